@@ -1,0 +1,40 @@
+/* frepmill.c: the one-shot command-line tool. It dispatches to the
+ * subcommands in cmd_*.c, which run the same pipeline as the daemon. */
+#include "commands.h"
+
+#include <stdio.h>
+#include <string.h>
+
+static const fm_command commands[] = {
+#ifdef FM_HAVE_CMD_EVAL
+    {"eval", "evaluate a HyperFun model at a point", fm_cmd_eval},
+#endif
+#ifdef FM_HAVE_CMD_MOTIONS
+    {"motions", "print the motions of a G-code program or trajectory", fm_cmd_motions},
+#endif
+    {NULL, NULL, NULL}};
+
+static void usage(FILE *out)
+{
+    fprintf(out, "usage: frepmill COMMAND [ARGS...]\n\ncommands:\n");
+    for (const fm_command *c = commands; c->name; c++)
+        fprintf(out, "  %-10s %s\n", c->name, c->summary);
+    fprintf(out, "\n`frepmill COMMAND --help` describes a command.\n");
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
+    if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
+        usage(stdout);
+        return 0;
+    }
+    for (const fm_command *c = commands; c->name; c++)
+        if (!strcmp(argv[1], c->name)) return c->run(argc - 1, argv + 1);
+    fprintf(stderr, "frepmill: unknown command '%s'\n", argv[1]);
+    usage(stderr);
+    return 2;
+}

@@ -1,0 +1,59 @@
+/* motion.h: one segment of tool movement, as the toolpath front ends
+ * (toolpaths/gcode, toolpaths/traj) produce it and lib/sweep consumes it.
+ * Part of the sweep module's public interface (included by sweep.h). */
+#ifndef FM_MOTION_H
+#define FM_MOTION_H
+
+#include <stddef.h>
+
+typedef enum fm_motion_kind {
+    FM_MOTION_RAPID = 0, /* G0: straight line at the rapid rate */
+    FM_MOTION_LINE,      /* G1 and canned-cycle feeds */
+    FM_MOTION_ARC,       /* G2/G3: arc or helix */
+    FM_MOTION_PARAM,     /* parametric trajectory segment */
+    FM_MOTION_DWELL      /* G4: no movement, time passes */
+} fm_motion_kind;
+
+/* A parametric tool pose: tip position and unit tool axis at program time t
+ * (t in the motion's [t0, t1]). pose_bounds gives sound bounds of both over
+ * [ta, tb] (interval evaluation of the trajectory's expressions). */
+typedef struct fm_path {
+    void *ctx;
+    void (*pose)(void *ctx, double t, double pos[3], double axis[3]);
+    void (*pose_bounds)(void *ctx, double ta, double tb, double pos_lo[3], double pos_hi[3],
+                        double axis_lo[3], double axis_hi[3]);
+} fm_path;
+
+/* Positions are millimetres in machine coordinates: the programmed point plus
+ * the active G5x and G92 offsets. The tool tip is start/end + tip_offset
+ * (tip_offset is zero when the active tool length offset matches the tool).
+ * Arcs: center is the arc centre with center[plane_axis] = start[plane_axis];
+ * the helix moves linearly along plane_axis from start to end; turns > 0 is
+ * counter-clockwise seen from +plane_axis, |turns| - 1 extra full circles
+ * (LinuxCNC ARC_FEED's rotation). */
+typedef struct fm_motion {
+    fm_motion_kind kind;
+    double start[3];
+    double end[3];
+    double axis_start[3];  /* unit tool axis, (0,0,1) for 3-axis programs */
+    double axis_end[3];
+    double center[3];      /* arcs */
+    int plane_axis;        /* arcs: 0 = X (G19), 1 = Y (G18), 2 = Z (G17) */
+    int turns;             /* arcs */
+    double tip_offset[3];  /* tool tip minus programmed point */
+    double feed;           /* mm/min; 0 for rapids and dwells */
+    double spindle_rpm;    /* 0 when stopped */
+    int spindle_dir;       /* 1 clockwise (M3), -1 counter-clockwise (M4), 0 stopped */
+    int coolant;           /* bit 0 mist (M7), bit 1 flood (M8) */
+    int tool;              /* tool number in the spindle */
+    double t0, t1;         /* program time interval, seconds */
+    int line;              /* 1-based source line */
+    long block;            /* N number if given, else -1 */
+    long index;            /* 0-based position in the motion stream */
+    const fm_path *path;   /* FM_MOTION_PARAM only; valid while the producer lives */
+} fm_motion;
+
+/* Receives motions in program order; return non-zero to stop the producer. */
+typedef int (*fm_motion_sink)(void *user, const fm_motion *motion);
+
+#endif
