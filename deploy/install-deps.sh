@@ -1,0 +1,48 @@
+#!/bin/sh
+# install-deps.sh: install what frepmill needs from Debian 12's archive,
+# idempotently (packages already present are not touched; apt-get update
+# runs only when something is missing). Usage:
+#   deploy/install-deps.sh build   compilers and libraries to build frepmill
+#   deploy/install-deps.sh test    build + what the tests use (valgrind, rs274, mbpoll, python3)
+#   deploy/install-deps.sh dev     test + clang with libFuzzer for the fuzz targets
+set -eu
+
+group=${1:-build}
+
+build_pkgs="build-essential cmake pkg-config libopenvdb-dev libboost-iostreams-dev libtbb-dev \
+libblosc-dev libdraco-dev libmodbus-dev libmicrohttpd-dev libjansson-dev libstb-dev"
+test_pkgs="valgrind python3 linuxcnc-uspace mbpoll draco curl"
+dev_pkgs="clang libclang-rt-14-dev"
+
+case "$group" in
+build) pkgs=$build_pkgs ;;
+test) pkgs="$build_pkgs $test_pkgs" ;;
+dev) pkgs="$build_pkgs $test_pkgs $dev_pkgs" ;;
+*) echo "install-deps.sh: unknown group '$group' (build, test or dev)" >&2; exit 2 ;;
+esac
+
+missing=""
+for p in $pkgs; do
+    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+        missing="$missing $p"
+    fi
+done
+
+if [ -z "$missing" ]; then
+    exit 0
+fi
+
+if [ "$(id -u)" -eq 0 ]; then
+    sudo=""
+elif command -v sudo >/dev/null 2>&1; then
+    sudo="sudo"
+else
+    echo "install-deps.sh: these packages are missing and I am not root:$missing" >&2
+    exit 1
+fi
+
+echo "install-deps.sh: installing$missing" >&2
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -q
+# shellcheck disable=SC2086
+$sudo apt-get install -y -q --no-install-recommends $missing
