@@ -1,0 +1,134 @@
+/* cmd_motions.c: `frepmill motions PROGRAM`: interpret a G-code program and
+ * print its motions, one JSON object per line, or its first error as
+ * file:line:column: message on stderr. */
+#include "commands.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "toolpaths/gcode/gcode.h"
+#include "toolpaths/tooltable/tooltable.h"
+
+static void usage(FILE *out)
+{
+    fprintf(out,
+            "usage: frepmill motions PROGRAM [--tools TOOLS] [--format jsonl]\n"
+            "                        [--rapid-rate MM_PER_MIN] [--skip N] [--inch]\n"
+            "                        [--block-delete]\n\n"
+            "Interpret a G-code program (LinuxCNC dialect) and print one motion per line:\n"
+            "  {\"line\":12,\"block\":12,\"kind\":\"arc\",\"start\":[x,y,z],\"end\":[x,y,z],\n"
+            "   \"center\":[x,y,z],\"axis\":\"z\",\"turns\":-1,\"feed\":500,\"tool\":1,\n"
+            "   \"tip_offset\":[0,0,0],\"t\":[t0,t1]}\n"
+            "Positions are machine millimetres (program point + G5x + G92 offsets).\n"
+            "TOOLS is a JSON tool table or a LinuxCNC .tbl file. --skip N interprets\n"
+            "everything but prints motions from index N on. Exit status: 0 ok, 2 bad\n"
+            "input, 3 limit exceeded, 4 I/O error.\n");
+}
+
+static const char *kind_name(fm_motion_kind k)
+{
+    switch (k) {
+    case FM_MOTION_RAPID: return "rapid";
+    case FM_MOTION_LINE: return "line";
+    case FM_MOTION_ARC: return "arc";
+    case FM_MOTION_DWELL: return "dwell";
+    default: return "param";
+    }
+}
+
+static int print_motion(void *user, const fm_motion *m)
+{
+    FILE *out = user;
+    fprintf(out, "{\"index\":%ld,\"line\":%d,", m->index, m->line);
+    if (m->block >= 0) fprintf(out, "\"block\":%ld,", m->block);
+    fprintf(out, "\"kind\":\"%s\",\"start\":[%.6f,%.6f,%.6f],\"end\":[%.6f,%.6f,%.6f],",
+            kind_name(m->kind), m->start[0], m->start[1], m->start[2], m->end[0], m->end[1],
+            m->end[2]);
+    if (m->kind == FM_MOTION_ARC)
+        fprintf(out, "\"center\":[%.6f,%.6f,%.6f],\"axis\":\"%c\",\"turns\":%d,", m->center[0],
+                m->center[1], m->center[2], "xyz"[m->plane_axis], m->turns);
+    fprintf(out,
+            "\"feed\":%.6f,\"tool\":%d,\"spindle\":%.6f,\"tip_offset\":[%.6f,%.6f,%.6f],"
+            "\"t\":[%.6f,%.6f]}\n",
+            m->feed, m->tool, m->spindle_rpm * m->spindle_dir, m->tip_offset[0],
+            m->tip_offset[1], m->tip_offset[2], m->t0, m->t1);
+    return ferror(out) ? 1 : 0;
+}
+
+int fm_cmd_motions(int argc, char **argv)
+{
+    const char *program = NULL, *tools_path = NULL;
+    fm_gcode_options opt;
+    fm_gcode_options_default(&opt);
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            usage(stdout);
+            return 0;
+        } else if (!strcmp(a, "--tools") && i + 1 < argc) {
+            tools_path = argv[++i];
+        } else if (!strcmp(a, "--format") && i + 1 < argc) {
+            if (strcmp(argv[++i], "jsonl")) {
+                fprintf(stderr, "frepmill motions: unknown format '%s'; expected jsonl\n", argv[i]);
+                return 2;
+            }
+        } else if (!strcmp(a, "--rapid-rate") && i + 1 < argc) {
+            char *end;
+            opt.rapid_rate = strtod(argv[++i], &end);
+            if (*end || !(opt.rapid_rate > 0)) {
+                fprintf(stderr, "frepmill motions: --rapid-rate '%s'; expected mm/min > 0\n",
+                        argv[i]);
+                return 2;
+            }
+        } else if (!strcmp(a, "--skip") && i + 1 < argc) {
+            char *end;
+            opt.skip_motions = strtol(argv[++i], &end, 10);
+            if (*end || opt.skip_motions < 0) {
+                fprintf(stderr, "frepmill motions: --skip '%s'; expected a count >= 0\n", argv[i]);
+                return 2;
+            }
+        } else if (!strcmp(a, "--inch")) {
+            opt.start_inch = 1;
+        } else if (!strcmp(a, "--block-delete")) {
+            opt.block_delete = 1;
+        } else if (a[0] == '-' && a[1]) {
+            fprintf(stderr, "frepmill motions: unknown or incomplete option '%s'\n", a);
+            usage(stderr);
+            return 2;
+        } else if (!program) {
+            program = a;
+        } else {
+            fprintf(stderr, "frepmill motions: more than one PROGRAM ('%s')\n", a);
+            return 2;
+        }
+    }
+    if (!program) {
+        usage(stderr);
+        return 2;
+    }
+    fm_error err;
+    char msg[1024];
+    fm_tool_table table = {0, NULL};
+    if (tools_path) {
+        if (fm_tooltable_load(tools_path, &table, &err)) {
+            fprintf(stderr, "%s\n", fm_error_format(&err, msg, sizeof msg));
+            return (int)err.code;
+        }
+        opt.tools = &table;
+    }
+    static char outbuf[1 << 16];
+    setvbuf(stdout, outbuf, _IOFBF, sizeof outbuf);
+    fm_status st = fm_gcode_run_file(program, &opt, print_motion, stdout, NULL, &err);
+    fflush(stdout);
+    fm_tool_table_free(&table);
+    if (st) {
+        fprintf(stderr, "%s\n", fm_error_format(&err, msg, sizeof msg));
+        return (int)st;
+    }
+    if (ferror(stdout)) {
+        fprintf(stderr, "frepmill motions: error writing the output\n");
+        return 4;
+    }
+    return 0;
+}

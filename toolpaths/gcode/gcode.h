@@ -1,0 +1,53 @@
+/* gcode.h: the RS274NGC (LinuxCNC dialect) front end. It interprets a
+ * G-code program and streams the resulting motions (lib/sweep/motion.h) to
+ * a callback, one at a time, so that a program of any length never has its
+ * motions in memory at once. Semantics follow LinuxCNC's interpreter (rs274);
+ * see docs/gcode.md for what is supported, what is refused and how the
+ * machine coordinates and tool tip offsets in each motion are defined. */
+#ifndef FM_GCODE_H
+#define FM_GCODE_H
+
+#include <stddef.h>
+
+#include "core/core.h"
+#include "sweep/motion.h"
+#include "tools/tools.h"
+
+typedef struct fm_gcode_options {
+    double rapid_rate;          /* mm/min for G0 and canned-cycle rapids (default 5000) */
+    int start_inch;             /* 1: the program starts in G20 (default 0: G21, mm) */
+    const fm_tool_table *tools; /* NULL: any T is accepted and every length offset is 0 */
+    size_t max_program_bytes;   /* refuse larger programs (default 256 MiB) */
+    long max_iterations;        /* loop iterations + subroutine calls (default 10^7) */
+    int max_call_depth;         /* nested O-word calls (default 64) */
+    long skip_motions;          /* interpret everything, but do not emit motions with
+                                   index < skip_motions (resume after a restart) */
+    int block_delete;           /* 1: skip lines starting with '/' (default 0, as rs274) */
+} fm_gcode_options;
+
+/* Fill *opt with the defaults above. */
+void fm_gcode_options_default(fm_gcode_options *opt);
+
+/* What a run did, for callers that want totals (may be NULL). */
+typedef struct fm_gcode_summary {
+    long motions;      /* motions produced, including skipped ones */
+    long lines;        /* source lines interpreted (a line in a loop counts each time) */
+    double seconds;    /* program time at the end */
+    int ended_by_m2;   /* 1 if M2/M30 or a closing % ended the program */
+    int stopped;       /* 1 if the sink asked to stop */
+} fm_gcode_summary;
+
+/* Interpret the program in `path` (read whole, bounded by max_program_bytes)
+ * and call sink for each motion in order. A sink that returns non-zero stops
+ * the run early (FM_OK). On error, err says file:line:column, the offending
+ * word and what was expected; motions already emitted stay valid. opt may be
+ * NULL for defaults. */
+fm_status fm_gcode_run_file(const char *path, const fm_gcode_options *opt, fm_motion_sink sink,
+                            void *user, fm_gcode_summary *summary, fm_error *err);
+
+/* Same for a program held by the caller; `name` is used in error messages. */
+fm_status fm_gcode_run_string(const char *text, size_t len, const char *name,
+                              const fm_gcode_options *opt, fm_motion_sink sink, void *user,
+                              fm_gcode_summary *summary, fm_error *err);
+
+#endif
