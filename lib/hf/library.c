@@ -1,0 +1,512 @@
+/* library.c: HyperFun's standard library (primitives, operations,
+ * coordinate transforms, distance variants) under HyperFun's names and
+ * argument orders, built as frep nodes from plain arithmetic with the
+ * formulas of the HyperFun library (docs/hf.md lists them). Transforms
+ * change the coordinate array in place and return 1, as in HyperFun. */
+#include "hf/hf_internal.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+/* HyperFun's EPS (interpreter and library). */
+#define HF_EPS 1e-6
+
+typedef hf_lib_ctx ctx_t;
+
+static fm_node K(ctx_t *c, double v) { return fm_const(c->g, v); }
+static fm_node add(ctx_t *c, fm_node a, fm_node b) { return fm_add(c->g, a, b); }
+static fm_node sub(ctx_t *c, fm_node a, fm_node b) { return fm_sub(c->g, a, b); }
+static fm_node mul(ctx_t *c, fm_node a, fm_node b) { return fm_mul(c->g, a, b); }
+static fm_node dvd(ctx_t *c, fm_node a, fm_node b) { return fm_div(c->g, a, b); }
+static fm_node sq(ctx_t *c, fm_node a) { return fm_square(c->g, a); }
+static fm_node rt(ctx_t *c, fm_node a) { return fm_sqrt(c->g, a); }
+static fm_node un(ctx_t *c, fm_op op, fm_node a) { return fm_unary(c->g, op, a); }
+static fm_node bin(ctx_t *c, fm_op op, fm_node a, fm_node b) { return fm_binary(c->g, op, a, b); }
+
+static fm_node bad(ctx_t *c, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+static fm_node bad(ctx_t *c, const char *fmt, ...)
+{
+    char msg[300];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    snprintf(c->message, sizeof c->message, "%s: %s", c->fname, msg);
+    return FM_NONE;
+}
+
+/* Reject a constant argument equal to zero (HyperFun returns a sentinel
+ * value there; a compile-time error is more useful). */
+static int nonzero(ctx_t *c, fm_node v, const char *what)
+{
+    double k;
+    if (fm_node_is_const(c->g, v, &k) && fabs(k) < HF_EPS) {
+        bad(c, "%s must not be zero", what);
+        return 0;
+    }
+    return 1;
+}
+
+/* x[i] - center[i] */
+static fm_node d(ctx_t *c, hf_value *args, int i)
+{
+    return sub(c, args[0].elems[i], args[1].elems[i]);
+}
+
+/* The three axes with `axis` first, the others in increasing order. */
+static void axes(int axis, int *u, int *v)
+{
+    *u = axis == 0 ? 1 : 0;
+    *v = axis == 2 ? 1 : 2;
+}
+
+/* ------------------------------------------------- R-functions (alpha) -- */
+
+/* HyperFun: (1/(1+alpha)) (f1 + f2 +- sqrt(|f1^2 + f2^2 - 2 alpha f1 f2|)).
+ * alpha = 1 is exactly max / min and is built as such (exact distances
+ * outside, tight intervals); alpha = 0 drops the zero terms. */
+static fm_node r_op(fm_graph *g, fm_node a, fm_node b, double alpha, int sign)
+{
+    if (alpha == 1.0) return sign > 0 ? fm_max(g, a, b) : fm_min(g, a, b);
+    fm_node s = fm_add(g, fm_square(g, a), fm_square(g, b));
+    if (alpha != 0.0)
+        s = fm_abs(g, fm_sub(g, s, fm_mul(g, fm_const(g, 2.0 * alpha), fm_mul(g, a, b))));
+    fm_node r = sign > 0 ? fm_add(g, fm_add(g, a, b), fm_sqrt(g, s))
+                         : fm_sub(g, fm_add(g, a, b), fm_sqrt(g, s));
+    if (alpha != 0.0) r = fm_mul(g, fm_const(g, 1.0 / (1.0 + alpha)), r);
+    return r;
+}
+
+fm_node fm_hf_r_union(fm_graph *g, fm_node a, fm_node b, double alpha)
+{
+    return r_op(g, a, b, alpha, 1);
+}
+
+fm_node fm_hf_r_inter(fm_graph *g, fm_node a, fm_node b, double alpha)
+{
+    return r_op(g, a, b, alpha, -1);
+}
+
+/* --------------------------------------------------------- primitives -- */
+
+/* hfSphere(x, center, R) = R^2 - |x - center|^2 */
+static fm_node lib_sphere(ctx_t *c, hf_value *a)
+{
+    fm_node f = sq(c, a[2].scalar);
+    for (int i = 0; i < 3; i++) f = sub(c, f, sq(c, d(c, a, i)));
+    return f;
+}
+
+/* hfEllipsoid(x, center, a, b, c) = 1 - sum ((x_i - c_i) / r_i)^2 */
+static fm_node lib_ellipsoid(ctx_t *c, hf_value *a)
+{
+    fm_node f = K(c, 1.0);
+    for (int i = 0; i < 3; i++) {
+        if (!nonzero(c, a[2 + i].scalar, "the half-axes")) return FM_NONE;
+        f = sub(c, f, sq(c, dvd(c, d(c, a, i), a[2 + i].scalar)));
+    }
+    return f;
+}
+
+/* hfCylinderX(x, center, R) = R^2 - (y - cy)^2 - (z - cz)^2 (and Y, Z) */
+static fm_node cylinder(ctx_t *c, hf_value *a, int axis)
+{
+    int u, v;
+    axes(axis, &u, &v);
+    return sub(c, sub(c, sq(c, a[2].scalar), sq(c, d(c, a, u))), sq(c, d(c, a, v)));
+}
+static fm_node lib_cyl_x(ctx_t *c, hf_value *a) { return cylinder(c, a, 0); }
+static fm_node lib_cyl_y(ctx_t *c, hf_value *a) { return cylinder(c, a, 1); }
+static fm_node lib_cyl_z(ctx_t *c, hf_value *a) { return cylinder(c, a, 2); }
+
+/* hfEllCylX(x, center, a, b) = 1 - ((y - cy)/a)^2 - ((z - cz)/b)^2 */
+static fm_node ellcyl(ctx_t *c, hf_value *a, int axis)
+{
+    int u, v;
+    axes(axis, &u, &v);
+    if (!nonzero(c, a[2].scalar, "a") || !nonzero(c, a[3].scalar, "b")) return FM_NONE;
+    return sub(c, sub(c, K(c, 1.0), sq(c, dvd(c, d(c, a, u), a[2].scalar))),
+               sq(c, dvd(c, d(c, a, v), a[3].scalar)));
+}
+static fm_node lib_ellcyl_x(ctx_t *c, hf_value *a) { return ellcyl(c, a, 0); }
+static fm_node lib_ellcyl_y(ctx_t *c, hf_value *a) { return ellcyl(c, a, 1); }
+static fm_node lib_ellcyl_z(ctx_t *c, hf_value *a) { return ellcyl(c, a, 2); }
+
+/* hfConeX(x, center, R) = (x - cx)^2 - ((y - cy)/R)^2 - ((z - cz)/R)^2:
+ * a double cone with radius R at distance 1 from the apex. */
+static fm_node cone(ctx_t *c, hf_value *a, int axis, fm_node ra, fm_node rb)
+{
+    int u, v;
+    axes(axis, &u, &v);
+    if (!nonzero(c, ra, "the radius") || !nonzero(c, rb, "the radius")) return FM_NONE;
+    return sub(c, sub(c, sq(c, d(c, a, axis)), sq(c, dvd(c, d(c, a, u), ra))),
+               sq(c, dvd(c, d(c, a, v), rb)));
+}
+static fm_node lib_cone_x(ctx_t *c, hf_value *a) { return cone(c, a, 0, a[2].scalar, a[2].scalar); }
+static fm_node lib_cone_y(ctx_t *c, hf_value *a) { return cone(c, a, 1, a[2].scalar, a[2].scalar); }
+static fm_node lib_cone_z(ctx_t *c, hf_value *a) { return cone(c, a, 2, a[2].scalar, a[2].scalar); }
+/* hfEllConeX(x, center, a, b) = (x - cx)^2 - ((y - cy)/a)^2 - ((z - cz)/b)^2 */
+static fm_node lib_ellcone_x(ctx_t *c, hf_value *a) { return cone(c, a, 0, a[2].scalar, a[3].scalar); }
+static fm_node lib_ellcone_y(ctx_t *c, hf_value *a) { return cone(c, a, 1, a[2].scalar, a[3].scalar); }
+static fm_node lib_ellcone_z(ctx_t *c, hf_value *a) { return cone(c, a, 2, a[2].scalar, a[3].scalar); }
+
+/* hfTorusX(x, center, R, r0) =
+ *   r0^2 - |x - c|^2 - R^2 + 2 R sqrt((y - cy)^2 + (z - cz)^2) */
+static fm_node torus(ctx_t *c, hf_value *a, int axis)
+{
+    int u, v;
+    axes(axis, &u, &v);
+    fm_node R = a[2].scalar, r0 = a[3].scalar;
+    fm_node ring = rt(c, add(c, sq(c, d(c, a, u)), sq(c, d(c, a, v))));
+    fm_node f = sq(c, r0);
+    for (int i = 0; i < 3; i++) f = sub(c, f, sq(c, d(c, a, i)));
+    f = sub(c, f, sq(c, R));
+    return add(c, f, mul(c, mul(c, K(c, 2.0), R), ring));
+}
+static fm_node lib_torus_x(ctx_t *c, hf_value *a) { return torus(c, a, 0); }
+static fm_node lib_torus_y(ctx_t *c, hf_value *a) { return torus(c, a, 1); }
+static fm_node lib_torus_z(ctx_t *c, hf_value *a) { return torus(c, a, 2); }
+
+/* hfBlock(x, vertex, dx, dy, dz): the slabs s_i = (x_i - v_i)(v_i + d_i - x_i)
+ * intersected with HyperFun's library formula for the current alpha:
+ * min for alpha = 1, else f = s1 + s2 - sqrt(s1^2 + s2^2 - 2 alpha s1 s2)
+ * and again with s3 (no 1/(1+alpha) factor, as in HyperFun's hfBlock). */
+static fm_node lib_block(ctx_t *c, hf_value *a)
+{
+    fm_node s[3];
+    for (int i = 0; i < 3; i++) {
+        double k;
+        if (fm_node_is_const(c->g, a[2 + i].scalar, &k) && k < 0)
+            return bad(c, "the edge lengths must not be negative, found %g", k);
+        fm_node lo = d(c, a, i);
+        fm_node hi = sub(c, add(c, a[1].elems[i], a[2 + i].scalar), a[0].elems[i]);
+        s[i] = mul(c, lo, hi);
+    }
+    if (c->alpha == 1.0) return fm_min(c->g, fm_min(c->g, s[0], s[1]), s[2]);
+    fm_node f = s[0];
+    for (int i = 1; i < 3; i++) {
+        fm_node q = add(c, sq(c, f), sq(c, s[i]));
+        if (c->alpha != 0.0) q = sub(c, q, mul(c, K(c, 2.0 * c->alpha), mul(c, f, s[i])));
+        f = sub(c, add(c, f, s[i]), rt(c, q));
+    }
+    return f;
+}
+
+/* hfSuperell(x, center, a, b, c, s1, s2) =
+ *   1 - (|xt|^(2/s2) + |yt|^(2/s2))^(s2/s1) - |zt|^(2/s1), xt = (x - cx)/a, ... */
+static fm_node lib_superell(ctx_t *c, hf_value *a)
+{
+    fm_node t[3];
+    for (int i = 0; i < 3; i++) {
+        if (!nonzero(c, a[2 + i].scalar, "the half-axes")) return FM_NONE;
+        t[i] = un(c, FM_OP_ABS, dvd(c, d(c, a, i), a[2 + i].scalar));
+    }
+    fm_node s1 = a[5].scalar, s2 = a[6].scalar;
+    if (!nonzero(c, s1, "s1") || !nonzero(c, s2, "s2")) return FM_NONE;
+    fm_node p = dvd(c, K(c, 2.0), s2);
+    fm_node xy = add(c, bin(c, FM_OP_POW, t[0], p), bin(c, FM_OP_POW, t[1], p));
+    fm_node f = sub(c, K(c, 1.0), bin(c, FM_OP_POW, xy, dvd(c, s2, s1)));
+    return sub(c, f, bin(c, FM_OP_POW, t[2], dvd(c, K(c, 2.0), s1)));
+}
+
+/* The number of key points of hfBlobby / hfMetaball / hfSoft: the length of
+ * x0 (HyperFun reads every array with that length). */
+static int keypoints(ctx_t *c, hf_value *a, int first, int count, size_t *n)
+{
+    *n = a[first].n;
+    for (int i = first + 1; i < first + count; i++)
+        if (a[i].n < *n)
+            return bad(c, "argument %d has %zu items, fewer than the %zu of x0", i + 1, a[i].n,
+                       *n) != FM_NONE;
+    return 1;
+}
+
+static fm_node r2_at(ctx_t *c, hf_value *a, size_t i)
+{
+    fm_node f = K(c, 0.0);
+    for (int k = 0; k < 3; k++) f = add(c, f, sq(c, sub(c, a[0].elems[k], a[1 + k].elems[i])));
+    return f;
+}
+
+/* hfBlobby(x, x0, y0, z0, a, b, T) = sum b_i exp(-a_i r_i^2) - T (Blinn) */
+static fm_node lib_blobby(ctx_t *c, hf_value *a)
+{
+    size_t n;
+    if (!keypoints(c, a, 1, 5, &n)) return FM_NONE;
+    fm_node f = K(c, 0.0);
+    for (size_t i = 0; i < n; i++)
+        f = add(c, f, mul(c, a[5].elems[i],
+                          un(c, FM_OP_EXP, fm_neg(c->g, mul(c, a[4].elems[i], r2_at(c, a, i))))));
+    return sub(c, f, a[6].scalar);
+}
+
+/* hfMetaball(x, x0, y0, z0, b, d, T) = sum m_i - T (Nishimura):
+ * m = b (1 - 3 r^2/d^2) for r <= d/3, 1.5 b (1 - r/d)^2 for d/3 < r < d,
+ * 0 beyond, and 0 for every r when d <= 0. */
+static fm_node lib_metaball(ctx_t *c, hf_value *a)
+{
+    size_t n;
+    if (!keypoints(c, a, 1, 5, &n)) return FM_NONE;
+    fm_node f = K(c, 0.0);
+    for (size_t i = 0; i < n; i++) {
+        fm_node b = a[4].elems[i], dd = a[5].elems[i];
+        fm_node r = rt(c, r2_at(c, a, i));
+        fm_node rd = dvd(c, r, dd);
+        fm_node inner = mul(c, b, sub(c, K(c, 1.0), mul(c, K(c, 3.0), sq(c, rd))));
+        fm_node outer = mul(c, mul(c, K(c, 1.5), b), sq(c, sub(c, K(c, 1.0), rd)));
+        fm_node m = fm_select(c->g, bin(c, FM_OP_LE, r, dvd(c, dd, K(c, 3.0))), inner,
+                              fm_select(c->g, bin(c, FM_OP_LT, r, dd), outer, K(c, 0.0)));
+        m = fm_select(c->g, bin(c, FM_OP_LT, K(c, 0.0), dd), m, K(c, 0.0));
+        f = add(c, f, m);
+    }
+    return sub(c, f, a[6].scalar);
+}
+
+/* hfSoft(x, x0, y0, z0, d, T) = sum s_i - T (Wyvill):
+ * s = 1 - 22 r^2/(9 d^2) + 17 r^4/(9 d^4) - 4 r^6/(9 d^6) for r <= d, else 0. */
+static fm_node lib_soft(ctx_t *c, hf_value *a)
+{
+    size_t n;
+    if (!keypoints(c, a, 1, 4, &n)) return FM_NONE;
+    fm_node f = K(c, 0.0);
+    for (size_t i = 0; i < n; i++) {
+        fm_node dd = a[4].elems[i];
+        fm_node r2 = r2_at(c, a, i), r4 = sq(c, r2);
+        fm_node d2 = sq(c, dd), d4 = sq(c, d2);
+        fm_node s = sub(c, K(c, 1.0), dvd(c, mul(c, K(c, 22.0), r2), mul(c, K(c, 9.0), d2)));
+        s = add(c, s, dvd(c, mul(c, K(c, 17.0), r4), mul(c, K(c, 9.0), d4)));
+        s = sub(c, s, dvd(c, mul(c, K(c, 4.0), mul(c, r4, r2)), mul(c, K(c, 9.0), mul(c, d4, d2))));
+        f = add(c, f, fm_select(c->g, bin(c, FM_OP_LE, rt(c, r2), dd), s, K(c, 0.0)));
+    }
+    return sub(c, f, a[5].scalar);
+}
+
+/* ------------------------------------------------------------- blends -- */
+
+/* hfBlendUni(f1, f2, a0, a1, a2) = f1 + f2 + sqrt(f1^2 + f2^2)
+ *                                  + a0 / (1 + (f1/a1)^2 + (f2/a2)^2) */
+static fm_node blend(ctx_t *c, hf_value *a, int sign)
+{
+    fm_node f1 = a[0].scalar, f2 = a[1].scalar;
+    if (!nonzero(c, a[3].scalar, "a1") || !nonzero(c, a[4].scalar, "a2")) return FM_NONE;
+    fm_node disp = dvd(c, a[2].scalar,
+                       add(c, add(c, K(c, 1.0), sq(c, dvd(c, f1, a[3].scalar))),
+                           sq(c, dvd(c, f2, a[4].scalar))));
+    fm_node root = rt(c, add(c, sq(c, f1), sq(c, f2)));
+    fm_node r = sign > 0 ? add(c, add(c, f1, f2), root) : sub(c, add(c, f1, f2), root);
+    return add(c, r, disp);
+}
+/* hfBlendInt: the same with f1 + f2 - sqrt(...), plus the displacement
+ * (HyperFun adds a0 for both; a negative a0 removes material). */
+static fm_node lib_blend_uni(ctx_t *c, hf_value *a) { return blend(c, a, 1); }
+static fm_node lib_blend_int(ctx_t *c, hf_value *a) { return blend(c, a, -1); }
+
+/* ---------------------------------------------------------- transforms -- */
+
+/* hfShift3D(x, dx, dy, dz): x_i = x_i - d_i */
+static fm_node lib_shift(ctx_t *c, hf_value *a)
+{
+    for (int i = 0; i < 3; i++) a[0].elems[i] = sub(c, a[0].elems[i], a[1 + i].scalar);
+    return K(c, 1.0);
+}
+
+/* hfScale3D(x, sx, sy, sz): x_i = x_i / s_i */
+static fm_node lib_scale(ctx_t *c, hf_value *a)
+{
+    for (int i = 0; i < 3; i++)
+        if (!nonzero(c, a[1 + i].scalar, "the scale factors")) return FM_NONE;
+    for (int i = 0; i < 3; i++) a[0].elems[i] = dvd(c, a[0].elems[i], a[1 + i].scalar);
+    return K(c, 1.0);
+}
+
+/* Rotation of the pair (p, q) of coordinates by theta as HyperFun's inverse
+ * mappings write it: p' = p cos + q sin, q' = -p sin + q cos, where
+ * (p, q) = (y, z) about X, (z, x) about Y and (x, y) about Z. */
+static void rotate_pair(ctx_t *c, fm_node *xs, int axis, fm_node theta)
+{
+    int p = axis == 0 ? 1 : axis == 1 ? 2 : 0;
+    int q = axis == 0 ? 2 : axis == 1 ? 0 : 1;
+    fm_node ct = un(c, FM_OP_COS, theta), st = un(c, FM_OP_SIN, theta);
+    fm_node np = add(c, mul(c, xs[p], ct), mul(c, xs[q], st));
+    fm_node nq = add(c, fm_neg(c->g, mul(c, xs[p], st)), mul(c, xs[q], ct));
+    xs[p] = np;
+    xs[q] = nq;
+}
+
+/* hfRotate3DX(x, theta) (and Y, Z) */
+static fm_node lib_rot_x(ctx_t *c, hf_value *a) { rotate_pair(c, a[0].elems, 0, a[1].scalar); return K(c, 1.0); }
+static fm_node lib_rot_y(ctx_t *c, hf_value *a) { rotate_pair(c, a[0].elems, 1, a[1].scalar); return K(c, 1.0); }
+static fm_node lib_rot_z(ctx_t *c, hf_value *a) { rotate_pair(c, a[0].elems, 2, a[1].scalar); return K(c, 1.0); }
+
+/* hfTwistX(x, x1, x2, theta1, theta2): t = (x - x1)/(x2 - x1),
+ * theta = (1 - t) theta1 + t theta2, then the rotation about X by theta. */
+static fm_node twist(ctx_t *c, hf_value *a, int axis)
+{
+    fm_node span = sub(c, a[2].scalar, a[1].scalar);
+    if (!nonzero(c, span, "the interval (x2 - x1)")) return FM_NONE;
+    fm_node t = dvd(c, sub(c, a[0].elems[axis], a[1].scalar), span);
+    fm_node theta = add(c, mul(c, sub(c, K(c, 1.0), t), a[3].scalar), mul(c, t, a[4].scalar));
+    rotate_pair(c, a[0].elems, axis, theta);
+    return K(c, 1.0);
+}
+static fm_node lib_twist_x(ctx_t *c, hf_value *a) { return twist(c, a, 0); }
+static fm_node lib_twist_y(ctx_t *c, hf_value *a) { return twist(c, a, 1); }
+static fm_node lib_twist_z(ctx_t *c, hf_value *a) { return twist(c, a, 2); }
+
+/* hfTaperX(x, x1, x2, s1, s2): scale = s1 for x < x1, s2 for x > x2, the
+ * linear blend between; |scale| < EPS counts as 1 (as HyperFun); the other
+ * two coordinates are divided by scale. s1, s2 must be positive. */
+static fm_node taper(ctx_t *c, hf_value *a, int axis)
+{
+    for (int i = 3; i <= 4; i++) {
+        double k;
+        if (fm_node_is_const(c->g, a[i].scalar, &k) && k <= 0)
+            return bad(c, "the scale factors s1, s2 must be positive, found %g", k);
+    }
+    fm_node s = a[0].elems[axis], x1 = a[1].scalar, x2 = a[2].scalar;
+    fm_node t = dvd(c, sub(c, s, x1), sub(c, x2, x1));
+    fm_node lerp = add(c, mul(c, sub(c, K(c, 1.0), t), a[3].scalar), mul(c, t, a[4].scalar));
+    fm_node scale = fm_select(c->g, bin(c, FM_OP_LT, s, x1), a[3].scalar,
+                              fm_select(c->g, bin(c, FM_OP_LT, x2, s), a[4].scalar, lerp));
+    scale = fm_select(c->g, bin(c, FM_OP_LT, un(c, FM_OP_ABS, scale), K(c, HF_EPS)), K(c, 1.0),
+                      scale);
+    int u, v;
+    axes(axis, &u, &v);
+    a[0].elems[u] = dvd(c, a[0].elems[u], scale);
+    a[0].elems[v] = dvd(c, a[0].elems[v], scale);
+    return K(c, 1.0);
+}
+static fm_node lib_taper_x(ctx_t *c, hf_value *a) { return taper(c, a, 0); }
+static fm_node lib_taper_y(ctx_t *c, hf_value *a) { return taper(c, a, 1); }
+static fm_node lib_taper_z(ctx_t *c, hf_value *a) { return taper(c, a, 2); }
+
+/* hfStretch3D(x, x0, sx, sy, sz): x_i = x0_i + (x_i - x0_i) / s_i */
+static fm_node lib_stretch(ctx_t *c, hf_value *a)
+{
+    for (int i = 0; i < 3; i++)
+        if (!nonzero(c, a[2 + i].scalar, "the scale factors")) return FM_NONE;
+    for (int i = 0; i < 3; i++)
+        a[0].elems[i] = add(c, a[1].elems[i],
+                            dvd(c, sub(c, a[0].elems[i], a[1].elems[i]), a[2 + i].scalar));
+    return K(c, 1.0);
+}
+
+/* ---------------------------------------------------- distance variants -- */
+
+/* hfDCylinder(x, center, u, R) = R - |u x (center - x)| / |u|: an infinite
+ * cylinder about the line through center along u, exact distance. */
+static fm_node lib_dcylinder(ctx_t *c, hf_value *a)
+{
+    fm_node *u = a[2].elems, w[3];
+    for (int i = 0; i < 3; i++) w[i] = sub(c, a[1].elems[i], a[0].elems[i]);
+    fm_node cx = sub(c, mul(c, u[1], w[2]), mul(c, w[1], u[2]));
+    fm_node cy = sub(c, mul(c, u[2], w[0]), mul(c, u[0], w[2]));
+    fm_node cz = sub(c, mul(c, u[0], w[1]), mul(c, u[1], w[0]));
+    fm_node cross2 = add(c, add(c, sq(c, cx), sq(c, cy)), sq(c, cz));
+    fm_node u2 = add(c, add(c, sq(c, u[0]), sq(c, u[1])), sq(c, u[2]));
+    if (!nonzero(c, u2, "the axis u")) return FM_NONE;
+    return sub(c, a[3].scalar, rt(c, dvd(c, cross2, u2)));
+}
+
+/* hfDConeX(x, center, R) = -(sqrt((y-cy)^2 + (z-cz)^2) cos t - |x - cx| sin t),
+ * t = atan(R): the signed distance to the infinite double cone. */
+static fm_node dcone(ctx_t *c, hf_value *a, int axis)
+{
+    int u, v;
+    axes(axis, &u, &v);
+    fm_node t = un(c, FM_OP_ATAN, a[2].scalar);
+    fm_node ring = rt(c, add(c, sq(c, d(c, a, u)), sq(c, d(c, a, v))));
+    fm_node dist = sub(c, mul(c, ring, un(c, FM_OP_COS, t)),
+                       mul(c, un(c, FM_OP_ABS, d(c, a, axis)), un(c, FM_OP_SIN, t)));
+    return fm_neg(c->g, dist);
+}
+static fm_node lib_dcone_x(ctx_t *c, hf_value *a) { return dcone(c, a, 0); }
+static fm_node lib_dcone_y(ctx_t *c, hf_value *a) { return dcone(c, a, 1); }
+static fm_node lib_dcone_z(ctx_t *c, hf_value *a) { return dcone(c, a, 2); }
+
+/* hfDTorusX(x, center, R, r0) = r0 - sqrt((sqrt((y-cy)^2 + (z-cz)^2) - R)^2 + (x-cx)^2) */
+static fm_node dtorus(ctx_t *c, hf_value *a, int axis)
+{
+    int u, v;
+    axes(axis, &u, &v);
+    fm_node ring = sub(c, rt(c, add(c, sq(c, d(c, a, u)), sq(c, d(c, a, v)))), a[2].scalar);
+    return sub(c, a[3].scalar, rt(c, add(c, sq(c, ring), sq(c, d(c, a, axis)))));
+}
+static fm_node lib_dtorus_x(ctx_t *c, hf_value *a) { return dtorus(c, a, 0); }
+static fm_node lib_dtorus_y(ctx_t *c, hf_value *a) { return dtorus(c, a, 1); }
+static fm_node lib_dtorus_z(ctx_t *c, hf_value *a) { return dtorus(c, a, 2); }
+
+/* The table. Signatures: p a point array (read), x a point array changed in
+ * place, c a 3-element array (centre, vertex, vector), a an array, r a
+ * number. */
+static const hf_lib_fn library[] = {
+    {"hfSphere", "pcr", lib_sphere},
+    {"hfEllipsoid", "pcrrr", lib_ellipsoid},
+    {"hfCylinderX", "pcr", lib_cyl_x},
+    {"hfCylinderY", "pcr", lib_cyl_y},
+    {"hfCylinderZ", "pcr", lib_cyl_z},
+    {"hfEllCylX", "pcrr", lib_ellcyl_x},
+    {"hfEllCylY", "pcrr", lib_ellcyl_y},
+    {"hfEllCylZ", "pcrr", lib_ellcyl_z},
+    {"hfConeX", "pcr", lib_cone_x},
+    {"hfConeY", "pcr", lib_cone_y},
+    {"hfConeZ", "pcr", lib_cone_z},
+    {"hfEllConeX", "pcrr", lib_ellcone_x},
+    {"hfEllConeY", "pcrr", lib_ellcone_y},
+    {"hfEllConeZ", "pcrr", lib_ellcone_z},
+    {"hfTorusX", "pcrr", lib_torus_x},
+    {"hfTorusY", "pcrr", lib_torus_y},
+    {"hfTorusZ", "pcrr", lib_torus_z},
+    {"hfBlock", "pcrrr", lib_block},
+    {"hfSuperell", "pcrrrrr", lib_superell},
+    {"hfBlobby", "paaaaar", lib_blobby},
+    {"hfMetaball", "paaaaar", lib_metaball},
+    {"hfSoft", "paaaar", lib_soft},
+    {"hfBlendUni", "rrrrr", lib_blend_uni},
+    {"hfBlendInt", "rrrrr", lib_blend_int},
+    {"hfShift3D", "xrrr", lib_shift},
+    {"hfScale3D", "xrrr", lib_scale},
+    {"hfRotate3DX", "xr", lib_rot_x},
+    {"hfRotate3DY", "xr", lib_rot_y},
+    {"hfRotate3DZ", "xr", lib_rot_z},
+    {"hfTwistX", "xrrrr", lib_twist_x},
+    {"hfTwistY", "xrrrr", lib_twist_y},
+    {"hfTwistZ", "xrrrr", lib_twist_z},
+    {"hfTaperX", "xrrrr", lib_taper_x},
+    {"hfTaperY", "xrrrr", lib_taper_y},
+    {"hfTaperZ", "xrrrr", lib_taper_z},
+    {"hfStretch3D", "xcrrr", lib_stretch},
+    {"hfDCylinder", "pccr", lib_dcylinder},
+    {"hfDConeX", "pcr", lib_dcone_x},
+    {"hfDConeY", "pcr", lib_dcone_y},
+    {"hfDConeZ", "pcr", lib_dcone_z},
+    {"hfDTorusX", "pcrr", lib_dtorus_x},
+    {"hfDTorusY", "pcrr", lib_dtorus_y},
+    {"hfDTorusZ", "pcrr", lib_dtorus_z},
+};
+
+#define LIBRARY_SIZE (sizeof library / sizeof library[0])
+
+const hf_lib_fn *fm_hf_library_find(const char *lower_name)
+{
+    for (size_t i = 0; i < LIBRARY_SIZE; i++) {
+        const char *a = library[i].name, *b = lower_name;
+        while (*a && *b && (*a | 0x20) == *b) {
+            a++;
+            b++;
+        }
+        if (!*a && !*b) return &library[i];
+    }
+    return NULL;
+}
+
+const hf_lib_fn *fm_hf_library_at(size_t i)
+{
+    return i < LIBRARY_SIZE ? &library[i] : NULL;
+}
