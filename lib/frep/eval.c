@@ -14,9 +14,11 @@ static int alloc_regs(fm_evaluator *ev, uint32_t cap, size_t choices)
     double *reg = malloc(cap * sizeof *reg);
     double *batch = malloc(bytes);
     fm_interval *ivl = malloc(cap * sizeof *ivl);
+    uint8_t *ivl_nan = malloc(cap);
     double *grad = malloc(cap * 5 * sizeof *grad);
     uint8_t *choice = malloc(choices ? choices : 1);
-    if (!reg || !batch || !ivl || !grad || !choice) {
+    if (!reg || !batch || !ivl || !ivl_nan || !grad || !choice) {
+        free(ivl_nan);
         free(reg);
         free(batch);
         free(ivl);
@@ -27,8 +29,10 @@ static int alloc_regs(fm_evaluator *ev, uint32_t cap, size_t choices)
     free(ev->reg);
     free(ev->batch);
     free(ev->ivl);
+    free(ev->ivl_nan);
     free(ev->grad);
     free(ev->choice);
+    ev->ivl_nan = ivl_nan;
     ev->reg = reg;
     ev->batch = batch;
     ev->ivl = ivl;
@@ -78,6 +82,7 @@ void fm_evaluator_free(fm_evaluator *ev)
     free(ev->reg);
     free(ev->batch);
     free(ev->ivl);
+    free(ev->ivl_nan);
     free(ev->grad);
     free(ev->choice);
     free(ev);

@@ -12,6 +12,17 @@ double fm_special_point(fm_evaluator *ev, const fm_insn *in, const double p[4])
     return NAN;
 }
 
+fm_interval fm_special_interval(fm_evaluator *ev, const fm_insn *in, const fm_interval box[4],
+                                int *maybe_nan)
+{
+    (void)ev;
+    (void)in;
+    (void)box;
+    *maybe_nan = 1;
+    fm_interval r = {-INFINITY, INFINITY};
+    return r;
+}
+
 double fm_reference_special(const fm_graph *g, fm_node n, const double p[4])
 {
     (void)g;

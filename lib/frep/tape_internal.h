@@ -72,7 +72,8 @@ struct fm_evaluator {
     uint32_t cap;         /* register slots allocated */
     double *reg;          /* cap */
     double *batch;        /* cap * FM_CHUNK */
-    fm_interval *ivl;     /* cap */
+    fm_interval *ivl;     /* cap: enclosure of the non-NaN values */
+    uint8_t *ivl_nan;     /* cap: 1 if the value may be NaN somewhere in the box */
     double *grad;         /* cap * 5: value, d/dx, d/dy, d/dz, d/dt */
     uint8_t *choice;      /* choice_cap: decided branch of each instruction */
     size_t choice_cap;
@@ -98,12 +99,14 @@ static inline double fm_insn_operand(const double *reg, const fm_insn *in, int w
 
 /* special.c: one special instruction in each mode. */
 double fm_special_point(fm_evaluator *ev, const fm_insn *in, const double p[4]);
-fm_interval fm_special_interval(fm_evaluator *ev, const fm_insn *in, const fm_interval box[4]);
+fm_interval fm_special_interval(fm_evaluator *ev, const fm_insn *in, const fm_interval box[4],
+                                int *maybe_nan);
 double fm_special_grad(fm_evaluator *ev, const fm_insn *in, const double p[4], double grad[4]);
 
-/* interval.c: the interval meaning of each non-special op (also used by
- * special.c and relations.c). */
-fm_interval fm_interval_unary(fm_op op, fm_interval a);
-fm_interval fm_interval_binary(fm_op op, fm_interval a, fm_interval b);
+/* interval.c: interval evaluation that also says whether the function may
+ * be NaN somewhere in the box. The interval encloses the non-NaN values;
+ * [NaN, NaN] when there are none. Records the decided branches in
+ * ev->choice. */
+fm_interval fm_eval_interval_nan(fm_evaluator *ev, const fm_interval box[4], int *maybe_nan);
 
 #endif
