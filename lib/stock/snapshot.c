@@ -1,0 +1,537 @@
+/* snapshot.c: crash-safe stock snapshots. OpenVDB 10.0 has no checksum and
+ * can corrupt its heap on a damaged file, so each .vdb payload is wrapped:
+ *
+ *   0   8  magic "FMSTOCK\n"
+ *   8   4  format version (1), little-endian
+ *   12  4  flags (0)
+ *   16  8  metadata length M
+ *   24  8  VDB length N
+ *   32  M  metadata (what a resumed job needs; see put_meta)
+ *   ..  N  OpenVDB stream bytes (Blosc-compressed)
+ *   end 8  FNV-1a 64 of every byte before it
+ *
+ * and the whole file is read into memory (within the budget) and verified
+ * before OpenVDB sees a byte. Writing goes to a temporary file in the same
+ * folder, fsync, the old file becomes "<path>.prev", rename, fsync of the
+ * folder. */
+#include "stock/stock_impl.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <unistd.h>
+
+#define SNAP_MAGIC "FMSTOCK\n"
+#define SNAP_VERSION 1u
+#define SNAP_HEADER 32u
+#define SNAP_TRAILER 8u
+#define META_VERSION 1u
+#define TMP_MARK ".fmtmp."
+
+/* ------------------------------------------------------------ hashing -- */
+
+#define FNV_OFFSET 0xcbf29ce484222325ULL
+#define FNV_PRIME 0x100000001b3ULL
+
+static uint64_t fnv1a(uint64_t h, const unsigned char *p, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        h ^= p[i];
+        h *= FNV_PRIME;
+    }
+    return h;
+}
+
+/* ------------------------------------------------- little-endian bytes -- */
+
+typedef struct wbuf {
+    unsigned char *p;
+    size_t len, cap;
+    int failed;
+} wbuf;
+
+static void put_bytes(wbuf *b, const void *src, size_t n)
+{
+    if (b->failed) return;
+    if (b->len + n > b->cap) {
+        size_t cap = b->cap ? b->cap : 256;
+        while (cap < b->len + n) cap *= 2;
+        unsigned char *p = realloc(b->p, cap);
+        if (!p) {
+            b->failed = 1;
+            return;
+        }
+        b->p = p;
+        b->cap = cap;
+    }
+    memcpy(b->p + b->len, src, n);
+    b->len += n;
+}
+
+static void put_u64(wbuf *b, uint64_t v)
+{
+    unsigned char x[8];
+    for (int i = 0; i < 8; i++) x[i] = (unsigned char)(v >> (8 * i));
+    put_bytes(b, x, 8);
+}
+
+static void put_u32(wbuf *b, uint32_t v)
+{
+    unsigned char x[4];
+    for (int i = 0; i < 4; i++) x[i] = (unsigned char)(v >> (8 * i));
+    put_bytes(b, x, 4);
+}
+
+static void put_f64(wbuf *b, double v)
+{
+    uint64_t u;
+    memcpy(&u, &v, 8);
+    put_u64(b, u);
+}
+
+static uint64_t get_u64(const unsigned char *p)
+{
+    uint64_t v = 0;
+    for (int i = 7; i >= 0; i--) v = (v << 8) | p[i];
+    return v;
+}
+
+static uint32_t get_u32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+typedef struct rbuf {
+    const unsigned char *p;
+    size_t len, pos;
+    int failed;
+} rbuf;
+
+static const unsigned char *take(rbuf *r, size_t n)
+{
+    if (r->failed || n > r->len - r->pos) {
+        r->failed = 1;
+        return NULL;
+    }
+    const unsigned char *p = r->p + r->pos;
+    r->pos += n;
+    return p;
+}
+
+static uint64_t take_u64(rbuf *r)
+{
+    const unsigned char *p = take(r, 8);
+    return p ? get_u64(p) : 0;
+}
+
+static uint32_t take_u32(rbuf *r)
+{
+    const unsigned char *p = take(r, 4);
+    return p ? get_u32(p) : 0;
+}
+
+static double take_f64(rbuf *r)
+{
+    uint64_t u = take_u64(r);
+    double v;
+    memcpy(&v, &u, 8);
+    return v;
+}
+
+/* ---------------------------------------------------------- metadata -- */
+
+/* voxel, band, version, initial and removed volume, the per-tool and
+ * per-block tables, and the caller's resume string. */
+static void put_meta(wbuf *b, const fm_stock *s, const char *resume)
+{
+    put_u32(b, META_VERSION);
+    put_f64(b, fm_vdb_voxel(s->vdb));
+    put_u32(b, (uint32_t)fm_vdb_band(s->vdb));
+    put_u64(b, s->version);
+    put_f64(b, s->initial_volume);
+    put_f64(b, s->removed_total);
+    put_u32(b, (uint32_t)s->ntools);
+    for (size_t i = 0; i < s->ntools; i++) {
+        put_u32(b, (uint32_t)s->tools[i].tool);
+        put_f64(b, s->tools[i].removed_mm3);
+    }
+    put_u32(b, (uint32_t)s->nblocks);
+    for (size_t i = 0; i < s->nblocks; i++) {
+        put_u64(b, (uint64_t)s->blocks[i].block);
+        put_f64(b, s->blocks[i].removed_mm3);
+        put_f64(b, s->blocks[i].t0);
+        put_f64(b, s->blocks[i].t1);
+    }
+    const size_t n = resume ? strlen(resume) : 0;
+    put_u32(b, (uint32_t)n);
+    put_bytes(b, resume ? resume : "", n);
+}
+
+typedef struct meta {
+    double voxel;
+    uint32_t band;
+    uint64_t version;
+    double initial, removed;
+    uint32_t ntools;
+    const unsigned char *tools; /* 12 bytes each */
+    uint32_t nblocks;
+    const unsigned char *blocks; /* 32 bytes each */
+    uint32_t resume_len;
+    const unsigned char *resume;
+} meta;
+
+static fm_status parse_meta(const unsigned char *p, size_t len, meta *m, const char *path,
+                            fm_error *err)
+{
+    rbuf r = {p, len, 0, 0};
+    const uint32_t v = take_u32(&r);
+    if (!r.failed && v != META_VERSION)
+        return fm_error_set(err, FM_ERR_INPUT, "%s: snapshot metadata version %u is not %u",
+                            path, v, META_VERSION);
+    m->voxel = take_f64(&r);
+    m->band = take_u32(&r);
+    m->version = take_u64(&r);
+    m->initial = take_f64(&r);
+    m->removed = take_f64(&r);
+    m->ntools = take_u32(&r);
+    m->tools = take(&r, (size_t)m->ntools * 12);
+    m->nblocks = take_u32(&r);
+    m->blocks = take(&r, (size_t)m->nblocks * 32);
+    m->resume_len = take_u32(&r);
+    m->resume = take(&r, m->resume_len);
+    if (r.failed || r.pos != len)
+        return fm_error_set(err, FM_ERR_INPUT, "%s: snapshot metadata is malformed", path);
+    if (!(m->voxel > 0) || m->band < 2 || m->band > 32 || m->ntools > FM_STOCK_MAX_TOOLS)
+        return fm_error_set(err, FM_ERR_INPUT,
+                            "%s: snapshot metadata out of range (voxel %g, band %u, %u tools)",
+                            path, m->voxel, m->band, m->ntools);
+    return FM_OK;
+}
+
+/* ------------------------------------------------------------- writing -- */
+
+static fm_status write_all(int fd, const unsigned char *p, size_t n, uint64_t *hash)
+{
+    if (hash) *hash = fnv1a(*hash, p, n);
+    while (n > 0) {
+        ssize_t w = write(fd, p, n > ((size_t)1 << 30) ? ((size_t)1 << 30) : n);
+        if (w < 0) {
+            if (errno == EINTR) continue;
+            return FM_ERR_IO;
+        }
+        p += w;
+        n -= (size_t)w;
+    }
+    return FM_OK;
+}
+
+/* Split path into its folder ("." if none) and base name. */
+static int split_path(const char *path, char *dir, size_t dsize, const char **base)
+{
+    const char *slash = strrchr(path, '/');
+    if (!slash) {
+        if (dsize < 2) return -1;
+        strcpy(dir, ".");
+        *base = path;
+        return 0;
+    }
+    size_t n = (size_t)(slash - path);
+    if (n == 0) n = 1; /* "/name" */
+    if (n >= dsize) return -1;
+    memcpy(dir, path, n);
+    dir[n] = '\0';
+    *base = slash + 1;
+    return 0;
+}
+
+static fm_status io_error(fm_error *err, const char *what, const char *path, int e)
+{
+    return fm_error_set(err, FM_ERR_IO, "snapshot not saved: %s %s: %s", what, path,
+                        strerror(e));
+}
+
+fm_status fm_stock_save(const fm_stock *s, const char *path, const char *resume, fm_error *err)
+{
+    static unsigned long counter;
+    char dir[4096], tmp[4096 + 300], prevtmp[4096 + 300], prev[4096 + 16];
+    const char *base;
+    if (!s || !path || !*path || split_path(path, dir, sizeof dir, &base) || !*base)
+        return fm_error_set(err, FM_ERR_INPUT, "snapshot path \"%s\" is not a file path",
+                            path ? path : "");
+    if (strlen(base) > 200)
+        return fm_error_set(err, FM_ERR_INPUT, "snapshot file name is too long");
+    const unsigned long seq = __atomic_add_fetch(&counter, 1, __ATOMIC_RELAXED);
+    snprintf(tmp, sizeof tmp, "%s/.%s" TMP_MARK "%ld.%lu", dir, base, (long)getpid(), seq);
+    snprintf(prevtmp, sizeof prevtmp, "%s/.%s.prev" TMP_MARK "%ld.%lu", dir, base,
+             (long)getpid(), seq);
+    snprintf(prev, sizeof prev, "%s.prev", path);
+
+    wbuf m = {0};
+    put_meta(&m, s, resume);
+    unsigned char *vdb = NULL;
+    size_t vdb_len = 0;
+    if (m.failed) {
+        free(m.p);
+        return fm_error_set(err, FM_ERR_LIMIT, "snapshot not saved: out of memory");
+    }
+    fm_status rc = fm_vdb_write(s->vdb, &vdb, &vdb_len, err);
+    if (rc) {
+        free(m.p);
+        return rc;
+    }
+
+    wbuf h = {0};
+    put_bytes(&h, SNAP_MAGIC, 8);
+    put_u32(&h, SNAP_VERSION);
+    put_u32(&h, 0);
+    put_u64(&h, m.len);
+    put_u64(&h, vdb_len);
+
+    int fd = -1;
+    if (h.failed) {
+        rc = fm_error_set(err, FM_ERR_LIMIT, "snapshot not saved: out of memory");
+        goto done;
+    }
+    fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd < 0) {
+        rc = io_error(err, "cannot create", tmp, errno);
+        goto done;
+    }
+    uint64_t hash = FNV_OFFSET;
+    unsigned char trailer[8];
+    if (write_all(fd, h.p, h.len, &hash) || write_all(fd, m.p, m.len, &hash) ||
+        write_all(fd, vdb, vdb_len, &hash)) {
+        rc = io_error(err, "cannot write", tmp, errno);
+        goto fail_tmp;
+    }
+    for (int i = 0; i < 8; i++) trailer[i] = (unsigned char)(hash >> (8 * i));
+    if (write_all(fd, trailer, 8, NULL)) {
+        rc = io_error(err, "cannot write", tmp, errno);
+        goto fail_tmp;
+    }
+    /* an fsync error means the data may not be on disk: not saved */
+    if (fsync(fd) != 0) {
+        rc = io_error(err, "fsync failed on", tmp, errno);
+        goto fail_tmp;
+    }
+    if (close(fd) != 0) {
+        fd = -1;
+        rc = io_error(err, "close failed on", tmp, errno);
+        goto fail_tmp;
+    }
+    fd = -1;
+
+    /* Keep the previous generation. A hard link plus rename replaces
+     * "<path>.prev" atomically while <path> itself never disappears. */
+    if (access(path, F_OK) == 0) {
+        if (link(path, prevtmp) == 0) {
+            if (rename(prevtmp, prev) != 0) {
+                rc = io_error(err, "cannot rename to", prev, errno);
+                unlink(prevtmp);
+                goto fail_tmp;
+            }
+        } else if (rename(path, prev) != 0) { /* no hard links here */
+            rc = io_error(err, "cannot rename to", prev, errno);
+            goto fail_tmp;
+        }
+    }
+    if (rename(tmp, path) != 0) {
+        rc = io_error(err, "cannot rename to", path, errno);
+        goto fail_tmp;
+    }
+    int dfd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dfd < 0) {
+        rc = io_error(err, "cannot open folder", dir, errno);
+        goto done;
+    }
+    if (fsync(dfd) != 0) {
+        /* the rename may not survive a power cut: say so */
+        rc = io_error(err, "fsync failed on folder", dir, errno);
+        close(dfd);
+        goto done;
+    }
+    close(dfd);
+    rc = FM_OK;
+    goto done;
+
+fail_tmp:
+    if (fd >= 0) close(fd);
+    unlink(tmp);
+done:
+    free(h.p);
+    free(m.p);
+    free(vdb);
+    return rc;
+}
+
+/* ------------------------------------------------------------- loading -- */
+
+fm_stock *fm_stock_load_vdb(const char *path, const fm_stock_options *opt_in, fm_error *err)
+{
+    fm_stock_options opt;
+    if (fm_stock_options_resolve(opt_in, &opt, err)) return NULL;
+    if (!path) {
+        fm_error_set(err, FM_ERR_INPUT, "no snapshot path");
+        return NULL;
+    }
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0) {
+        fm_error_set(err, FM_ERR_IO, "cannot open snapshot %s: %s", path, strerror(errno));
+        return NULL;
+    }
+    struct stat st;
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        fm_error_set(err, FM_ERR_IO, "snapshot %s is not a regular file", path);
+        close(fd);
+        return NULL;
+    }
+    const uint64_t size = (uint64_t)st.st_size;
+    if (size < SNAP_HEADER + SNAP_TRAILER) {
+        fm_error_set(err, FM_ERR_INPUT, "%s: truncated snapshot (%llu bytes)", path,
+                     (unsigned long long)size);
+        close(fd);
+        return NULL;
+    }
+    if (size > opt.memory_budget) {
+        fm_error_set(err, FM_ERR_LIMIT,
+                     "%s: snapshot of %.0f MB is larger than the memory budget of %.0f MB", path,
+                     (double)size / 1048576.0, (double)opt.memory_budget / 1048576.0);
+        close(fd);
+        return NULL;
+    }
+    unsigned char *buf = malloc((size_t)size);
+    if (!buf) {
+        fm_error_set(err, FM_ERR_LIMIT, "%s: out of memory reading the snapshot", path);
+        close(fd);
+        return NULL;
+    }
+    size_t got = 0;
+    while (got < size) {
+        ssize_t r = read(fd, buf + got, (size_t)size - got);
+        if (r < 0 && errno == EINTR) continue;
+        if (r <= 0) break;
+        got += (size_t)r;
+    }
+    close(fd);
+    fm_stock *s = NULL;
+    if (got != size) {
+        fm_error_set(err, FM_ERR_IO, "%s: read %zu of %llu bytes", path, got,
+                     (unsigned long long)size);
+        goto out;
+    }
+    if (memcmp(buf, SNAP_MAGIC, 8) != 0) {
+        fm_error_set(err, FM_ERR_INPUT, "%s: not a frepmill snapshot (bad magic number)", path);
+        goto out;
+    }
+    const uint32_t version = get_u32(buf + 8);
+    if (version != SNAP_VERSION) {
+        fm_error_set(err, FM_ERR_INPUT, "%s: snapshot format version %u, this build reads %u",
+                     path, version, SNAP_VERSION);
+        goto out;
+    }
+    const uint64_t mlen = get_u64(buf + 16), vlen = get_u64(buf + 24);
+    const uint64_t body = size - SNAP_HEADER - SNAP_TRAILER;
+    if (mlen > body || vlen > body - mlen || mlen + vlen != body) {
+        fm_error_set(err, FM_ERR_INPUT,
+                     "%s: damaged snapshot: lengths %llu + %llu do not match the %llu bytes "
+                     "present",
+                     path, (unsigned long long)mlen, (unsigned long long)vlen,
+                     (unsigned long long)body);
+        goto out;
+    }
+    const uint64_t want = get_u64(buf + size - SNAP_TRAILER);
+    const uint64_t have = fnv1a(FNV_OFFSET, buf, (size_t)(size - SNAP_TRAILER));
+    if (want != have) {
+        fm_error_set(err, FM_ERR_INPUT, "%s: damaged snapshot: checksum mismatch", path);
+        goto out;
+    }
+    meta m;
+    memset(&m, 0, sizeof m);
+    if (parse_meta(buf + SNAP_HEADER, (size_t)mlen, &m, path, err)) goto out;
+
+    /* verified: only now does OpenVDB see the bytes */
+    fm_vdb *v = fm_vdb_read(buf + SNAP_HEADER + mlen, (size_t)vlen, opt.threads, err);
+    if (!v) goto out;
+    if (fabs(fm_vdb_voxel(v) - m.voxel) > 1e-9 * m.voxel || (uint32_t)fm_vdb_band(v) != m.band) {
+        fm_error_set(err, FM_ERR_INPUT,
+                     "%s: snapshot metadata (voxel %g, band %u) disagrees with its grid "
+                     "(voxel %g, band %d)",
+                     path, m.voxel, m.band, fm_vdb_voxel(v), fm_vdb_band(v));
+        fm_vdb_free(v);
+        goto out;
+    }
+    s = fm_stock_wrap(v, &opt, err);
+    if (!s) goto out;
+    /* every chunk counts as changed in the restored version: readers that
+     * come back after a restart fetch everything once */
+    s->version = m.version ? m.version : 1;
+    for (size_t i = 0; i < s->cap_chunks; i++)
+        if (s->chunks[i].used) s->chunks[i].version = s->version;
+    s->initial_volume = m.initial;
+    s->removed_total = m.removed;
+    for (uint32_t i = 0; i < m.ntools; i++) {
+        const unsigned char *t = m.tools + 12 * (size_t)i;
+        double removed;
+        uint64_t u = get_u64(t + 4);
+        memcpy(&removed, &u, 8);
+        fm_stock_add_tool(s, (int)get_u32(t), removed);
+    }
+    for (uint32_t i = 0; i < m.nblocks; i++) {
+        const unsigned char *b = m.blocks + 32 * (size_t)i;
+        double d[3];
+        for (int k = 0; k < 3; k++) {
+            uint64_t u = get_u64(b + 8 + 8 * k);
+            memcpy(&d[k], &u, 8);
+        }
+        fm_stock_add_block(s, (int64_t)get_u64(b), d[0], d[1], d[2]);
+    }
+    char *resume = malloc((size_t)m.resume_len + 1);
+    if (!resume) {
+        fm_error_set(err, FM_ERR_LIMIT, "%s: out of memory", path);
+        fm_stock_free(s);
+        s = NULL;
+        goto out;
+    }
+    memcpy(resume, m.resume, m.resume_len);
+    resume[m.resume_len] = '\0';
+    free(s->resume);
+    s->resume = resume;
+out:
+    free(buf);
+    return s;
+}
+
+/* ------------------------------------------------------------ cleanup -- */
+
+fm_status fm_stock_snapshot_cleanup(const char *dir, size_t *removed, fm_error *err)
+{
+    if (removed) *removed = 0;
+    DIR *d = opendir(dir);
+    if (!d) return fm_error_set(err, FM_ERR_IO, "cannot open %s: %s", dir, strerror(errno));
+    struct dirent *e;
+    size_t count = 0;
+    const long self = (long)getpid();
+    while ((e = readdir(d)) != NULL) {
+        const char *mark = strstr(e->d_name, TMP_MARK);
+        if (e->d_name[0] != '.' || !mark) continue;
+        char *end;
+        const long pid = strtol(mark + strlen(TMP_MARK), &end, 10);
+        if (end == mark + strlen(TMP_MARK) || *end != '.') continue;
+        /* a writer that still runs may be in the middle of its write */
+        if (pid == self) continue;
+        if (pid > 0 && (kill((pid_t)pid, 0) == 0 || errno == EPERM)) continue;
+        char full[4096 + 512];
+        snprintf(full, sizeof full, "%s/%s", dir, e->d_name);
+        if (unlink(full) == 0) count++;
+    }
+    closedir(d);
+    if (removed) *removed = count;
+    return FM_OK;
+}

@@ -1,0 +1,163 @@
+/* stock.h: the workpiece. lib/stock keeps the stock as an OpenVDB narrow-band
+ * level set (C++ inside, this C header outside), creates it from a box, a
+ * cylinder, an F-rep field, an STL mesh or a frepmill snapshot, subtracts
+ * swept volumes from it, measures it, tracks which chunks changed, and saves
+ * crash-safe snapshots. Everything in this header uses the F-rep sign:
+ * positive inside, millimetres. No C++ type crosses it. */
+#ifndef FM_STOCK_H
+#define FM_STOCK_H
+
+#include "core/core.h"
+#include "frep/frep.h"
+
+#include <stddef.h>
+#include <stdint.h>
+
+typedef struct fm_stock fm_stock;
+
+typedef struct fm_stock_options {
+    double voxel_mm;          /* edge of a voxel; default 0.1 */
+    int band_voxels;          /* narrow-band half-width in voxels; default 3, at least 2 */
+    size_t memory_budget;     /* bytes the grid may use; default 4 GiB */
+    int threads;              /* 0: one per core */
+    size_t block_table_size;  /* per-block entries kept (largest removals win); default 4096 */
+} fm_stock_options;
+
+void fm_stock_options_default(fm_stock_options *opt);
+
+/* The memory a grid needs for a surface, before anything is allocated.
+ * projected_area_mm2 is the sum over the surface of |nx|+|ny|+|nz| dA, i.e.
+ * the areas of the surface projected on the three axis planes (a box's
+ * plain surface area; about 1.27 times the area of a cylinder's side).
+ * The formula is in docs/stock.md. */
+size_t fm_stock_estimate_bytes(double projected_area_mm2, double voxel_mm, int band_voxels);
+
+/* ------------------------------------------------------------ creation -- */
+/* opt may be NULL (defaults). All return NULL and fill err on failure:
+ * FM_ERR_INPUT for bad geometry or files, FM_ERR_LIMIT when the estimate
+ * exceeds the budget (the message names both), FM_ERR_IO for files. */
+fm_stock *fm_stock_new_box(const double lo[3], const double hi[3], const fm_stock_options *opt,
+                           fm_error *err);
+/* Upright cylinder: axis parallel to Z through (x, y), from z0 to z1. */
+fm_stock *fm_stock_new_cylinder(double x, double y, double z0, double z1, double r,
+                                const fm_stock_options *opt, fm_error *err);
+/* Any field (a HyperFun model): rasterized in its narrow band; the interval
+ * callback skips leaf-sized boxes. The memory estimate counts the boundary
+ * leaves the interval pass finds. */
+fm_stock *fm_stock_new_from_field(const fm_field *field, const fm_stock_options *opt,
+                                  fm_error *err);
+/* Binary or ASCII STL of a closed mesh (cast or pre-machined stock). */
+fm_stock *fm_stock_new_from_stl(const char *path, const fm_stock_options *opt, fm_error *err);
+/* A snapshot written by fm_stock_save (never a file a network client sent).
+ * opt supplies the budget and threads; voxel and band come from the file. */
+fm_stock *fm_stock_load_vdb(const char *path, const fm_stock_options *opt, fm_error *err);
+void fm_stock_free(fm_stock *stock);
+
+/* ----------------------------------------------------------- cutting -- */
+
+typedef struct fm_stock_cut {
+    int tool;       /* tool number: removed volume is summed per tool */
+    int64_t block;  /* block / source line id: summed per block; negative = none */
+    double t0, t1;  /* program time of the motion, seconds */
+} fm_stock_cut;
+
+/* What one subtraction did; for tests, benchmarks and the report. */
+typedef struct fm_stock_cut_stats {
+    double removed_mm3;      /* volume before - volume after, of the touched region */
+    size_t intervals;        /* interval evaluations of the swept field */
+    size_t leaves_evaluated; /* 8^3 leaves evaluated voxel by voxel */
+    size_t voxels_evaluated; /* = 512 * leaves_evaluated */
+    size_t interior_boxes;   /* boxes found all inside the swept volume */
+    size_t leaves_changed;   /* leaves whose values changed */
+} fm_stock_cut_stats;
+
+/* stock = stock \ swept. swept is positive inside, first-order distance,
+ * negative outside its [lo, hi] (frep.h). cut may be NULL (tool 0, no
+ * block). stats may be NULL. On error the stock is unchanged. */
+fm_status fm_stock_subtract(fm_stock *stock, const fm_field *swept, const fm_stock_cut *cut,
+                            fm_stock_cut_stats *stats, fm_error *err);
+
+/* ----------------------------------------------------------- measures -- */
+
+/* Volume of the whole grid now (mm^3), summed voxel by voxel with a linear
+ * smooth Heaviside; costs O(grid). */
+double fm_stock_volume(const fm_stock *stock);
+/* Volume when created (or the initial volume stored in a snapshot). */
+double fm_stock_initial_volume(const fm_stock *stock);
+/* Sum of the removed volumes of all cuts, computed on the touched region
+ * only; equals initial - current volume up to rounding. */
+double fm_stock_removed_volume(const fm_stock *stock);
+/* Removed by one tool number (0 if it never cut). */
+double fm_stock_removed_volume_tool(const fm_stock *stock, int tool);
+
+typedef struct fm_stock_tool_volume {
+    int tool;
+    double removed_mm3;
+} fm_stock_tool_volume;
+/* Fills up to cap entries (ascending tool number); returns how many exist. */
+size_t fm_stock_tool_volumes(const fm_stock *stock, fm_stock_tool_volume *out, size_t cap);
+
+typedef struct fm_stock_block {
+    int64_t block;
+    double removed_mm3;
+    double t0, t1; /* program time span of the block's cuts: rate = removed / (t1 - t0) */
+} fm_stock_block;
+/* Blocks by removed volume, largest first; up to cap; returns how many are
+ * kept (at most opt.block_table_size: when full, the smallest is evicted). */
+size_t fm_stock_blocks(const fm_stock *stock, fm_stock_block *out, size_t cap);
+/* 1 and *out if the block is in the table, else 0. */
+int fm_stock_block_removed(const fm_stock *stock, int64_t block, fm_stock_block *out);
+
+/* Surface area (mm^2), OpenVDB's levelSetArea; costs O(grid). */
+fm_status fm_stock_surface_area(const fm_stock *stock, double *area_mm2, fm_error *err);
+/* Memory the grid uses now (bytes, OpenVDB's own count). */
+size_t fm_stock_memory_bytes(const fm_stock *stock);
+
+/* ------------------------------------------------------------- chunks -- */
+
+#define FM_STOCK_CHUNK_VOXELS 64
+
+typedef struct fm_stock_chunk {
+    int32_t index[3];  /* chunk coordinates: voxel index / 64, rounded down */
+    uint64_t version;  /* stock version when it last changed */
+    double lo[3], hi[3]; /* world bounds of the chunk's voxel centres, mm */
+} fm_stock_chunk;
+
+/* Bumped by every subtraction that changed the grid; 1 after creation. */
+uint64_t fm_stock_version(const fm_stock *stock);
+/* Chunks changed after version since (0: all chunks with surface). Fills
+ * up to cap entries and returns the number that match. */
+size_t fm_stock_changed_chunks(const fm_stock *stock, uint64_t since, fm_stock_chunk *out,
+                               size_t cap);
+void fm_stock_chunk_bounds(const fm_stock *stock, const int32_t index[3], double lo[3],
+                           double hi[3]);
+
+/* ---------------------------------------------------------- accessors -- */
+
+double fm_stock_voxel_size(const fm_stock *stock);
+int fm_stock_band_voxels(const fm_stock *stock);
+/* World position of voxel index ijk (voxel centres are at integer indices). */
+void fm_stock_index_to_world(const fm_stock *stock, const double ijk[3], double xyz[3]);
+/* Inclusive index box of the active voxels; FM_ERR_INPUT if the grid is empty. */
+fm_status fm_stock_active_bounds(const fm_stock *stock, int32_t lo[3], int32_t hi[3],
+                                 fm_error *err);
+/* Signed distance at a world point, trilinear, positive inside; clamped to
+ * +-band far from the surface. */
+double fm_stock_sample(const fm_stock *stock, const double p[3]);
+
+/* ---------------------------------------------------------- snapshots -- */
+
+/* Write a snapshot crash-safe: temporary file in the same folder, fsync,
+ * the existing file kept as "<path>.prev", rename, fsync of the folder. Any
+ * failure, fsync included, means not saved (FM_ERR_IO) and leaves the
+ * previous files as they were. resume is an opaque string stored with the
+ * snapshot (job id, next block...); may be NULL. */
+fm_status fm_stock_save(const fm_stock *stock, const char *path, const char *resume,
+                        fm_error *err);
+/* The resume string of a loaded snapshot ("" otherwise). */
+const char *fm_stock_resume_string(const fm_stock *stock);
+/* Remove temporary files left in dir by snapshot writers that no longer
+ * run. *removed (may be NULL) gets the count. Call at start. */
+fm_status fm_stock_snapshot_cleanup(const char *dir, size_t *removed, fm_error *err);
+
+#endif

@@ -1,0 +1,72 @@
+/* stock_private.h: what lib/stock's C files and its C++ bridge
+ * (vdb_bridge.cpp) say to each other, and the one door lib/mesh's C++ bridge
+ * may use (fm_stock_vdb_grid). Not part of the public API. Signs here are
+ * OpenVDB's (phi < 0 inside) unless a comment says otherwise. */
+#ifndef FM_STOCK_PRIVATE_H
+#define FM_STOCK_PRIVATE_H
+
+/* core.h and frep.h are plain C headers without C++ guards. */
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#include "stock/stock.h"
+
+/* The grid plus its thread arena; defined in vdb_bridge.cpp. */
+typedef struct fm_vdb fm_vdb;
+
+/* Chunk and budget bookkeeping the bridge reports back to C. */
+typedef void (*fm_vdb_touch_fn)(void *user, const int32_t lo[3], const int32_t hi[3]);
+
+/* Empty grid: background +band*voxel, voxel centres at origin + voxel*i. */
+fm_vdb *fm_vdb_new(double voxel, int band, const double origin[3], int threads, fm_error *err);
+void fm_vdb_free(fm_vdb *v);
+
+/* Rasterize field (positive inside) into an empty grid. Refuses with
+ * FM_ERR_LIMIT, before allocating leaves, when the boundary leaves found by
+ * the interval pass would exceed budget bytes. */
+fm_status fm_vdb_rasterize(fm_vdb *v, const fm_field *field, size_t budget, fm_error *err);
+
+/* grid = grid \ field, restricted to the region that can change. touch is
+ * called (on the calling thread) for every index box whose values changed.
+ * Refuses with FM_ERR_LIMIT, grid unchanged, when the new leaves would take
+ * the grid over budget. */
+fm_status fm_vdb_subtract(fm_vdb *v, const fm_field *field, size_t budget, fm_vdb_touch_fn touch,
+                          void *user, fm_stock_cut_stats *stats, fm_error *err);
+
+/* Closed triangle soup (world mm) to a level set; grid must be empty. */
+fm_status fm_vdb_from_mesh(fm_vdb *v, const float *points, size_t npoints, const uint32_t *tris,
+                           size_t ntris, fm_error *err);
+
+double fm_vdb_volume(const fm_vdb *v);
+fm_status fm_vdb_area(const fm_vdb *v, double *area, fm_error *err);
+size_t fm_vdb_memory(const fm_vdb *v);
+/* Bytes one more leaf costs (for the estimate formula). */
+size_t fm_vdb_leaf_bytes(void);
+size_t fm_vdb_internal1_bytes(void);
+double fm_vdb_voxel(const fm_vdb *v);
+int fm_vdb_band(const fm_vdb *v);
+void fm_vdb_origin(const fm_vdb *v, double origin[3]);
+/* Inclusive index box of the active voxels; 0 if there are none. */
+int fm_vdb_active_bounds(const fm_vdb *v, int32_t lo[3], int32_t hi[3]);
+/* Trilinear phi at a world point (OpenVDB sign). */
+double fm_vdb_sample(const fm_vdb *v, const double p[3]);
+/* Call touch for the index box of every leaf (initial chunk marking). */
+void fm_vdb_for_each_leaf(const fm_vdb *v, fm_vdb_touch_fn touch, void *user);
+
+/* Serialize to a malloc'd buffer (OpenVDB stream, Blosc when available). */
+fm_status fm_vdb_write(const fm_vdb *v, unsigned char **buf, size_t *len, fm_error *err);
+/* Parse bytes already verified by the snapshot wrapper. */
+fm_vdb *fm_vdb_read(const unsigned char *buf, size_t len, int threads, fm_error *err);
+
+/* For lib/mesh's C++ bridge only: a pointer to the stock's
+ * openvdb::FloatGrid::Ptr (cast it back to that type). Valid until the stock
+ * is freed; do not modify the grid, and never use it from C. */
+void *fm_stock_vdb_grid(fm_stock *stock);
+void *fm_vdb_grid_ptr(fm_vdb *v);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
