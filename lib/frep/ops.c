@@ -417,6 +417,10 @@ static fm_node rebuild(remap_job *job, fm_node n)
         return fm_graph_intern(g, &r);
     }
     if (op == FM_OP_VOXELS) {
+        if (!FM_VOXELS_SAMPLE_CHILDREN)
+            return fm_graph_fail(g, FM_ERR_INPUT,
+                                 "remap: a voxel grid cannot be moved or deformed yet (the evaluators "
+                                 "sample it at the unmapped point)");
         r.a = mapped(job, r.a);
         r.b = mapped(job, r.b);
         r.c = mapped(job, r.c);

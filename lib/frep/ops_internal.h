@@ -13,4 +13,11 @@
  * at the children's values, not at the raw point. */
 #define FM_VOXELS_MAX_SAMPLES ((size_t)1 << 28)
 
+/* 1 once the evaluators (special.c, tape.c) sample VOXELS at the children's
+ * values. While 0, fm_remap refuses to move a voxel grid, since the tape
+ * would sample the unmoved grid at the raw point and be silently wrong. */
+#ifndef FM_VOXELS_SAMPLE_CHILDREN
+#define FM_VOXELS_SAMPLE_CHILDREN 0
+#endif
+
 #endif

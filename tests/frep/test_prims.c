@@ -11,10 +11,54 @@
 
 #define PI 3.14159265358979323846
 
+/* Every value the tests read is also computed by the compiled tape
+ * (fm_tape_compile + fm_eval_point) and must equal the reference
+ * evaluator's. One tape is cached: tests evaluate one node many times. */
+static struct {
+    const fm_graph *g;
+    fm_node node;
+    fm_tape *tape;
+    fm_evaluator *ev;
+} tape_cache;
+
+static void tape_cache_clear(void)
+{
+    fm_evaluator_free(tape_cache.ev);
+    fm_tape_free(tape_cache.tape);
+    memset(&tape_cache, 0, sizeof tape_cache);
+}
+
+static void free_graph(fm_graph *g)
+{
+    tape_cache_clear();
+    fm_graph_free(g);
+}
+
+static double reference_and_tape(const fm_graph *g, fm_node n, const double p[4])
+{
+    double ref = fm_graph_eval_reference(g, n, p);
+    if (tape_cache.g != g || tape_cache.node != n) {
+        tape_cache_clear();
+        fm_error err;
+        fm_error_clear(&err);
+        tape_cache.g = g;
+        tape_cache.node = n;
+        tape_cache.tape = fm_tape_compile(g, n, &err);
+        tape_cache.ev = tape_cache.tape ? fm_evaluator_new(tape_cache.tape, &err) : NULL;
+        CHECK(tape_cache.ev != NULL);
+    }
+    if (tape_cache.ev) {
+        double v = fm_eval_point(tape_cache.ev, p);
+        if (isnan(ref)) CHECK(isnan(v));
+        else CHECK_NEAR(v, ref, 1e-12 * (1.0 + fabs(ref)));
+    }
+    return ref;
+}
+
 static double ev(const fm_graph *g, fm_node n, const double p[3])
 {
     double q[4] = {p[0], p[1], p[2], 0.0};
-    return fm_graph_eval_reference(g, n, q);
+    return reference_and_tape(g, n, q);
 }
 
 static double grad_norm(const fm_graph *g, fm_node n, const double p[3])
@@ -78,7 +122,7 @@ static void test_halfspace(void)
     }
     double zero[3] = {0, 0, 0};
     expect_error(g, fm_halfspace(g, zero, 1.0), FM_ERR_INPUT, "normal");
-    fm_graph_free(g);
+    free_graph(g);
 }
 
 static void test_sphere(void)
@@ -98,10 +142,10 @@ static void test_sphere(void)
     CHECK(fm_sphere(g, c, 2.5) == f);
     CHECK(fm_graph_node_count(g) == count);
     expect_error(g, fm_sphere(g, c, -1.0), FM_ERR_INPUT, "radius -1");
-    fm_graph_free(g);
+    free_graph(g);
     g = fm_graph_new(0);
     expect_error(g, fm_sphere(g, c, 0.0), FM_ERR_INPUT, "radius 0");
-    fm_graph_free(g);
+    free_graph(g);
 }
 
 static void test_block(void)
@@ -125,7 +169,7 @@ static void test_block(void)
         CHECK_NEAR(grad_norm(g, f, p), 1.0, 1e-5);
     }
     expect_error(g, fm_block(g, hi, lo), FM_ERR_INPUT, "lo < hi");
-    fm_graph_free(g);
+    free_graph(g);
 }
 
 /* (distance along the axis, distance from the axis) of p. */
@@ -165,10 +209,10 @@ static void test_cylinder(void)
     CHECK_NEAR(ev(g, fz, p), 0.5, 1e-15);
     double zero[3] = {0, 0, 0};
     expect_error(g, fm_cylinder(g, base, zero, 1, 1), FM_ERR_INPUT, "axis");
-    fm_graph_free(g);
+    free_graph(g);
     g = fm_graph_new(0);
     expect_error(g, fm_cylinder(g, base, axis, -2, 1), FM_ERR_INPUT, "radius -2");
-    fm_graph_free(g);
+    free_graph(g);
 }
 
 static void test_cone(void)
@@ -191,10 +235,10 @@ static void test_cone(void)
         }
     }
     expect_error(g, fm_cone(g, base, axis, 0, 0, 1), FM_ERR_INPUT, "not both 0");
-    fm_graph_free(g);
+    free_graph(g);
     g = fm_graph_new(0);
     expect_error(g, fm_cone(g, base, axis, 1, 1, -1), FM_ERR_INPUT, "height -1");
-    fm_graph_free(g);
+    free_graph(g);
 }
 
 static void test_torus(void)
@@ -221,7 +265,7 @@ static void test_torus(void)
         if (norm3(e) > 1e-3) CHECK_NEAR(grad_norm(g, f, p), 1.0, 1e-5);
     }
     expect_error(g, fm_torus(g, c, axis, 3, -1), FM_ERR_INPUT, "r = -1");
-    fm_graph_free(g);
+    free_graph(g);
 }
 
 static void test_ellipsoid(void)
@@ -256,7 +300,7 @@ static void test_ellipsoid(void)
     CHECK_NEAR(ev(g, f, c), 1.0, 0.0); /* the centre: smallest radius */
     double bad[3] = {1, 0, 2};
     expect_error(g, fm_ellipsoid(g, c, bad), FM_ERR_INPUT, "radii");
-    fm_graph_free(g);
+    free_graph(g);
 }
 
 /* The standard inside-outside function of a superellipsoid, by hand. */
@@ -309,7 +353,7 @@ static void test_superellipsoid(void)
         CHECK(isfinite(ev(g, f, c)) && ev(g, f, c) > 0);
     }
     expect_error(g, fm_superellipsoid(g, c, rad, 0.0, 1.0), FM_ERR_INPUT, "exponents");
-    fm_graph_free(g);
+    free_graph(g);
 }
 
 /* Eq. 4.9 by hand: w / sqrt(w^2 + |grad w|^2), grad by central differences. */
@@ -418,10 +462,10 @@ static void test_blobby_soft(void)
 
     double bad_a[2] = {1, -1};
     expect_error(g, fm_blobby(g, 2, blob_c, bad_a, blob_b, 0.5), FM_ERR_INPUT, "a > 0");
-    fm_graph_free(g);
+    free_graph(g);
     g = fm_graph_new(0);
     expect_error(g, fm_soft(g, 2, soft_c, soft_r, 0.0), FM_ERR_INPUT, "threshold");
-    fm_graph_free(g);
+    free_graph(g);
 }
 
 static double linear_field(double x, double y, double z) { return 2 * x - y + 3 * z + 1; }
@@ -448,7 +492,8 @@ static void test_voxels(void)
     CHECK(g->grid_count == 1);
     v[0] = 1e6f; /* the graph holds a copy */
     const fm_voxel_grid *grid = &g->grids[g->nodes[f].aux];
-    int reference_ready = !isnan(ev(g, f, lo));
+    double probe[4] = {lo[0], lo[1], lo[2], 0.0};
+    int reference_ready = !isnan(fm_graph_eval_reference(g, f, probe));
     for (int i = 0; i < 500; i++) {
         double p[3], q[3], d[3];
         random_point(p, -3, 4);
@@ -462,18 +507,18 @@ static void test_voxels(void)
     }
     if (!reference_ready) printf("voxels: reference evaluation of VOXELS not available yet, skipped\n");
     expect_error(g, fm_voxels(g, lo, hi, 1, 3, 3, v), FM_ERR_INPUT, "at least 2");
-    fm_graph_free(g);
+    free_graph(g);
     g = fm_graph_new(0);
     expect_error(g, fm_voxels(g, lo, hi, (size_t)1 << 20, (size_t)1 << 20, 4, v), FM_ERR_LIMIT,
                  "budget");
-    fm_graph_free(g);
+    free_graph(g);
     g = fm_graph_new(0);
     expect_error(g, fm_voxels(g, lo, hi, SIZE_MAX / 2, 4, 4, v), FM_ERR_LIMIT, "budget");
-    fm_graph_free(g);
+    free_graph(g);
     g = fm_graph_new(0);
     v[3] = NAN;
     expect_error(g, fm_voxels(g, lo, hi, n[0], n[1], n[2], v), FM_ERR_INPUT, "sample 3");
-    fm_graph_free(g);
+    free_graph(g);
     free(v);
 }
 
@@ -482,7 +527,7 @@ static void test_budget(void)
     fm_graph *g = fm_graph_new(8);
     double c[3] = {0, 0, 0};
     expect_error(g, fm_sphere(g, c, 1.0), FM_ERR_LIMIT, "node budget");
-    fm_graph_free(g);
+    free_graph(g);
 }
 
 int main(void)
