@@ -84,7 +84,8 @@ fm_node fm_param(fm_graph *g, const char *name, double value);
 fm_status fm_graph_set_param(fm_graph *g, const char *name, double value);
 
 /* Generic builders (constant folding happens here: an op on constants is a
- * constant; x + 0, x * 1, x * 0 (finite x), --x simplify). */
+ * constant; x + 0, x * 1, x * -1, --x, min(a, a), max(a, a) simplify; x * 0
+ * is kept, since x may be infinite or NaN at some points). */
 fm_node fm_unary(fm_graph *g, fm_op op, fm_node a);
 fm_node fm_binary(fm_graph *g, fm_op op, fm_node a, fm_node b);
 fm_node fm_select(fm_graph *g, fm_node cond, fm_node if_true, fm_node if_false);
@@ -111,8 +112,8 @@ fm_node fm_r_inter(fm_graph *g, fm_node f1, fm_node f2, double alpha);
 /* R_0^m (eq. 5): (f1 + f2 +- sqrt(f1^2 + f2^2)) (f1^2 + f2^2)^(m/2), m >= 0. */
 fm_node fm_r_union_m(fm_graph *g, fm_node f1, fm_node f2, int m);
 fm_node fm_r_inter_m(fm_graph *g, fm_node f1, fm_node f2, int m);
-/* R_p (Shapiro eq. 3.6): f1 + f2 +- (|f1|^p + |f2|^p)^(1/p), p >= 1
- * (p = 2 equals R_0). */
+/* R_p (Shapiro eq. 3.6): f1 + f2 +- (|f1|^p + |f2|^p)^(1/p), p > 1
+ * (p = 2 equals R_0; p = 1 would make the union all of space). */
 fm_node fm_rp_union(fm_graph *g, fm_node f1, fm_node f2, double p);
 fm_node fm_rp_inter(fm_graph *g, fm_node f1, fm_node f2, double p);
 fm_node fm_complement(fm_graph *g, fm_node f);
@@ -136,7 +137,7 @@ fm_node fm_hyperbolic_blend_inter(fm_graph *g, fm_node f1, fm_node f2, double a)
 /* L_p approximate union / intersection of n functions (Akleman sec. 3):
  * union (sum f_i^-p)^(-1/p) and intersection (sum f_i^p)^(1/p) as the paper
  * writes them for positive f_i; here extended to signed f by the R_p forms so
- * that the zero set is kept: see docs/frep.md. n >= 1, p >= 1. */
+ * that the zero set is kept: see docs/frep.md. n >= 1, p > 1. */
 fm_node fm_lp_union(fm_graph *g, const fm_node *f, size_t n, double p);
 fm_node fm_lp_inter(fm_graph *g, const fm_node *f, size_t n, double p);
 

@@ -114,7 +114,9 @@ static uint8_t deps_of(const fm_graph *g, const fm_node_rec *r)
     uint8_t d = 0;
     if (r->op == FM_OP_VAR) return (uint8_t)(1u << r->aux);
     if (r->op == FM_OP_PARAM) return FM_DEP_PARAM;
-    if (r->op == FM_OP_VOXELS) return 0x7;
+    /* A voxel grid samples at its children (the x, y, z expressions, so
+     * that a grid can be moved); a bare grid samples at x, y, z. */
+    if (r->op == FM_OP_VOXELS && !r->a) return 0x7;
     if (r->a) d |= g->nodes[r->a].deps;
     if (r->b) d |= g->nodes[r->b].deps;
     if (r->c) d |= g->nodes[r->c].deps;
