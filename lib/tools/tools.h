@@ -64,4 +64,111 @@ void fm_tool_table_free(fm_tool_table *table);
 /* The entry for tool number n, or NULL. */
 const fm_tool_spec *fm_tool_table_find(const fm_tool_table *table, int number);
 
+/* ================================================= cutter geometry ==
+ * Everything below turns a tool table entry into solids. Each part (flutes,
+ * shank, holder) is a solid of revolution about +Z given by its boundary
+ * profile in the (r, z) half-plane: a chain of segments and arcs from the
+ * axis at the bottom (0, z_lo) to the axis at the top (0, z_hi), with z never
+ * decreasing along the chain, so that the part is {z_lo <= z <= z_hi,
+ * r <= R(z)}. Its signed distance at (x, y, z) is the exact 2D signed
+ * distance to that region at (sqrt(x^2 + y^2), z), positive inside. Such a
+ * distance is 1-Lipschitz and never increases with r (lib/sweep relies on
+ * both; docs/tools.md proves the second). */
+
+#include "frep/frep.h"
+
+#define FM_PROFILE_MAX 48
+
+typedef enum fm_profile_kind { FM_PROFILE_SEGMENT = 0, FM_PROFILE_ARC } fm_profile_kind;
+
+/* One element of a profile, from a to b (points (r, z)). An arc has centre c
+ * and radius, spans at most a quarter turn, and goes the short way round
+ * (ccw is 1 when that is counter-clockwise in the (r, z) plane). */
+typedef struct fm_profile_elem {
+    fm_profile_kind kind;
+    double a[2], b[2];
+    double c[2], radius;
+    int ccw;
+} fm_profile_elem;
+
+/* A custom cutter (HyperFun model or any other function), taken as the solid
+ * of revolution of its section y = 0, x = r >= 0: the spinning tool sweeps
+ * exactly that. It must lie in r <= bound_radius, 0 <= z <= bound_length.
+ * eval need not be a distance; interval must be a sound enclosure over the
+ * (r, z) box. Callbacks run on several threads, each with its own worker. */
+typedef struct fm_tool_custom {
+    void *ctx;
+    void *(*worker_new)(void *ctx);
+    void (*worker_free)(void *ctx, void *worker);
+    double (*eval)(void *ctx, void *worker, double r, double z);
+    fm_interval (*interval)(void *ctx, void *worker, fm_interval r, fm_interval z);
+    double bound_radius, bound_length;
+} fm_tool_custom;
+
+typedef enum fm_tool_part_kind { FM_TOOL_PART_PROFILE = 0, FM_TOOL_PART_CUSTOM } fm_tool_part_kind;
+
+typedef struct fm_tool_part {
+    fm_tool_part_kind kind;
+    size_t count;                        /* profile elements */
+    fm_profile_elem elem[FM_PROFILE_MAX];
+    double z_lo, z_hi, r_max;            /* bounding cylinder, tool frame */
+    int convex;                          /* the solid is convex */
+    double ball_radius;                  /* > 0: the profile is a ball tip under a cylinder of the
+                                            same radius, at least 2 radii tall (capsule fast path) */
+    fm_tool_custom custom;               /* FM_TOOL_PART_CUSTOM */
+} fm_tool_part;
+
+typedef struct fm_tool {
+    fm_tool_spec spec;
+    fm_tool_part flutes; /* cutting part: tip to flute_length */
+    fm_tool_part shank;  /* flute_length to length; has_shank = 0 when they are equal */
+    fm_tool_part holder; /* from the holder face (z = length) upward; has_holder = 0 without segments */
+    int has_shank, has_holder;
+} fm_tool;
+
+/* Check a tool table entry: FM_ERR_INPUT with a message naming the tool and
+ * the field when a dimension is impossible. */
+fm_status fm_tool_validate(const fm_tool_spec *spec, fm_error *err);
+/* Build the parts of a standard cutter (every shape but FM_TOOL_HYPERFUN;
+ * for that one use fm_tool_build_custom). */
+fm_status fm_tool_build(const fm_tool_spec *spec, fm_tool *tool, fm_error *err);
+/* A custom cutting part with the shank and holder of spec (spec->shape is
+ * FM_TOOL_HYPERFUN; flute_length and bound_radius bound the custom part). */
+fm_status fm_tool_build_custom(const fm_tool_spec *spec, const fm_tool_custom *custom,
+                               fm_tool *tool, fm_error *err);
+/* A custom part over a compiled tape of f(x, y, z) (t = 0): the hook for
+ * lib/hf models. The tape must outlive the part. */
+fm_status fm_tool_custom_from_tape(const fm_tape *tape, double bound_radius, double bound_length,
+                                   fm_tool_custom *custom, fm_error *err);
+
+/* A part from an explicit profile chain (validated: starts and ends on the
+ * axis, continuous, z non-decreasing, r >= 0, arcs consistent). */
+fm_status fm_tool_part_from_profile(const fm_profile_elem *elems, size_t n, fm_tool_part *part,
+                                    fm_error *err);
+
+/* Per-thread state for evaluating a part (NULL for profile parts, and NULL
+ * is accepted by every evaluator for them). */
+void *fm_tool_part_worker_new(const fm_tool_part *part);
+void fm_tool_part_worker_free(const fm_tool_part *part, void *worker);
+
+/* The exact 2D signed distance at (r, z), r >= 0, and its gradient
+ * (d/dr, d/dz) (a supergradient where it has a kink); grad may be NULL. */
+double fm_tool_profile_eval(const fm_tool_part *part, void *worker, double r, double z,
+                            double grad[2]);
+/* A sound enclosure of the profile function over [r] x [z] (r >= 0). */
+fm_interval fm_tool_profile_interval(const fm_tool_part *part, void *worker, fm_interval r,
+                                     fm_interval z);
+/* The part in 3D (tool frame). */
+double fm_tool_part_eval(const fm_tool_part *part, void *worker, const double p[3]);
+void fm_tool_part_eval_batch(const fm_tool_part *part, void *worker, size_t n, const double *x,
+                             const double *y, const double *z, double *out);
+fm_interval fm_tool_part_interval(const fm_tool_part *part, void *worker,
+                                  const fm_interval box[3]);
+
+/* The part as an frep DAG of the nodes r (>= 0) and z: the same exact
+ * distance. FM_NONE for custom parts (they are functions already). */
+fm_node fm_tool_part_build_rz(fm_graph *g, const fm_tool_part *part, fm_node r, fm_node z);
+/* In 3D: r = sqrt(x^2 + y^2). */
+fm_node fm_tool_part_build(fm_graph *g, const fm_tool_part *part);
+
 #endif
