@@ -762,7 +762,8 @@ static int exec_assign(hf_exec *ex, hf_frame *fr, const hf_ast *at)
         free(vals);
         return ok;
     }
-    if (rhs->kind == HF_E_NAME && fr->vars[rhs->name].kind == VAR_ARRAY) {
+    if (rhs->kind == HF_E_NAME && fr->vars[rhs->name].kind == VAR_ARRAY &&
+        !(o && at->name == o->name)) {
         /* a = b copies an array (an extension: HyperFun copies item by item) */
         if (rhs->name == at->name) return 1;
         hf_var *src = &fr->vars[rhs->name];
@@ -871,7 +872,7 @@ static int exec_while(hf_exec *ex, hf_frame *fr, const hf_ast *at)
         if (!fm_node_is_const(ex->g, cond, &c)) {
             int on_x = 0;
             for (int axis = 0; axis < FM_AXES; axis++) on_x |= fm_node_depends_on(ex->g, cond, axis);
-            return xfail(ex, &ex->p->nodes[at->a], FM_ERR_INPUT,
+            return xfail(ex, at, FM_ERR_INPUT,
                          "the condition of this 'while' depends on %s; only loops whose "
                          "condition is known at compile time can be unrolled",
                          on_x ? "the point coordinates (x)" : "a parameter (a)");
@@ -879,9 +880,9 @@ static int exec_while(hf_exec *ex, hf_frame *fr, const hf_ast *at)
         if (c == 0.0) return 1;
         if (++ex->iterations > ex->opt->max_iterations)
             return xfail(ex, at, FM_ERR_LIMIT,
-                         "this 'while' loop has not ended after %zu iterations in all (the "
-                         "iteration budget); does its condition ever become false?",
-                         count);
+                         "this 'while' loop has not ended after %zu iterations (%zu for all "
+                         "loops is the iteration budget); does its condition ever become false?",
+                         count, ex->opt->max_iterations);
         count++;
         if (!exec_block(ex, fr, at->b)) return 0;
     }

@@ -6,6 +6,7 @@
 #include "hf/hf_internal.h"
 
 #include <ctype.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -647,7 +648,7 @@ static int parse_param_array(hf_parser *ps, uint32_t *name, int *dim, const char
     if (ps->tok != HF_TK_NUMBER) return expected(ps, "the array size", "in the object header");
     double v = ps->tnum;
     int line = ps->tline, col = ps->tcol;
-    if (v != (double)(int)v || v < 1 || v > (!strcmp(role, "coordinate") ? 4 : FM_HF_MAX_PARAMS))
+    if (!(v >= 1 && v <= (!strcmp(role, "coordinate") ? 4 : FM_HF_MAX_PARAMS)) || v != floor(v))
         return fail_at(ps, line, col, FM_ERR_INPUT,
                        "the %s array size must be an integer from 1 to %d, found %g", role,
                        !strcmp(role, "coordinate") ? 4 : FM_HF_MAX_PARAMS, v);

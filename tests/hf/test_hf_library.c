@@ -1,0 +1,260 @@
+/* test_hf_library.c: every library function of lib/hf against its
+ * HyperFun formula, written out independently here, at random points. The
+ * programs use the fixed arrays below (centre c, axis u, key points x0, y0,
+ * z0 and coefficient arrays p, q). */
+#include "frep/frep_internal.h"
+#include "hf/hf.h"
+#include "test.h"
+
+static const double C[3] = {0.5, -0.25, 1};
+static const double U[3] = {0.3, -0.4, 1.2};
+static const double X0[3] = {0, 1, -1}, Y0[3] = {0, 1, 0.5}, Z0[3] = {0, -1, 0.5};
+static const double P[3] = {1, 2, 0.5}, Q[3] = {2, 3, 1.5};
+
+static const char *prologue =
+    "array c[3], u[3], x0[3], y0[3], z0[3], p[3], q[3], xt[3];\n"
+    "c = [0.5, -0.25, 1]; u = [0.3, -0.4, 1.2];\n"
+    "x0 = [0, 1, -1]; y0 = [0, 1, 0.5]; z0 = [0, -1, 0.5]; p = [1, 2, 0.5]; q = [2, 3, 1.5];\n"
+    "xt[1] = x[1]; xt[2] = x[2]; xt[3] = x[3];\n";
+
+typedef double (*formula)(const double x[3]);
+
+static double sqr(double v) { return v * v; }
+
+/* Compile `t = <expr>;` (after optional statements) and compare with f at
+ * random points in [-3, 3]^3. */
+static void check(const char *stmts, const char *expr, formula f, double tol)
+{
+    char src[4096];
+    snprintf(src, sizeof src, "t(x[3], a[1])\n{\n%s%s\nt = %s;\n}\n", prologue, stmts, expr);
+    fm_graph *g = fm_graph_new(0);
+    fm_hf_model m;
+    fm_error err;
+    fm_status st = fm_hf_compile_string(g, src, strlen(src), "lib", NULL, NULL, &m, &err);
+    if (st != FM_OK) {
+        char buf[800];
+        fprintf(stderr, "%s: %s\n", expr, fm_error_format(&err, buf, sizeof buf));
+    }
+    CHECK(st == FM_OK);
+    int bad = 0;
+    for (int i = 0; st == FM_OK && i < 300 && bad < 3; i++) {
+        double p[4] = {test_uniform(-3, 3), test_uniform(-3, 3), test_uniform(-3, 3), 0};
+        double want = f(p), got = fm_graph_eval_reference(g, m.root, p);
+        if (isnan(want) && isnan(got)) continue;
+        if (!(fabs(got - want) <= tol * (1 + fabs(want)))) {
+            bad++;
+            fprintf(stderr, "%s at (%g, %g, %g): got %.15g, want %.15g\n", expr, p[0], p[1], p[2],
+                    got, want);
+        }
+    }
+    CHECK(bad == 0);
+    fm_graph_free(g);
+}
+
+/* ---- primitives (d = x - c) ---- */
+#define D0 (x[0] - C[0])
+#define D1 (x[1] - C[1])
+#define D2 (x[2] - C[2])
+static double f_sphere(const double x[3]) { return 4 - sqr(D0) - sqr(D1) - sqr(D2); }
+static double f_ellipsoid(const double x[3]) { return 1 - sqr(D0 / 1) - sqr(D1 / 2) - sqr(D2 / 3); }
+static double f_cyl_x(const double x[3]) { return 2.25 - sqr(D1) - sqr(D2); }
+static double f_cyl_y(const double x[3]) { return 2.25 - sqr(D0) - sqr(D2); }
+static double f_cyl_z(const double x[3]) { return 2.25 - sqr(D0) - sqr(D1); }
+static double f_ellcyl_x(const double x[3]) { return 1 - sqr(D1 / 1.5) - sqr(D2 / 0.5); }
+static double f_ellcyl_y(const double x[3]) { return 1 - sqr(D0 / 1.5) - sqr(D2 / 0.5); }
+static double f_ellcyl_z(const double x[3]) { return 1 - sqr(D0 / 1.5) - sqr(D1 / 0.5); }
+static double f_cone_x(const double x[3]) { return sqr(D0) - sqr(D1 / 0.5) - sqr(D2 / 0.5); }
+static double f_cone_y(const double x[3]) { return sqr(D1) - sqr(D0 / 0.5) - sqr(D2 / 0.5); }
+static double f_cone_z(const double x[3]) { return sqr(D2) - sqr(D0 / 0.5) - sqr(D1 / 0.5); }
+static double f_ellcone_x(const double x[3]) { return sqr(D0) - sqr(D1 / 0.5) - sqr(D2 / 2); }
+static double f_ellcone_y(const double x[3]) { return sqr(D1) - sqr(D0 / 0.5) - sqr(D2 / 2); }
+static double f_ellcone_z(const double x[3]) { return sqr(D2) - sqr(D0 / 0.5) - sqr(D1 / 2); }
+static double torus(const double x[3], double ring2)
+{
+    return 0.25 - (sqr(D0) + sqr(D1) + sqr(D2)) - 4 + 4 * sqrt(ring2);
+}
+static double f_torus_x(const double x[3]) { return torus(x, sqr(D1) + sqr(D2)); }
+static double f_torus_y(const double x[3]) { return torus(x, sqr(D0) + sqr(D2)); }
+static double f_torus_z(const double x[3]) { return torus(x, sqr(D0) + sqr(D1)); }
+static double block(const double x[3], double alpha)
+{
+    double s[3];
+    const double len[3] = {1, 2, 3};
+    for (int i = 0; i < 3; i++) s[i] = (x[i] - C[i]) * (C[i] + len[i] - x[i]);
+    if (alpha == 1) return fmin(fmin(s[0], s[1]), s[2]);
+    double f = s[0] + s[1] - sqrt(s[0] * s[0] + s[1] * s[1] - 2 * alpha * s[0] * s[1]);
+    return f + s[2] - sqrt(f * f + s[2] * s[2] - 2 * alpha * f * s[2]);
+}
+static double f_block0(const double x[3]) { return block(x, 0); }
+static double f_block_half(const double x[3]) { return block(x, 0.5); }
+static double f_block1(const double x[3]) { return block(x, 1); }
+static double f_superell(const double x[3])
+{
+    double xy = pow(fabs(D0 / 1), 2 / 0.7) + pow(fabs(D1 / 2), 2 / 0.7);
+    return 1 - pow(xy, 0.7 / 0.5) - pow(fabs(D2 / 3), 2 / 0.5);
+}
+static double r2k(const double x[3], int i)
+{
+    return sqr(x[0] - X0[i]) + sqr(x[1] - Y0[i]) + sqr(x[2] - Z0[i]);
+}
+static double f_blobby(const double x[3])
+{
+    double s = 0;
+    for (int i = 0; i < 3; i++) s += Q[i] * exp(-P[i] * r2k(x, i));
+    return s - 0.5;
+}
+static double f_metaball(const double x[3]) /* b = q, d = p */
+{
+    double s = 0;
+    for (int i = 0; i < 3; i++) {
+        double r = sqrt(r2k(x, i)), dd = P[i], b = Q[i];
+        if (r <= dd / 3) s += b * (1 - 3 * r * r / (dd * dd));
+        else if (r < dd) s += 1.5 * b * sqr(1 - r / dd);
+    }
+    return s - 0.5;
+}
+static double f_soft(const double x[3]) /* d = q */
+{
+    double s = 0;
+    for (int i = 0; i < 3; i++) {
+        double r = sqrt(r2k(x, i)), dd = Q[i];
+        if (r <= dd) {
+            double k = r / dd;
+            s += 1 - 22.0 / 9 * pow(k, 2) + 17.0 / 9 * pow(k, 4) - 4.0 / 9 * pow(k, 6);
+        }
+    }
+    return s - 0.2;
+}
+static double f_blend_uni(const double x[3])
+{
+    double f1 = x[0], f2 = x[1];
+    return f1 + f2 + sqrt(f1 * f1 + f2 * f2) + 0.5 / (1 + sqr(f1 / 1.5) + sqr(f2 / 0.7));
+}
+static double f_blend_int(const double x[3])
+{
+    double f1 = x[0], f2 = x[1];
+    return f1 + f2 - sqrt(f1 * f1 + f2 * f2) + 0.5 / (1 + sqr(f1 / 1.5) + sqr(f2 / 0.7));
+}
+
+/* ---- transforms: the test reads back w . xt with weights 1, sqrt 2, pi ---- */
+static double weigh(const double y[3]) { return y[0] + sqrt(2.0) * y[1] + 3.14159265358979323846 * y[2]; }
+static const char *weighed = "xt[1] + sqrt(2)*xt[2] + 3.14159265358979323846*xt[3]";
+static double f_shift(const double x[3])
+{
+    double y[3] = {x[0] - 1, x[1] - 2, x[2] - 3};
+    return weigh(y);
+}
+static double f_scale(const double x[3])
+{
+    double y[3] = {x[0] / 1, x[1] / 2, x[2] / 4};
+    return weigh(y);
+}
+static void rot(double *p, double *q, double th)
+{
+    double np = *p * cos(th) + *q * sin(th), nq = -*p * sin(th) + *q * cos(th);
+    *p = np;
+    *q = nq;
+}
+static double f_rot_x(const double x[3]) { double y[3] = {x[0], x[1], x[2]}; rot(&y[1], &y[2], 0.5); return weigh(y); }
+static double f_rot_y(const double x[3]) { double y[3] = {x[0], x[1], x[2]}; rot(&y[2], &y[0], 0.5); return weigh(y); }
+static double f_rot_z(const double x[3]) { double y[3] = {x[0], x[1], x[2]}; rot(&y[0], &y[1], 0.5); return weigh(y); }
+static double twist_angle(double s) { double t = (s + 1) / 3; return (1 - t) * 0.3 + t * 1.2; }
+static double f_twist_x(const double x[3]) { double y[3] = {x[0], x[1], x[2]}; rot(&y[1], &y[2], twist_angle(x[0])); return weigh(y); }
+static double f_twist_y(const double x[3]) { double y[3] = {x[0], x[1], x[2]}; rot(&y[2], &y[0], twist_angle(x[1])); return weigh(y); }
+static double f_twist_z(const double x[3]) { double y[3] = {x[0], x[1], x[2]}; rot(&y[0], &y[1], twist_angle(x[2])); return weigh(y); }
+static double taper_scale(double s)
+{
+    if (s < -1) return 0.5;
+    if (s > 1) return 2;
+    double t = (s + 1) / 2;
+    return (1 - t) * 0.5 + t * 2;
+}
+static double f_taper_x(const double x[3]) { double k = taper_scale(x[0]); double y[3] = {x[0], x[1] / k, x[2] / k}; return weigh(y); }
+static double f_taper_y(const double x[3]) { double k = taper_scale(x[1]); double y[3] = {x[0] / k, x[1], x[2] / k}; return weigh(y); }
+static double f_taper_z(const double x[3]) { double k = taper_scale(x[2]); double y[3] = {x[0] / k, x[1] / k, x[2]}; return weigh(y); }
+static double f_stretch(const double x[3])
+{
+    double y[3] = {C[0] + (x[0] - C[0]) / 1, C[1] + (x[1] - C[1]) / 2, C[2] + (x[2] - C[2]) / 4};
+    return weigh(y);
+}
+/* a transform applied to x before a primitive: the sphere moved by (1, 2, 3) */
+static double f_shifted_sphere(const double x[3])
+{
+    return 4 - sqr(x[0] - 1 - C[0]) - sqr(x[1] - 2 - C[1]) - sqr(x[2] - 3 - C[2]);
+}
+
+/* ---- distance variants ---- */
+static double f_dcylinder(const double x[3])
+{
+    double w[3] = {C[0] - x[0], C[1] - x[1], C[2] - x[2]};
+    double cr[3] = {U[1] * w[2] - U[2] * w[1], U[2] * w[0] - U[0] * w[2], U[0] * w[1] - U[1] * w[0]};
+    double along = sqrt(sqr(cr[0]) + sqr(cr[1]) + sqr(cr[2])) / sqrt(sqr(U[0]) + sqr(U[1]) + sqr(U[2]));
+    return 1 - along;
+}
+static double dcone(double axial, double radial)
+{
+    double t = atan(0.5);
+    return -(radial * cos(t) - fabs(axial) * sin(t));
+}
+static double f_dcone_x(const double x[3]) { return dcone(D0, sqrt(sqr(D1) + sqr(D2))); }
+static double f_dcone_y(const double x[3]) { return dcone(D1, sqrt(sqr(D0) + sqr(D2))); }
+static double f_dcone_z(const double x[3]) { return dcone(D2, sqrt(sqr(D0) + sqr(D1))); }
+static double dtorus(double axial, double radial) { return 0.5 - sqrt(sqr(radial - 2) + sqr(axial)); }
+static double f_dtorus_x(const double x[3]) { return dtorus(D0, sqrt(sqr(D1) + sqr(D2))); }
+static double f_dtorus_y(const double x[3]) { return dtorus(D1, sqrt(sqr(D0) + sqr(D2))); }
+static double f_dtorus_z(const double x[3]) { return dtorus(D2, sqrt(sqr(D0) + sqr(D1))); }
+
+int main(void)
+{
+    const double tol = 1e-12;
+    check("", "hfSphere(x, c, 2)", f_sphere, tol);
+    check("", "hfEllipsoid(x, c, 1, 2, 3)", f_ellipsoid, tol);
+    check("", "hfCylinderX(x, c, 1.5)", f_cyl_x, tol);
+    check("", "hfCylinderY(x, c, 1.5)", f_cyl_y, tol);
+    check("", "hfCylinderZ(x, c, 1.5)", f_cyl_z, tol);
+    check("", "hfEllCylX(x, c, 1.5, 0.5)", f_ellcyl_x, tol);
+    check("", "hfEllCylY(x, c, 1.5, 0.5)", f_ellcyl_y, tol);
+    check("", "hfEllCylZ(x, c, 1.5, 0.5)", f_ellcyl_z, tol);
+    check("", "hfConeX(x, c, 0.5)", f_cone_x, tol);
+    check("", "hfConeY(x, c, 0.5)", f_cone_y, tol);
+    check("", "hfConeZ(x, c, 0.5)", f_cone_z, tol);
+    check("", "hfEllConeX(x, c, 0.5, 2)", f_ellcone_x, tol);
+    check("", "hfEllConeY(x, c, 0.5, 2)", f_ellcone_y, tol);
+    check("", "hfEllConeZ(x, c, 0.5, 2)", f_ellcone_z, tol);
+    check("", "hfTorusX(x, c, 2, 0.5)", f_torus_x, tol);
+    check("", "hfTorusY(x, c, 2, 0.5)", f_torus_y, tol);
+    check("", "hfTorusZ(x, c, 2, 0.5)", f_torus_z, tol);
+    check("", "hfBlock(x, c, 1, 2, 3)", f_block0, tol);
+    check("r_alpha = 0.5;", "hfBlock(x, c, 1, 2, 3)", f_block_half, tol);
+    check("r_alpha = 1;", "hfBlock(x, c, 1, 2, 3)", f_block1, tol);
+    check("", "hfSuperell(x, c, 1, 2, 3, 0.5, 0.7)", f_superell, 1e-10);
+    check("", "hfBlobby(x, x0, y0, z0, p, q, 0.5)", f_blobby, tol);
+    check("", "hfMetaball(x, x0, y0, z0, q, p, 0.5)", f_metaball, tol);
+    check("", "hfSoft(x, x0, y0, z0, q, 0.2)", f_soft, tol);
+    check("", "hfBlendUni(x[1], x[2], 0.5, 1.5, 0.7)", f_blend_uni, tol);
+    check("", "hfBlendInt(x[1], x[2], 0.5, 1.5, 0.7)", f_blend_int, tol);
+    /* transforms return 1 and change xt in place */
+    char expr[256];
+    snprintf(expr, sizeof expr, "r * (%s)", weighed);
+    check("r = hfShift3D(xt, 1, 2, 3);", expr, f_shift, tol);
+    check("r = hfScale3D(xt, 1, 2, 4);", expr, f_scale, tol);
+    check("r = hfRotate3DX(xt, 0.5);", expr, f_rot_x, tol);
+    check("r = hfRotate3DY(xt, 0.5);", expr, f_rot_y, tol);
+    check("r = hfRotate3DZ(xt, 0.5);", expr, f_rot_z, tol);
+    check("r = hfTwistX(xt, -1, 2, 0.3, 1.2);", expr, f_twist_x, tol);
+    check("r = hfTwistY(xt, -1, 2, 0.3, 1.2);", expr, f_twist_y, tol);
+    check("r = hfTwistZ(xt, -1, 2, 0.3, 1.2);", expr, f_twist_z, tol);
+    check("r = hfTaperX(xt, -1, 1, 0.5, 2);", expr, f_taper_x, tol);
+    check("r = hfTaperY(xt, -1, 1, 0.5, 2);", expr, f_taper_y, tol);
+    check("r = hfTaperZ(xt, -1, 1, 0.5, 2);", expr, f_taper_z, tol);
+    check("r = hfStretch3D(xt, c, 1, 2, 4);", expr, f_stretch, tol);
+    check("r = hfShift3D(x, 1, 2, 3);", "hfSphere(x, c, 2)", f_shifted_sphere, tol);
+    check("", "hfDCylinder(x, c, u, 1)", f_dcylinder, tol);
+    check("", "hfDConeX(x, c, 0.5)", f_dcone_x, tol);
+    check("", "hfDConeY(x, c, 0.5)", f_dcone_y, tol);
+    check("", "hfDConeZ(x, c, 0.5)", f_dcone_z, tol);
+    check("", "hfDTorusX(x, c, 2, 0.5)", f_dtorus_x, tol);
+    check("", "hfDTorusY(x, c, 2, 0.5)", f_dtorus_y, tol);
+    check("", "hfDTorusZ(x, c, 2, 0.5)", f_dtorus_z, tol);
+    return test_summary("hf_library");
+}
