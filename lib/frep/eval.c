@@ -124,7 +124,11 @@ double fm_eval_point(fm_evaluator *ev, const double p[4])
             v = fm_apply_binary(op, fm_insn_operand(r, in, 0), fm_insn_operand(r, in, 1));
             break;
         case 3: v = r[in->a] != 0.0 ? r[in->b] : r[in->c]; break;
-        default: v = fm_special_point(ev, in, p); break;
+        default:
+            v = op == FM_OP_VOXELS
+                    ? fm_voxel_sample(&t->shared->specials[in->aux].grid, r[in->a], r[in->b], r[in->c])
+                    : fm_special_point(ev, in, p);
+            break;
         }
         r[in->out] = v;
     }
@@ -220,6 +224,12 @@ static void run_chunk(fm_evaluator *ev, size_t m)
                 break;
             }
             default: {
+                if (op == FM_OP_VOXELS) {
+                    const fm_voxel_grid *grid = &t->shared->specials[in->aux].grid;
+                    const double *A = R(in->a), *B = R(in->b), *C = R(in->c);
+                    for (size_t i = 0; i < m; i++) O[i] = fm_voxel_sample(grid, A[i], B[i], C[i]);
+                    break;
+                }
                 /* Special ops: one search per point. */
                 const double *X = R(FM_X), *Y = R(FM_Y), *Z = R(FM_Z), *T = R(FM_T);
                 for (size_t i = 0; i < m; i++) {

@@ -552,7 +552,19 @@ fm_interval fm_eval_interval_nan(fm_evaluator *ev, const fm_interval box[4], int
         }
         default: {
             int nan = 0;
-            fm_interval s = fm_special_interval(ev, in, box, &nan);
+            fm_interval s;
+            if (op == FM_OP_VOXELS) {
+                ival x = operand(ev, in, 0), y = operand(ev, in, 1), z = operand(ev, in, 2);
+                nan = x.nan || y.nan || z.nan;
+                if (empty(x) || empty(y) || empty(z)) {
+                    r = EMPTY_NAN;
+                    break;
+                }
+                fm_interval xyz[3] = {{x.lo, x.hi}, {y.lo, y.hi}, {z.lo, z.hi}};
+                s = fm_voxels_interval(&t->shared->specials[in->aux].grid, xyz);
+            } else {
+                s = fm_special_interval(ev, in, box, &nan);
+            }
             r.lo = s.lo;
             r.hi = s.hi;
             r.nan = nan;

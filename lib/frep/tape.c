@@ -319,7 +319,7 @@ static uint32_t mk(compiler *cc, fm_op op, uint32_t a, uint32_t b, uint32_t c, u
 
 static fm_tape *compile_at_depth(const fm_graph *g, fm_node root, int depth, fm_error *err);
 
-static uint32_t add_special(compiler *cc, const fm_node_rec *r)
+static uint32_t add_special(compiler *cc, const fm_node_rec *r, const uint32_t ch[3])
 {
     fm_tape_shared *s = cc->shared;
     fm_special *sp = realloc(s->specials, (s->nspecials + 1) * sizeof *sp);
@@ -359,6 +359,10 @@ static uint32_t add_special(compiler *cc, const fm_node_rec *r)
         }
         s->nspecials++;
     }
+    /* VOXELS samples at its three children (the possibly remapped x, y, z:
+     * see ops_internal.h); the other special ops own their child. */
+    if (r->op == FM_OP_VOXELS)
+        return mk_raw(cc, FM_OP_VOXELS, (uint32_t)(s->nspecials - 1), ch[0], ch[1], ch[2], 0.0);
     return mk_raw(cc, (fm_op)r->op, (uint32_t)(s->nspecials - 1), 0, 0, 0, 0.0);
 }
 
@@ -382,7 +386,7 @@ static uint32_t param_index(compiler *cc, uint32_t graph_index)
  * child through a sub-tape). */
 static int graph_children(const fm_node_rec *r, fm_node out[3])
 {
-    int ar = fm_op_arity((fm_op)r->op);
+    int ar = r->op == FM_OP_VOXELS ? 3 : fm_op_arity((fm_op)r->op);
     if (ar < 0) return 0;
     out[0] = r->a;
     out[1] = r->b;
@@ -468,9 +472,12 @@ static uint32_t import_graph(compiler *cc, fm_node root)
             break;
         }
         default:
-            if (k > 0) id = mk(cc, (fm_op)r->op, map[ch[0]], k > 1 ? map[ch[1]] : 0,
+            if (r->op == FM_OP_VOXELS) {
+                uint32_t vch[3] = {map[ch[0]], map[ch[1]], map[ch[2]]};
+                id = add_special(cc, r, vch);
+            } else if (k > 0) id = mk(cc, (fm_op)r->op, map[ch[0]], k > 1 ? map[ch[1]] : 0,
                                k > 2 ? map[ch[2]] : 0, uses[n]);
-            else if (r->op < FM_OP_COUNT) id = add_special(cc, r);
+            else if (r->op < FM_OP_COUNT) id = add_special(cc, r, NULL);
             else id = fail(cc, FM_ERR_INTERNAL, "unknown op in the graph");
             break;
         }
@@ -542,6 +549,11 @@ static uint32_t value_of(emitter *e, uint32_t id)
         int ar = fm_op_arity((fm_op)r->op);
         if (ar < 0) {
             in.aux = r->aux;
+            if (r->op == FM_OP_VOXELS) {
+                in.sa = value_of(e, r->a);
+                in.sb = value_of(e, r->b);
+                in.sc = value_of(e, r->c);
+            }
         } else if (ar == 2 && (e->cc->cn[r->a].op == FM_OP_CONST) !=
                                   (e->cc->cn[r->b].op == FM_OP_CONST)) {
             /* One constant operand: an immediate, so that batch loops read

@@ -97,8 +97,11 @@ static inline double fm_insn_operand(const double *reg, const fm_insn *in, int w
     return reg[in->c];
 }
 
-/* special.c: one special instruction in each mode. */
+/* special.c: one special instruction in each mode (VOXELS, whose operands
+ * are registers, has its own helpers). */
 double fm_special_point(fm_evaluator *ev, const fm_insn *in, const double p[4]);
+double fm_voxels_grad(const fm_voxel_grid *grid, double x, double y, double z, double d[3]);
+fm_interval fm_voxels_interval(const fm_voxel_grid *grid, const fm_interval xyz[3]);
 fm_interval fm_special_interval(fm_evaluator *ev, const fm_insn *in, const fm_interval box[4],
                                 int *maybe_nan);
 double fm_special_grad(fm_evaluator *ev, const fm_insn *in, const double p[4], double grad[4]);
