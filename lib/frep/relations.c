@@ -97,6 +97,39 @@ static void center(const fm_interval b[4], double p[4])
     for (int i = 0; i < 4; i++) p[i] = 0.5 * (b[i].lo + b[i].hi);
 }
 
+/* Compass search from the best point, inside the box: the interval bounds
+ * prune well only once a good value is known, and near a flat or kinked
+ * maximum bisection midpoints approach it slowly. */
+static void local_refine(objective *o, const fm_interval box[4], size_t budget, fm_max_result *out)
+{
+    double step = 0;
+    for (int i = 0; i < 4; i++)
+        if (box[i].hi - box[i].lo > step) step = box[i].hi - box[i].lo;
+    step *= 0.125;
+    double floor_step = 1e-13 * (1.0 + step);
+    while (step > floor_step && out->evaluations < budget) {
+        int moved = 0;
+        for (int i = 0; i < 4 && out->evaluations < budget; i++) {
+            if (!(box[i].hi > box[i].lo)) continue;
+            for (int sgn = -1; sgn <= 1; sgn += 2) {
+                double q[4];
+                memcpy(q, out->at, sizeof q);
+                q[i] += sgn * step;
+                if (q[i] < box[i].lo || q[i] > box[i].hi) continue;
+                double v = obj_point(o, q);
+                out->evaluations++;
+                if (v > out->value) {
+                    out->value = v;
+                    memcpy(out->at, q, sizeof q);
+                    moved = 1;
+                    break;
+                }
+            }
+        }
+        if (!moved) step *= 0.5;
+    }
+}
+
 /* Branch and bound. stop_at_or_above / stop_below end the search as soon
  * as the answer to a yes/no question is known. */
 static fm_status maximize(objective *o, const fm_interval box[4], double tol, size_t budget,
@@ -115,7 +148,12 @@ static fm_status maximize(objective *o, const fm_interval box[4], double tol, si
     memcpy(root.b, box, sizeof root.b);
     root.ub = obj_upper(o, box);
     if (!heap_push(&h, &root)) goto oom;
+    size_t refine_at = 256;
     while (h.n > 0) {
+        if (out->evaluations >= refine_at) {
+            local_refine(o, box, out->evaluations + budget / 8 + 1 < budget ? out->evaluations + budget / 8 + 1 : budget, out);
+            refine_at = out->evaluations * 4;
+        }
         double top = h.items[0].ub;
         if (top - out->value <= tol || out->value >= stop_at_or_above ||
             (top < stop_below && pruned < stop_below) || out->evaluations >= budget)
@@ -150,6 +188,8 @@ static fm_status maximize(objective *o, const fm_interval box[4], double tol, si
             }
         }
     }
+    if (!(out->value >= stop_at_or_above) && h.n > 0 && h.items[0].ub - out->value > tol)
+        local_refine(o, box, budget, out);
     out->upper = pruned;
     if (h.n > 0 && h.items[0].ub > out->upper) out->upper = h.items[0].ub;
     if (out->value > out->upper) out->upper = out->value;
