@@ -536,6 +536,13 @@ fm_status fm_stock_surface_area(const fm_stock *s, double *area, fm_error *err)
 
 size_t fm_stock_memory_bytes(const fm_stock *s) { return fm_vdb_memory(s->vdb); }
 
+void fm_stock_set_memory_budget(fm_stock *s, size_t bytes)
+{
+    if (bytes) s->opt.memory_budget = bytes;
+}
+
+fm_status fm_stock_validate(const fm_stock *s, fm_error *err) { return fm_vdb_validate(s->vdb, err); }
+
 /* ------------------------------------------------------------- chunks -- */
 
 uint64_t fm_stock_version(const fm_stock *s) { return s->version; }

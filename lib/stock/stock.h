@@ -110,6 +110,8 @@ int fm_stock_block_removed(const fm_stock *stock, int64_t block, fm_stock_block 
 
 /* Surface area (mm^2), OpenVDB's levelSetArea; costs O(grid). */
 fm_status fm_stock_surface_area(const fm_stock *stock, double *area_mm2, fm_error *err);
+/* Change the memory budget later cuts are held to (bytes, > 0). */
+void fm_stock_set_memory_budget(fm_stock *stock, size_t bytes);
 /* Memory the grid uses now (bytes, OpenVDB's own count). */
 size_t fm_stock_memory_bytes(const fm_stock *stock);
 

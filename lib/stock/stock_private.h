@@ -59,6 +59,14 @@ fm_status fm_vdb_write(const fm_vdb *v, unsigned char **buf, size_t *len, fm_err
 /* Parse bytes already verified by the snapshot wrapper. */
 fm_vdb *fm_vdb_read(const unsigned char *buf, size_t len, int threads, fm_error *err);
 
+/* Check the level-set invariants (for tests; costs O(grid)): values within
+ * +-background, a voxel active exactly when |phi| < background, tiles
+ * inactive at +-background, and no face-neighbours at +background and
+ * -background (a hole in the band). FM_ERR_INTERNAL names the first
+ * violation. */
+fm_status fm_vdb_validate(const fm_vdb *v, fm_error *err);
+fm_status fm_stock_validate(const fm_stock *stock, fm_error *err);
+
 /* For lib/mesh's C++ bridge only: a pointer to the stock's
  * openvdb::FloatGrid::Ptr (cast it back to that type). Valid until the stock
  * is freed; do not modify the grid, and never use it from C. */
