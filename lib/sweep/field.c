@@ -1,0 +1,146 @@
+/* field.c: sweeps as fm_field (frep.h) for lib/stock: one motion, or the
+ * max of S over a run of consecutive motions, with per-motion box culling
+ * (S_i <= -distance to its box, so a motion whose box is farther than the
+ * best value so far cannot win). */
+#include "sweep/sweep_internal.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct many_ctx {
+    size_t n;
+    fm_sweep **sweeps;
+} many_ctx;
+
+static void *many_worker_new(void *ctx)
+{
+    many_ctx *c = ctx;
+    return fm_sweep_worker_new(c->sweeps[0]);
+}
+
+static void many_worker_free(void *ctx, void *worker)
+{
+    (void)ctx;
+    fm_sweep_worker_free(worker);
+}
+
+/* Distance from p to the box [lo, hi] (0 inside). */
+static double box_dist(const double p[3], const double lo[3], const double hi[3])
+{
+    double d2 = 0;
+    for (int i = 0; i < 3; i++) {
+        double e = p[i] < lo[i] ? lo[i] - p[i] : p[i] > hi[i] ? p[i] - hi[i] : 0;
+        d2 += e * e;
+    }
+    return sqrt(d2);
+}
+
+static void many_batch(void *ctx, void *worker, size_t n, const double *x, const double *y, const double *z,
+                       double *out)
+{
+    many_ctx *c = ctx;
+    for (size_t k = 0; k < n; k++) {
+        double p[3] = {x[k], y[k], z ? z[k] : 0};
+        double best = -DBL_MAX;
+        for (size_t i = 0; i < c->n; i++) {
+            const fm_sweep *s = c->sweeps[i];
+            /* Outside its box S_i is at most minus the distance to it; inside
+             * there is no such bound. */
+            double d = box_dist(p, s->lo, s->hi);
+            if (d > 0 && -d <= best) continue;
+            double v = fm_sweep_eval(s, worker, p);
+            if (v > best) best = v;
+        }
+        out[k] = best;
+    }
+}
+
+static fm_interval many_interval(void *ctx, void *worker, const fm_interval box[3])
+{
+    many_ctx *c = ctx;
+    fm_interval out = {-DBL_MAX, -DBL_MAX};
+    for (size_t i = 0; i < c->n; i++) {
+        const fm_sweep *s = c->sweeps[i];
+        /* Distance between the query box and the sweep's box bounds S_i
+         * from above over the whole query box. */
+        double d2 = 0;
+        for (int a = 0; a < 3; a++) {
+            double e = box[a].hi < s->lo[a] ? s->lo[a] - box[a].hi : box[a].lo > s->hi[a] ? box[a].lo - s->hi[a] : 0;
+            d2 += e * e;
+        }
+        double cap = d2 > 0 ? -sqrt(d2) : DBL_MAX;
+        /* S_i <= cap over the query box: when that is below the current
+         * upper end, S_i cannot move either end (its lower bound is below
+         * cap too). */
+        if (cap <= out.hi && out.hi > -DBL_MAX) continue;
+        fm_interval v = fm_sweep_interval(s, worker, box);
+        if (v.hi > cap) v.hi = cap;
+        if (v.lo > v.hi) v.lo = v.hi;
+        if (v.lo > out.lo) out.lo = v.lo;
+        if (v.hi > out.hi) out.hi = v.hi;
+    }
+    if (out.hi < out.lo) out.hi = out.lo;
+    return out;
+}
+
+static void many_release(void *ctx)
+{
+    many_ctx *c = ctx;
+    if (!c) return;
+    for (size_t i = 0; i < c->n; i++) fm_sweep_free(c->sweeps[i]);
+    free(c->sweeps);
+    free(c);
+}
+
+fm_status fm_sweep_field_many(fm_field *field, const fm_motion *motions, size_t n, const fm_tool_part *part,
+                              fm_error *err)
+{
+    memset(field, 0, sizeof *field);
+    if (n == 0) return fm_error_set(err, FM_ERR_INTERNAL, "sweep field: no motions");
+    many_ctx *c = calloc(1, sizeof *c);
+    size_t bytes;
+    if (!c || !fm_size_mul(n, sizeof *c->sweeps, &bytes) || !(c->sweeps = calloc(n, sizeof *c->sweeps))) {
+        free(c);
+        return fm_error_set(err, FM_ERR_LIMIT, "sweep field: out of memory for %zu motions", n);
+    }
+    for (size_t i = 0; i < n; i++) {
+        if (motions[i].kind == FM_MOTION_DWELL && n > 1) continue;
+        fm_status st = fm_sweep_new(&motions[i], part, NULL, &c->sweeps[c->n], err);
+        if (st != FM_OK) {
+            many_release(c);
+            return st;
+        }
+        c->n++;
+    }
+    if (c->n == 0) { /* only dwells: the tool at rest still occupies its place */
+        fm_status st = fm_sweep_new(&motions[0], part, NULL, &c->sweeps[0], err);
+        if (st != FM_OK) {
+            many_release(c);
+            return st;
+        }
+        c->n = 1;
+    }
+    for (int a = 0; a < 3; a++) {
+        field->lo[a] = DBL_MAX;
+        field->hi[a] = -DBL_MAX;
+    }
+    for (size_t i = 0; i < c->n; i++)
+        for (int a = 0; a < 3; a++) {
+            field->lo[a] = fmin(field->lo[a], c->sweeps[i]->lo[a]);
+            field->hi[a] = fmax(field->hi[a], c->sweeps[i]->hi[a]);
+        }
+    field->ctx = c;
+    field->worker_new = many_worker_new;
+    field->worker_free = many_worker_free;
+    field->batch = many_batch;
+    field->interval = many_interval;
+    field->release = many_release;
+    return FM_OK;
+}
+
+fm_status fm_sweep_field(fm_field *field, const fm_motion *motion, const fm_tool_part *part, fm_error *err)
+{
+    return fm_sweep_field_many(field, motion, 1, part, err);
+}

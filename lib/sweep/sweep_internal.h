@@ -1,0 +1,40 @@
+/* sweep_internal.h: the sweep object shared by the files of lib/sweep
+ * (evaluation, set-up, fields). Not part of the public interface. */
+#ifndef FM_SWEEP_INTERNAL_H
+#define FM_SWEEP_INTERNAL_H
+
+#include "sweep/sweep.h"
+
+typedef enum sw_kind { SW_STATIC = 0, SW_LINE, SW_ARC, SW_PARAM } sw_kind;
+
+struct fm_sweep {
+    fm_tool_part part;
+    fm_sweep_method method;
+    sw_kind kind;
+    double t0, t1;
+    double tol;
+    size_t max_evals;
+    /* line: tip(u) = c0 + u d; static: tip = c0 */
+    double c0[3], d[3], dd;
+    /* axis: a0 (fixed) or nlerp from a0 to a1 */
+    double a0[3], a1[3], lmin;
+    int axis_const;
+    /* arc: tip(u) = ctr + r(u) (cos th(u) e_ai + sin th(u) e_aj) + u dh e_ak */
+    int ai, aj, ak, full_turn;
+    double ctr[3], th0, dth, r0, drr, dh;
+    /* parametric */
+    const fm_path *path;
+    double tip_offset[3];
+    /* search: |dtip/du| <= lipschitz, |daxis/du| <= turn_rate,
+     * |d2tip/du2| <= accel; pieces to start the branch-and-bound with */
+    double lipschitz, turn_rate, accel, speed;
+    int second_order, certified, pieces;
+    double lo[3], hi[3];
+};
+
+struct fm_sweep_worker {
+    const fm_tool_part *part;
+    void *part_worker;
+};
+
+#endif
