@@ -94,9 +94,16 @@ static int set_nonblocking(int fd)
     return flags < 0 ? -1 : fcntl(fd, F_SETFL, flags | O_NONBLOCK);
 }
 
-static void conn_close(fm_modbus_server *s, connection *c, const char *why)
+/* abortive: reset instead of FIN. A client dropped for misbehaving (deadline,
+ * malformed stream) may not be reading; a graceful close would leave the
+ * kernel holding its unsent replies in FIN-WAIT for minutes. */
+static void conn_close(fm_modbus_server *s, connection *c, const char *why, int abortive)
 {
     server_log(s, FM_MODBUS_LOG_DEBUG, "modbus: closing connection %d: %s", c->fd, why);
+    if (abortive) {
+        struct linger lg = {1, 0};
+        setsockopt(c->fd, SOL_SOCKET, SO_LINGER, &lg, sizeof lg);
+    }
     close(c->fd);
     c->fd = -1;
     c->rx_len = 0;
@@ -118,7 +125,7 @@ static int conn_flush(fm_modbus_server *s, connection *c, int64_t now)
         } else if (n < 0 && errno == EINTR) {
             continue;
         } else {
-            conn_close(s, c, "send failed");
+            conn_close(s, c, "send failed", 1);
             return -1;
         }
     }
@@ -131,7 +138,7 @@ static int conn_process(fm_modbus_server *s, connection *c, int64_t now)
     while (c->rx_len > 0) {
         int total = fm_modbus_frame_length(c->rx, c->rx_len);
         if (total < 0) {
-            conn_close(s, c, "not a Modbus/TCP header");
+            conn_close(s, c, "not a Modbus/TCP header", 1);
             return -1;
         }
         if (total == 0 || c->rx_len < (size_t)total) {
@@ -143,7 +150,7 @@ static int conn_process(fm_modbus_server *s, connection *c, int64_t now)
             return 0; /* resumed from conn_flush's caller once the client reads */
         size_t n = fm_modbus_engine_handle(&s->engine, c->rx, (size_t)total, c->tx + c->tx_len);
         if (n == 0) {
-            conn_close(s, c, "malformed frame");
+            conn_close(s, c, "malformed frame", 1);
             return -1;
         }
         c->tx_len += n;
@@ -161,12 +168,12 @@ static void conn_read(fm_modbus_server *s, connection *c, int64_t now)
     /* Never more than the free part of the 260-byte frame buffer. */
     ssize_t n = recv(c->fd, c->rx + c->rx_len, sizeof c->rx - c->rx_len, 0);
     if (n == 0) {
-        conn_close(s, c, "peer closed");
+        conn_close(s, c, "peer closed", 0);
         return;
     }
     if (n < 0) {
         if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
-            conn_close(s, c, "recv failed");
+            conn_close(s, c, "recv failed", 1);
         return;
     }
     c->rx_len += (size_t)n;
@@ -212,9 +219,9 @@ static void check_deadlines(fm_modbus_server *s, int64_t now)
             continue;
         if (s->cfg.frame_timeout_ms > 0 && c->frame_start_ms != 0 &&
             now - c->frame_start_ms > s->cfg.frame_timeout_ms)
-            conn_close(s, c, "frame deadline");
+            conn_close(s, c, "frame deadline", 1);
         else if (s->cfg.idle_timeout_ms > 0 && now - c->last_progress_ms > s->cfg.idle_timeout_ms)
-            conn_close(s, c, "idle deadline");
+            conn_close(s, c, "idle deadline", 1);
     }
 }
 
