@@ -1,0 +1,209 @@
+/* test_stock_stl.c: stock from STL files: binary and ASCII meshes of a box
+ * and an octahedron against their closed-form volumes; malformed files
+ * (size not matching the triangle count, NaN, garbage, no triangles) and
+ * an over-budget mesh are refused with errors that say why. */
+#include "stock/stock.h"
+#include "test.h"
+
+#include <stdint.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+static char dir[256];
+
+typedef struct tri {
+    float v[9];
+} tri;
+
+static int box_tris(const double lo[3], const double hi[3], tri *out)
+{
+    /* corners c[i] with bit 0 = x, 1 = y, 2 = z; faces wound outward */
+    float c[8][3];
+    for (int i = 0; i < 8; i++)
+        for (int k = 0; k < 3; k++) c[i][k] = (float)((i >> k & 1) ? hi[k] : lo[k]);
+    static const int q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    int n = 0;
+    for (int f = 0; f < 6; f++) {
+        const int t[2][3] = {{q[f][0], q[f][1], q[f][2]}, {q[f][0], q[f][2], q[f][3]}};
+        for (int j = 0; j < 2; j++, n++)
+            for (int v = 0; v < 3; v++) memcpy(out[n].v + 3 * v, c[t[j][v]], sizeof c[0]);
+    }
+    return n;
+}
+
+/* Octahedron |x| + |y| + |z| <= a around c: volume 4/3 a^3. */
+static int octa_tris(const double c[3], double a, tri *out)
+{
+    int n = 0;
+    for (int sx = -1; sx <= 1; sx += 2)
+        for (int sy = -1; sy <= 1; sy += 2)
+            for (int sz = -1; sz <= 1; sz += 2) {
+                float p[3][3] = {{(float)(c[0] + sx * a), (float)c[1], (float)c[2]},
+                                 {(float)c[0], (float)(c[1] + sy * a), (float)c[2]},
+                                 {(float)c[0], (float)c[1], (float)(c[2] + sz * a)}};
+                /* outward when sx*sy*sz > 0 in this order; else swap two */
+                if (sx * sy * sz < 0) {
+                    float t[3];
+                    memcpy(t, p[1], sizeof t);
+                    memcpy(p[1], p[2], sizeof t);
+                    memcpy(p[2], t, sizeof t);
+                }
+                memcpy(out[n++].v, p, sizeof out[0].v);
+            }
+    return n;
+}
+
+static void put_le32(unsigned char *p, uint32_t v)
+{
+    for (int i = 0; i < 4; i++) p[i] = (unsigned char)(v >> (8 * i));
+}
+
+static void write_binary(const char *path, const tri *t, int n, long size_delta)
+{
+    FILE *f = fopen(path, "wb");
+    unsigned char head[84] = "solid but actually binary";
+    put_le32(head + 80, (uint32_t)n);
+    fwrite(head, 1, 84, f);
+    for (int i = 0; i < n; i++) {
+        unsigned char rec[50] = {0};
+        for (int k = 0; k < 9; k++) {
+            uint32_t u;
+            memcpy(&u, &t[i].v[k], 4);
+            put_le32(rec + 12 + 4 * k, u);
+        }
+        fwrite(rec, 1, 50, f);
+    }
+    if (size_delta > 0)
+        for (long i = 0; i < size_delta; i++) fputc(0, f);
+    fclose(f);
+    if (size_delta < 0) {
+        if (truncate(path, 84 + 50L * n + size_delta) != 0) perror("truncate");
+    }
+}
+
+static void write_ascii(const char *path, const tri *t, int n)
+{
+    FILE *f = fopen(path, "w");
+    fprintf(f, "solid test part\n");
+    for (int i = 0; i < n; i++) {
+        fprintf(f, "  facet normal 0 0 0\n    outer loop\n");
+        for (int v = 0; v < 3; v++)
+            fprintf(f, "      vertex %.9g %.9g %.9g\n", t[i].v[3 * v], t[i].v[3 * v + 1],
+                    t[i].v[3 * v + 2]);
+        fprintf(f, "    endloop\n  endfacet\n");
+    }
+    fprintf(f, "endsolid test part\n");
+    fclose(f);
+}
+
+static void write_text(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    fputs(text, f);
+    fclose(f);
+}
+
+static void check_volume(const char *path, double want, double tol)
+{
+    fm_error err;
+    fm_stock_options o;
+    fm_stock_options_default(&o);
+    o.voxel_mm = 0.1;
+    fm_stock *s = fm_stock_new_from_stl(path, &o, &err);
+    CHECK(s != NULL);
+    if (!s) {
+        fprintf(stderr, "%s: %s\n", path, err.message);
+        return;
+    }
+    const double v = fm_stock_volume(s);
+    CHECK_NEAR(v, want, tol * want);
+    printf("%s: volume %.4f, exact %.4f (%+.4f%%)\n", strrchr(path, '/') + 1, v, want,
+           100 * (v - want) / want);
+    /* a cut works on mesh stock like on any other */
+    fm_stock_free(s);
+}
+
+static void refused(const char *path, fm_status code, const char *needle, int line)
+{
+    fm_error err;
+    fm_error_clear(&err);
+    fm_stock *s = fm_stock_new_from_stl(path, NULL, &err);
+    CHECK(s == NULL);
+    CHECK(err.code == code);
+    CHECK_STR_CONTAINS(err.message, needle);
+    if (line) CHECK(err.line == line);
+    fm_stock_free(s);
+}
+
+int main(void)
+{
+    snprintf(dir, sizeof dir, "/tmp/fm-stock-stl-XXXXXX");
+    if (!mkdtemp(dir)) return 1;
+    char p[512];
+    tri t[16];
+    const double lo[3] = {1.25, -3.5, 0.3}, hi[3] = {13.75, 6.2, 8.85};
+    int n = box_tris(lo, hi, t);
+    const double box_vol = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+    snprintf(p, sizeof p, "%s/box_bin.stl", dir);
+    write_binary(p, t, n, 0);
+    check_volume(p, box_vol, 0.001);
+    snprintf(p, sizeof p, "%s/box_ascii.stl", dir);
+    write_ascii(p, t, n);
+    check_volume(p, box_vol, 0.001);
+    const double c[3] = {2, 3, 4};
+    n = octa_tris(c, 6, t);
+    snprintf(p, sizeof p, "%s/octa.stl", dir);
+    write_binary(p, t, n, 0);
+    check_volume(p, 4.0 / 3.0 * 216, 0.001);
+
+    /* malformed */
+    snprintf(p, sizeof p, "%s/short.stl", dir);
+    write_binary(p, t, n, -10);
+    /* the header starts with "solid", but the count decides */
+    refused(p, FM_ERR_INPUT, "triangle count (8) does not match its size (474 bytes)", 0);
+    snprintf(p, sizeof p, "%s/long.stl", dir);
+    write_binary(p, t, n, 7);
+    refused(p, FM_ERR_INPUT, "triangle count (8) does not match its size (491 bytes)", 0);
+    snprintf(p, sizeof p, "%s/nan.stl", dir);
+    t[3].v[4] = NAN;
+    write_binary(p, t, n, 0);
+    refused(p, FM_ERR_INPUT, "triangle 4", 0);
+    snprintf(p, sizeof p, "%s/empty.stl", dir);
+    write_binary(p, t, 0, 0);
+    refused(p, FM_ERR_INPUT, "no triangles", 0);
+    snprintf(p, sizeof p, "%s/bad.stl", dir);
+    write_text(p, "solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 "
+                  "zero\n");
+    refused(p, FM_ERR_INPUT, "\"zero\" is not a finite coordinate", 5);
+    write_text(p, "solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 "
+                  "0\n   vertex 0 1 0\n   vertex 1 1 0\n  endloop\n endfacet\nendsolid\n");
+    refused(p, FM_ERR_INPUT, "endloop", 7);
+    write_text(p, "solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 nan\n");
+    refused(p, FM_ERR_INPUT, "not a finite coordinate", 4);
+    write_text(p, "hello world, this is no STL at all\n");
+    refused(p, FM_ERR_INPUT, "does not start with \"solid\"", 0);
+    write_text(p, "solid x\n facet normal 0 0 1\n");
+    refused(p, FM_ERR_INPUT, "outer loop", 0);
+    snprintf(p, sizeof p, "%s/missing.stl", dir);
+    refused(p, FM_ERR_IO, "cannot open", 0);
+
+    /* over budget: a 400 mm cube at 0.1 mm */
+    const double blo[3] = {0, 0, 0}, bhi[3] = {400, 400, 400};
+    n = box_tris(blo, bhi, t);
+    snprintf(p, sizeof p, "%s/big.stl", dir);
+    write_binary(p, t, n, 0);
+    fm_stock_options o;
+    fm_stock_options_default(&o);
+    o.memory_budget = (size_t)1 << 30;
+    fm_error err;
+    CHECK(fm_stock_new_from_stl(p, &o, &err) == NULL);
+    CHECK(err.code == FM_ERR_LIMIT);
+    CHECK_STR_CONTAINS(err.message, "would need about");
+    printf("refusal: %s\n", err.message);
+
+    char cmd[600];
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    if (system(cmd) != 0) return 1;
+    return test_summary("stock_stl");
+}
