@@ -50,6 +50,7 @@ struct fm_modbus_server {
     connection *conns;
     struct pollfd *pfds;
     int *pfd_conn; /* pfds index -> connection index */
+    int64_t accept_paused_until_ms;
 };
 
 static int64_t monotonic_ms(void)
@@ -185,8 +186,16 @@ static void accept_clients(fm_modbus_server *s, int64_t now)
 {
     for (int round = 0; round < MAX_ACCEPTS_PER_ROUND; round++) {
         int fd = accept(s->listen_fd, NULL, NULL);
-        if (fd < 0)
-            return; /* EAGAIN, or a transient error: poll will tell again */
+        if (fd < 0) {
+            /* Out of descriptors the pending connection stays queued and the
+             * listener stays readable: stop polling it for a while instead of
+             * spinning. Anything else (EAGAIN, ECONNABORTED) just returns. */
+            if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
+                server_log(s, FM_MODBUS_LOG_ERROR, "modbus: accept: %s", strerror(errno));
+                s->accept_paused_until_ms = now + 100;
+            }
+            return;
+        }
         connection *slot = NULL;
         for (int i = 0; i < s->max_connections; i++) {
             if (s->conns[i].fd < 0) {
@@ -237,7 +246,7 @@ static void *server_thread(void *arg)
         s->pfds[n].fd = s->wake_pipe[0];
         s->pfds[n].events = POLLIN;
         s->pfd_conn[n++] = -1;
-        s->pfds[n].fd = s->listen_fd;
+        s->pfds[n].fd = now < s->accept_paused_until_ms ? -1 : s->listen_fd; /* -1: ignored by poll */
         s->pfds[n].events = POLLIN;
         s->pfd_conn[n++] = -1;
         for (int i = 0; i < s->max_connections; i++) {
