@@ -1514,6 +1514,7 @@ static fm_status interp_init(gc_interp *g, const char *text, size_t len, const c
     g->absolute = 1;
     g->arc_absolute = 0;
     g->motion = 800;
+    g->retract_r = 1; /* rs274 starts in G99 (retract to R) */
     g->cs = 1;
     g->params[5220] = 1;
     return FM_OK;

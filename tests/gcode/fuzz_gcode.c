@@ -1,0 +1,33 @@
+/* fuzz_gcode.c: libFuzzer target for the G-code interpreter: any input must
+ * end in FM_OK or a clean error, never a crash, a hang or a leak. */
+#include <stddef.h>
+#include <stdint.h>
+
+#include "toolpaths/gcode/gcode.h"
+
+static int count_sink(void *user, const fm_motion *m)
+{
+    long *n = user;
+    (*n)++;
+    /* stop very long outputs so each input stays fast */
+    return *n > 200000 || m->t1 < m->t0;
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    static fm_tool_spec tools[2];
+    static fm_tool_table table = {2, tools};
+    tools[0].number = 1;
+    tools[0].length_offset = 12.5;
+    tools[1].number = 2;
+    tools[1].length_offset = -3;
+    fm_gcode_options opt;
+    fm_gcode_options_default(&opt);
+    opt.max_iterations = 20000; /* keep each run short; the limit itself is what we test */
+    opt.max_program_bytes = 1 << 20;
+    opt.tools = (size & 1) ? &table : NULL;
+    long n = 0;
+    fm_error err;
+    fm_gcode_run_string((const char *)data, size, "fuzz", &opt, count_sink, &n, NULL, &err);
+    return 0;
+}
