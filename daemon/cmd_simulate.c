@@ -1,0 +1,250 @@
+/* cmd_simulate.c: `frepmill simulate`: run a program against a stock with
+ * the job runner (job.c), write the final stock and a JSON report, and
+ * show a progress bar on a terminal. */
+#include <errno.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "commands.h"
+#include "job.h"
+#include "outputs.h"
+
+#define SIMULATE_MAX_OUTPUTS 8
+
+static void usage(FILE *out)
+{
+    fprintf(out,
+            "usage: frepmill simulate PROGRAM --stock SPEC --tools TOOLS [--voxel MM]\n"
+            "                         [--out FILE]... [--report FILE.json] [--progress]\n"
+            "                         [--band VOXELS] [--memory-budget MB] [--threads N]\n"
+            "                         [--rapid-rate MM_PER_MIN] [--batch DIAMETERS]\n"
+            "\n"
+            "PROGRAM   G-code, or a parametric trajectory (.json)\n"
+            "SPEC      box:X0,Y0,Z0,X1,Y1,Z1 | cylinder:X,Y,Z0,Z1,R | FILE.hf | FILE.stl | FILE.vdb\n"
+            "TOOLS     JSON tool table or LinuxCNC .tbl file\n"
+            "--voxel   voxel edge in mm (default 0.1)\n"
+            "--out     final stock; format by extension: %s (may be given several times)\n"
+            "--report  JSON report (default: none; `-` for standard output)\n"
+            "Exit status: 0 success, 2 bad input, 3 resource limit, 4 I/O error.\n",
+            fm_output_formats());
+}
+
+typedef struct progress_bar {
+    int enabled;
+    int is_tty;
+    double last_shown;
+    int last_permille;
+} progress_bar;
+
+static int show_progress(void *user, const fm_job_progress *p)
+{
+    progress_bar *bar = user;
+    if (!bar->enabled) return 0;
+    double fraction = p->program_time_total > 0 ? p->program_time / p->program_time_total
+                      : p->motions_total > 0   ? (double)p->motions_done / (double)p->motions_total
+                                               : 1.0;
+    if (fraction > 1) fraction = 1;
+    int permille = (int)(fraction * 1000);
+    /* Repaint at most ten times a second on a terminal, and on each whole
+     * percent in a log. */
+    if (bar->is_tty ? p->elapsed_s - bar->last_shown < 0.1 && permille < 1000
+                    : permille / 10 == bar->last_permille / 10)
+        return 0;
+    bar->last_shown = p->elapsed_s;
+    bar->last_permille = permille;
+    double rate = p->elapsed_s > 0 ? (double)p->motions_done / p->elapsed_s : 0;
+    double eta = fraction > 0.001 ? p->elapsed_s * (1 - fraction) / fraction : 0;
+    if (bar->is_tty) {
+        char cells[31];
+        int filled = (int)(fraction * 30);
+        for (int i = 0; i < 30; i++) cells[i] = i < filled ? '#' : '.';
+        cells[30] = '\0';
+        fprintf(stderr, "\r[%s] %5.1f%%  line %d  %.0f motions/s  ETA %.0f s ", cells,
+                fraction * 100, p->line, rate, eta);
+    } else {
+        fprintf(stderr, "progress %5.1f%%  line %d  %.0f motions/s  ETA %.0f s\n", fraction * 100,
+                p->line, rate, eta);
+    }
+    fflush(stderr);
+    return 0;
+}
+
+static int parse_double(const char *s, double *out)
+{
+    char *end;
+    errno = 0;
+    *out = strtod(s, &end);
+    return end != s && *end == '\0' && errno != ERANGE && isfinite(*out);
+}
+
+static json_t *report_json(const fm_job_result *r)
+{
+    json_t *tools = json_array();
+    for (size_t i = 0; i < r->tool_count; i++)
+        json_array_append_new(tools, json_pack("{s:i, s:f}", "tool", r->tools[i].tool,
+                                               "removed_volume_mm3", r->tools[i].removed_mm3));
+    json_t *blocks = json_array();
+    for (size_t i = 0; i < r->top_block_count; i++) {
+        const fm_stock_block *b = &r->top_blocks[i];
+        double span = b->t1 - b->t0;
+        json_array_append_new(
+            blocks, json_pack("{s:I, s:f, s:f, s:f, s:f}", "line", (json_int_t)b->block,
+                              "removed_volume_mm3", b->removed_mm3, "t0", b->t0, "t1", b->t1,
+                              "removal_rate_mm3_per_s", span > 0 ? b->removed_mm3 / span : 0.0));
+    }
+    return json_pack("{s:f, s:f, s:f, s:f, s:I, s:I, s:f, s:f, s:I, s:f, s:o, s:o, s:b}",
+                     "initial_volume_mm3", r->initial_volume_mm3, "final_volume_mm3",
+                     r->final_volume_mm3, "removed_volume_mm3", r->removed_volume_mm3,
+                     "surface_area_mm2", r->surface_area_mm2, "motions", (json_int_t)r->motions,
+                     "blocks", (json_int_t)r->blocks, "program_time_s", r->program_time_s,
+                     "wall_time_s", r->wall_time_s, "peak_memory_bytes",
+                     (json_int_t)r->peak_memory_bytes, "voxel_mm", r->voxel_mm, "tools", tools,
+                     "top_blocks", blocks, "stopped", r->stopped);
+}
+
+static int exit_status(fm_status st)
+{
+    switch (st) {
+    case FM_OK: return 0;
+    case FM_ERR_LIMIT: return 3;
+    case FM_ERR_IO: return 4;
+    case FM_ERR_INPUT: return 2;
+    default: return 5;
+    }
+}
+
+int fm_cmd_simulate(int argc, char **argv)
+{
+    fm_job_spec spec;
+    fm_job_spec_default(&spec);
+    const char *outputs[SIMULATE_MAX_OUTPUTS];
+    int output_count = 0;
+    const char *report_path = NULL;
+    int force_progress = 0;
+
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+        double d;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            usage(stdout);
+            return 0;
+        } else if (!strcmp(a, "--progress")) {
+            force_progress = 1;
+            continue;
+        } else if (a[0] != '-' || !a[1]) {
+            if (spec.program_path) {
+                fprintf(stderr, "frepmill simulate: more than one program given ('%s' and '%s')\n",
+                        spec.program_path, a);
+                return 2;
+            }
+            spec.program_path = a;
+            continue;
+        }
+        if (!v) {
+            fprintf(stderr, "frepmill simulate: %s needs a value\n", a);
+            return 2;
+        }
+        i++;
+        if (!strcmp(a, "--stock")) {
+            spec.stock_spec = v;
+        } else if (!strcmp(a, "--tools")) {
+            spec.tools_path = v;
+        } else if (!strcmp(a, "--out")) {
+            if (output_count == SIMULATE_MAX_OUTPUTS) {
+                fprintf(stderr, "frepmill simulate: at most %d --out files\n", SIMULATE_MAX_OUTPUTS);
+                return 2;
+            }
+            if (!fm_output_format_known(v)) {
+                fprintf(stderr, "frepmill simulate: --out %s: unknown format (use %s)\n", v,
+                        fm_output_formats());
+                return 2;
+            }
+            outputs[output_count++] = v;
+        } else if (!strcmp(a, "--report")) {
+            report_path = v;
+        } else if (!strcmp(a, "--voxel") && parse_double(v, &d) && d > 0) {
+            spec.stock.voxel_mm = d;
+        } else if (!strcmp(a, "--band") && parse_double(v, &d) && d >= 2 && d <= 32) {
+            spec.stock.band_voxels = (int)d;
+        } else if (!strcmp(a, "--memory-budget") && parse_double(v, &d) && d > 0) {
+            spec.stock.memory_budget = (size_t)(d * 1024 * 1024);
+        } else if (!strcmp(a, "--threads") && parse_double(v, &d) && d >= 0 && d <= 1024) {
+            spec.stock.threads = (int)d;
+        } else if (!strcmp(a, "--rapid-rate") && parse_double(v, &d) && d > 0) {
+            spec.rapid_rate = d;
+        } else if (!strcmp(a, "--batch") && parse_double(v, &d)) {
+            spec.batch_diameters = d;
+        } else if (!strcmp(a, "--voxel") || !strcmp(a, "--band") || !strcmp(a, "--memory-budget") ||
+                   !strcmp(a, "--threads") || !strcmp(a, "--rapid-rate") || !strcmp(a, "--batch")) {
+            fprintf(stderr, "frepmill simulate: %s %s: not a valid value\n", a, v);
+            return 2;
+        } else {
+            fprintf(stderr, "frepmill simulate: unknown option %s\n", a);
+            usage(stderr);
+            return 2;
+        }
+    }
+    if (!spec.program_path || !spec.stock_spec || !spec.tools_path) {
+        fprintf(stderr, "frepmill simulate: %s\n",
+                !spec.program_path ? "no PROGRAM given"
+                : !spec.stock_spec ? "no --stock given"
+                                   : "no --tools given");
+        usage(stderr);
+        return 2;
+    }
+
+    progress_bar bar = {0};
+    bar.is_tty = isatty(STDERR_FILENO);
+    bar.enabled = bar.is_tty || force_progress;
+    bar.last_permille = -10;
+    fm_job_hooks hooks = {.user = &bar, .progress = show_progress};
+
+    fm_job_result result;
+    fm_error err;
+    fm_error_clear(&err);
+    fm_status st = fm_job_run(&spec, &hooks, &result, &err);
+    if (bar.enabled && bar.is_tty) fputc('\n', stderr);
+    if (st != FM_OK) {
+        char buf[1024];
+        fprintf(stderr, "frepmill simulate: %s\n", fm_error_format(&err, buf, sizeof buf));
+        return exit_status(st);
+    }
+
+    int status = 0;
+    for (int i = 0; i < output_count && status == 0; i++) {
+        st = fm_output_write(outputs[i], result.stock, &err);
+        if (st != FM_OK) {
+            char buf[1024];
+            fprintf(stderr, "frepmill simulate: %s\n", fm_error_format(&err, buf, sizeof buf));
+            status = exit_status(st);
+        }
+    }
+
+    fprintf(stderr,
+            "frepmill simulate: %ld motions, %.1f s of program time; removed %.1f mm3 of %.1f mm3 "
+            "in %.2f s, peak memory %.0f MB\n",
+            result.motions, result.program_time_s, result.removed_volume_mm3,
+            result.initial_volume_mm3, result.wall_time_s,
+            (double)result.peak_memory_bytes / (1024.0 * 1024.0));
+
+    if (report_path && status == 0) {
+        json_t *report = report_json(&result);
+        int rc = !strcmp(report_path, "-")
+                     ? json_dumpf(report, stdout, JSON_INDENT(2) | JSON_REAL_PRECISION(10))
+                     : json_dump_file(report, report_path, JSON_INDENT(2) | JSON_REAL_PRECISION(10));
+        if (!strcmp(report_path, "-")) fputc('\n', stdout);
+        json_decref(report);
+        if (rc != 0) {
+            fprintf(stderr, "frepmill simulate: cannot write the report %s: %s\n", report_path,
+                    strerror(errno));
+            status = 4;
+        }
+    }
+    fm_stock_free(result.stock);
+    return status;
+}

@@ -1,0 +1,616 @@
+/* job.c: the simulation pipeline behind `frepmill simulate` and the
+ * daemon's jobs. It loads the tools, makes the stock, interprets the
+ * program twice (a first pass that validates it and measures its length
+ * for progress, a second that cuts), turns each motion (or a short run of
+ * consecutive motions of one tool) into a swept-volume field and subtracts
+ * it from the stock. */
+#include "job.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <time.h>
+
+#include "frep/frep.h"
+#include "toolpaths/gcode/gcode.h"
+#include "hf/hf.h"
+#include "sweep/sweep.h"
+#include "toolpaths/tooltable/tooltable.h"
+#ifdef FM_HAVE_TRAJ
+#include "toolpaths/traj/traj.h"
+#endif
+
+#define JOB_MAX_BATCH 256
+/* Stock models given as HyperFun are searched for within this cube (mm). */
+#define JOB_MODEL_SEARCH_MM 2000.0
+#define JOB_MODEL_MAX_BOXES 4000000u
+
+void fm_job_spec_default(fm_job_spec *spec)
+{
+    memset(spec, 0, sizeof *spec);
+    fm_stock_options_default(&spec->stock);
+    spec->rapid_rate = 5000.0;
+    spec->batch_diameters = 1.0;
+}
+
+size_t fm_job_peak_rss(void)
+{
+    struct rusage ru;
+    if (getrusage(RUSAGE_SELF, &ru) != 0) return 0;
+    return (size_t)ru.ru_maxrss * 1024u; /* Linux reports kilobytes */
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* ------------------------------------------------------------- stock -- */
+
+/* Parse exactly n comma-separated finite numbers. */
+static int parse_numbers(const char *s, double *out, int n)
+{
+    for (int i = 0; i < n; i++) {
+        char *end;
+        errno = 0;
+        out[i] = strtod(s, &end);
+        if (end == s || errno == ERANGE || !isfinite(out[i])) return 0;
+        s = end;
+        while (isspace((unsigned char)*s)) s++;
+        if (i < n - 1) {
+            if (*s != ',') return 0;
+            s++;
+        }
+    }
+    return *s == '\0';
+}
+
+static int has_extension(const char *path, const char *ext)
+{
+    size_t n = strlen(path), e = strlen(ext);
+    if (n <= e) return 0;
+    for (size_t i = 0; i < e; i++)
+        if (tolower((unsigned char)path[n - e + i]) != tolower((unsigned char)ext[i])) return 0;
+    return 1;
+}
+
+typedef struct bounds_search {
+    fm_evaluator *ev;
+    double lo[3], hi[3];
+    int found;
+    size_t boxes;
+} bounds_search;
+
+/* Grow the search's box by every box where the model may be inside,
+ * subdividing boxes where it is undecided down to min_size. */
+static int search_model_bounds(bounds_search *s, const fm_interval box[3], double min_size)
+{
+    if (++s->boxes > JOB_MODEL_MAX_BOXES) return 0;
+    fm_interval b4[4] = {box[0], box[1], box[2], {0, 0}};
+    fm_interval v = fm_eval_interval(s->ev, b4);
+    if (!(v.hi >= 0)) return 1; /* all outside (a NaN bound counts as undecided below) */
+    double size = box[0].hi - box[0].lo;
+    if (v.lo >= 0 || size <= min_size) {
+        for (int a = 0; a < 3; a++) {
+            if (!s->found || box[a].lo < s->lo[a]) s->lo[a] = box[a].lo;
+            if (!s->found || box[a].hi > s->hi[a]) s->hi[a] = box[a].hi;
+        }
+        s->found = 1;
+        return 1;
+    }
+    for (int k = 0; k < 8; k++) {
+        fm_interval sub[3];
+        for (int a = 0; a < 3; a++) {
+            double mid = 0.5 * (box[a].lo + box[a].hi);
+            sub[a] = (k >> a) & 1 ? (fm_interval){mid, box[a].hi} : (fm_interval){box[a].lo, mid};
+        }
+        if (!search_model_bounds(s, sub, min_size)) return 0;
+    }
+    return 1;
+}
+
+static fm_stock *stock_from_model(const char *path, const fm_stock_options *opt, fm_error *err)
+{
+    fm_graph *g = fm_graph_new(0);
+    if (!g) {
+        fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+        return NULL;
+    }
+    fm_stock *stock = NULL;
+    fm_tape *tape = NULL;
+    fm_evaluator *ev = NULL;
+    fm_field field;
+    memset(&field, 0, sizeof field);
+    fm_hf_model model;
+    if (fm_hf_compile_file(g, path, NULL, &model, err) != FM_OK) goto done;
+    if (model.dimension > 3) {
+        fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                    "the stock model '%s' is %dD; a stock is a 3D object (x[3])", model.name,
+                    model.dimension);
+        goto done;
+    }
+    /* HyperFun functions are rarely distances (hfSphere is R^2 - r^2), and
+     * the stock's narrow band needs first-order distances: normalize
+     * (Shapiro eq. 4.9). */
+    fm_node root = fm_normalize(g, model.root);
+    if (!root) {
+        *err = *fm_graph_error(g);
+        goto done;
+    }
+    tape = fm_tape_compile(g, root, err);
+    if (!tape) goto done;
+    ev = fm_evaluator_new(tape, err);
+    if (!ev) goto done;
+    double voxel = opt && opt->voxel_mm > 0 ? opt->voxel_mm : 0.1;
+    bounds_search s = {.ev = ev};
+    fm_interval start[3];
+    for (int a = 0; a < 3; a++) start[a] = (fm_interval){-JOB_MODEL_SEARCH_MM, JOB_MODEL_SEARCH_MM};
+    double min_size = fmax(voxel, 2 * JOB_MODEL_SEARCH_MM / 1024.0);
+    if (!search_model_bounds(&s, start, min_size)) {
+        fm_error_at(err, FM_ERR_LIMIT, path, 0, 0,
+                    "the stock model's boundary is too complex to bound (over %u boxes)",
+                    JOB_MODEL_MAX_BOXES);
+        goto done;
+    }
+    if (!s.found) {
+        fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                    "the stock model '%s' is empty within +-%.0f mm", model.name,
+                    JOB_MODEL_SEARCH_MM);
+        goto done;
+    }
+    for (int a = 0; a < 3; a++) {
+        if (s.lo[a] <= -JOB_MODEL_SEARCH_MM || s.hi[a] >= JOB_MODEL_SEARCH_MM) {
+            fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                        "the stock model '%s' is not bounded within +-%.0f mm along %c; "
+                        "intersect it with a block",
+                        model.name, JOB_MODEL_SEARCH_MM, "xyz"[a]);
+            goto done;
+        }
+        s.lo[a] -= 4 * voxel;
+        s.hi[a] += 4 * voxel;
+    }
+    if (fm_field_from_tape(&field, tape, s.lo, s.hi, 0.0, err) != FM_OK) goto done;
+    stock = fm_stock_new_from_field(&field, opt, err);
+    fm_field_release(&field);
+done:
+    fm_evaluator_free(ev);
+    fm_tape_free(tape);
+    fm_graph_free(g);
+    return stock;
+}
+
+fm_stock *fm_job_make_stock(const char *spec, const fm_stock_options *opt, fm_error *err)
+{
+    double v[6];
+    if (!spec || !*spec) {
+        fm_error_set(err, FM_ERR_INPUT, "no stock given (--stock box:X0,Y0,Z0,X1,Y1,Z1, "
+                                        "cylinder:X,Y,Z0,Z1,R, or a .hf, .stl or .vdb file)");
+        return NULL;
+    }
+    if (!strncmp(spec, "box:", 4)) {
+        if (!parse_numbers(spec + 4, v, 6)) {
+            fm_error_set(err, FM_ERR_INPUT,
+                         "stock '%s': expected box:X0,Y0,Z0,X1,Y1,Z1 (six numbers in mm)", spec);
+            return NULL;
+        }
+        for (int a = 0; a < 3; a++)
+            if (!(v[a] < v[a + 3])) {
+                fm_error_set(err, FM_ERR_INPUT,
+                             "stock '%s': the box's %c range is empty (%g >= %g); give the "
+                             "lower corner first",
+                             spec, "XYZ"[a], v[a], v[a + 3]);
+                return NULL;
+            }
+        return fm_stock_new_box(v, v + 3, opt, err);
+    }
+    if (!strncmp(spec, "cylinder:", 9)) {
+        if (!parse_numbers(spec + 9, v, 5)) {
+            fm_error_set(err, FM_ERR_INPUT,
+                         "stock '%s': expected cylinder:X,Y,Z0,Z1,R (five numbers in mm)", spec);
+            return NULL;
+        }
+        if (!(v[2] < v[3]) || !(v[4] > 0)) {
+            fm_error_set(err, FM_ERR_INPUT,
+                         "stock '%s': the cylinder needs Z0 < Z1 and a radius above 0", spec);
+            return NULL;
+        }
+        return fm_stock_new_cylinder(v[0], v[1], v[2], v[3], v[4], opt, err);
+    }
+    if (has_extension(spec, ".hf")) return stock_from_model(spec, opt, err);
+    if (has_extension(spec, ".stl")) return fm_stock_new_from_stl(spec, opt, err);
+    if (has_extension(spec, ".vdb")) return fm_stock_load_vdb(spec, opt, err);
+    fm_error_set(err, FM_ERR_INPUT,
+                 "stock '%s' is not box:X0,Y0,Z0,X1,Y1,Z1, cylinder:X,Y,Z0,Z1,R, or a .hf, "
+                 ".stl or .vdb file",
+                 spec);
+    return NULL;
+}
+
+/* ------------------------------------------------------------- tools -- */
+
+/* A built tool, with the HyperFun model behind a custom cutter. */
+typedef struct job_tool {
+    fm_tool tool;
+    fm_graph *graph;
+    fm_tape *tape;
+} job_tool;
+
+typedef struct job_tools {
+    fm_tool_table table; /* when loaded here */
+    const fm_tool_table *use;
+    job_tool *built;
+    size_t count;
+} job_tools;
+
+static void free_tools(job_tools *t)
+{
+    for (size_t i = 0; i < t->count; i++) {
+        fm_tape_free(t->built[i].tape);
+        fm_graph_free(t->built[i].graph);
+    }
+    free(t->built);
+    fm_tool_table_free(&t->table);
+    memset(t, 0, sizeof *t);
+}
+
+/* The folder part of path (with its slash), or "" for a bare name. */
+static void folder_of(const char *path, char *out, size_t size)
+{
+    const char *slash = path ? strrchr(path, '/') : NULL;
+    size_t n = slash ? (size_t)(slash - path + 1) : 0;
+    if (n >= size) n = 0;
+    memcpy(out, path, n);
+    out[n] = '\0';
+}
+
+static fm_status build_custom_tool(const fm_tool_spec *spec, const char *tools_path, job_tool *jt,
+                                   fm_error *err)
+{
+    char file[1024];
+    if (spec->hyperfun_file[0] == '/') {
+        snprintf(file, sizeof file, "%s", spec->hyperfun_file);
+    } else {
+        char folder[512];
+        folder_of(tools_path, folder, sizeof folder);
+        snprintf(file, sizeof file, "%s%s", folder, spec->hyperfun_file);
+    }
+    jt->graph = fm_graph_new(0);
+    if (!jt->graph) return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    fm_hf_model model;
+    fm_status st = fm_hf_compile_file(jt->graph, file, NULL, &model, err);
+    if (st != FM_OK) return st;
+    jt->tape = fm_tape_compile(jt->graph, model.root, err);
+    if (!jt->tape) return err ? err->code : FM_ERR_INPUT;
+    fm_tool_custom custom;
+    st = fm_tool_custom_from_tape(jt->tape, spec->bound_radius, spec->flute_length, &custom, err);
+    if (st != FM_OK) return st;
+    return fm_tool_build_custom(spec, &custom, &jt->tool, err);
+}
+
+static fm_status load_tools(const fm_job_spec *spec, job_tools *t, fm_error *err)
+{
+    memset(t, 0, sizeof *t);
+    if (spec->tools) {
+        t->use = spec->tools;
+    } else if (spec->tools_path) {
+        fm_status st = fm_tooltable_load(spec->tools_path, &t->table, err);
+        if (st != FM_OK) return st;
+        t->use = &t->table;
+    } else {
+        return fm_error_set(err, FM_ERR_INPUT, "no tool table given (--tools TOOLS.json or .tbl)");
+    }
+    if (t->use->count == 0)
+        return fm_error_set(err, FM_ERR_INPUT, "the tool table %s has no tools",
+                            spec->tools_path ? spec->tools_path : "");
+    t->built = calloc(t->use->count, sizeof *t->built);
+    if (!t->built) return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    t->count = t->use->count;
+    for (size_t i = 0; i < t->count; i++) {
+        const fm_tool_spec *ts = &t->use->tools[i];
+        fm_status st = ts->shape == FM_TOOL_HYPERFUN
+                           ? build_custom_tool(ts, spec->tools_path, &t->built[i], err)
+                           : fm_tool_build(ts, &t->built[i].tool, err);
+        if (st != FM_OK) {
+            if (err && spec->tools_path && !err->file[0])
+                snprintf(err->file, sizeof err->file, "%s", spec->tools_path);
+            return st;
+        }
+    }
+    return FM_OK;
+}
+
+/* The tool that cuts for a motion: the spindle's, or the table's only tool
+ * when the program never loaded one (T0: many single-tool programs have no
+ * M6). NULL: nothing cuts. */
+static const fm_tool *tool_for(const job_tools *t, int number)
+{
+    for (size_t i = 0; i < t->count; i++)
+        if (t->built[i].tool.spec.number == number) return &t->built[i].tool;
+    if (number == 0 && t->count == 1) return &t->built[0].tool;
+    return NULL;
+}
+
+/* ----------------------------------------------------------- program -- */
+
+static fm_program_kind program_kind(const fm_job_spec *spec)
+{
+    if (spec->program_kind != FM_PROGRAM_AUTO) return spec->program_kind;
+    const char *name = spec->program_path ? spec->program_path : spec->program_name;
+    if (name && has_extension(name, ".json")) return FM_PROGRAM_TRAJECTORY;
+    return FM_PROGRAM_GCODE;
+}
+
+static fm_status run_program(const fm_job_spec *spec, const fm_tool_table *tools,
+                             fm_motion_sink sink, void *user, fm_error *err)
+{
+    if (!spec->program_path && !spec->program_text)
+        return fm_error_set(err, FM_ERR_INPUT, "no program given");
+    if (program_kind(spec) == FM_PROGRAM_TRAJECTORY) {
+#ifdef FM_HAVE_TRAJ
+        fm_traj_options topt;
+        fm_traj_options_default(&topt);
+        topt.rapid_rate = spec->rapid_rate > 0 ? spec->rapid_rate : topt.rapid_rate;
+        if (spec->program_path) return fm_traj_run_file(spec->program_path, &topt, sink, user, NULL, err);
+        return fm_traj_run_string(spec->program_text, spec->program_length,
+                                  spec->program_name ? spec->program_name : "trajectory", &topt,
+                                  sink, user, NULL, err);
+#else
+        return fm_error_set(err, FM_ERR_INPUT, "parametric trajectories are not built in");
+#endif
+    }
+    fm_gcode_options gopt;
+    fm_gcode_options_default(&gopt);
+    if (spec->rapid_rate > 0) gopt.rapid_rate = spec->rapid_rate;
+    gopt.tools = tools;
+    if (spec->program_path)
+        return fm_gcode_run_file(spec->program_path, &gopt, sink, user, NULL, err);
+    return fm_gcode_run_string(spec->program_text, spec->program_length,
+                               spec->program_name ? spec->program_name : "program", &gopt, sink,
+                               user, NULL, err);
+}
+
+/* -------------------------------------------------------- first pass -- */
+
+typedef struct survey {
+    long motions;
+    double time_total;
+    int max_line;
+} survey;
+
+static int survey_sink(void *user, const fm_motion *m)
+{
+    survey *s = user;
+    s->motions++;
+    if (m->t1 > s->time_total) s->time_total = m->t1;
+    if (m->line > s->max_line) s->max_line = m->line;
+    return 0;
+}
+
+/* --------------------------------------------------------------- cut -- */
+
+typedef struct cutter {
+    const fm_job_spec *spec;
+    const fm_job_hooks *hooks;
+    job_tools *tools;
+    fm_stock *stock;
+    fm_error *err;
+    fm_status status;
+    int stopped;
+
+    fm_motion batch[JOB_MAX_BATCH];
+    size_t batch_count;
+    double batch_length;
+    const fm_tool *batch_tool;
+
+    fm_job_progress progress;
+    double started;
+    unsigned char *lines_cut; /* bitmap of source lines that cut */
+    size_t lines_cap;
+    long blocks;
+} cutter;
+
+static double motion_path_length(const fm_motion *m)
+{
+    double d2 = 0;
+    for (int a = 0; a < 3; a++) d2 += (m->end[a] - m->start[a]) * (m->end[a] - m->start[a]);
+    double chord = sqrt(d2);
+    if (m->kind == FM_MOTION_ARC) {
+        /* An arc is at most its circle's circumference per turn plus the
+         * axial travel; an upper bound suffices for batching. */
+        double r2 = 0;
+        for (int a = 0; a < 3; a++)
+            if (a != m->plane_axis) r2 += (m->start[a] - m->center[a]) * (m->start[a] - m->center[a]);
+        int turns = m->turns < 0 ? -m->turns : m->turns;
+        return chord + 2 * 3.14159265358979323846 * sqrt(r2) * (turns > 0 ? turns : 1);
+    }
+    return chord;
+}
+
+static void mark_line(cutter *c, int line)
+{
+    if (line <= 0) return;
+    size_t byte = (size_t)line / 8;
+    if (byte >= c->lines_cap) {
+        size_t cap = c->lines_cap ? c->lines_cap : 1024;
+        while (cap <= byte) cap *= 2;
+        unsigned char *p = realloc(c->lines_cut, cap);
+        if (!p) return; /* the count is a report figure; losing it is not worth failing */
+        memset(p + c->lines_cap, 0, cap - c->lines_cap);
+        c->lines_cut = p;
+        c->lines_cap = cap;
+    }
+    unsigned char bit = (unsigned char)(1u << (line % 8));
+    if (!(c->lines_cut[byte] & bit)) {
+        c->lines_cut[byte] |= bit;
+        c->blocks++;
+    }
+}
+
+static fm_status flush_batch(cutter *c)
+{
+    if (c->batch_count == 0) return FM_OK;
+    const fm_motion *first = &c->batch[0], *last = &c->batch[c->batch_count - 1];
+    fm_field field;
+    fm_status st = fm_sweep_field_many(&field, c->batch, c->batch_count, &c->batch_tool->flutes,
+                                       c->err);
+    if (st == FM_OK) {
+        fm_stock_cut cut = {.tool = c->batch_tool->spec.number,
+                            .block = first->line,
+                            .t0 = first->t0,
+                            .t1 = last->t1};
+        st = fm_stock_subtract(c->stock, &field, &cut, NULL, c->err);
+        fm_field_release(&field);
+    }
+    if (st != FM_OK) {
+        if (c->err && c->err->line == 0) {
+            c->err->line = first->line;
+            const char *name = c->spec->program_path ? c->spec->program_path : c->spec->program_name;
+            if (name && !c->err->file[0]) snprintf(c->err->file, sizeof c->err->file, "%s", name);
+        }
+        return st;
+    }
+    for (size_t i = 0; i < c->batch_count; i++) mark_line(c, c->batch[i].line);
+    c->batch_count = 0;
+    c->batch_length = 0;
+    c->batch_tool = NULL;
+
+    fm_job_progress *p = &c->progress;
+    p->program_time = last->t1;
+    p->line = last->line;
+    p->block = last->block;
+    p->tool = last->tool;
+    for (int a = 0; a < 3; a++) p->position[a] = last->end[a] + last->tip_offset[a];
+    p->removed_mm3 = fm_stock_removed_volume(c->stock);
+    p->elapsed_s = now_s() - c->started;
+    p->stock = c->stock;
+    if (c->hooks && c->hooks->progress && c->hooks->progress(c->hooks->user, p)) c->stopped = 1;
+    return FM_OK;
+}
+
+static int cut_sink(void *user, const fm_motion *m)
+{
+    cutter *c = user;
+    c->progress.motions_done++;
+    if (m->index < c->spec->skip_motions) return 0; /* cut before the snapshot we resume from */
+    if (c->hooks && c->hooks->before_motion) {
+        /* The hook must see the stock as it is when this motion starts. */
+        if ((c->status = flush_batch(c)) != FM_OK) return 1;
+        if (c->stopped) return 1;
+        const fm_tool *t = tool_for(c->tools, m->tool);
+        if (c->hooks->before_motion(c->hooks->user, m, t, c->stock)) {
+            c->stopped = 1;
+            return 1;
+        }
+    }
+    if (m->kind == FM_MOTION_DWELL) return 0;
+    const fm_tool *tool = tool_for(c->tools, m->tool);
+    if (!tool) return 0; /* no tool in the spindle: nothing cuts */
+    double length = motion_path_length(m);
+    double limit = c->spec->batch_diameters * tool->spec.diameter;
+    int fits = c->spec->batch_diameters >= 0 && c->batch_count > 0 && c->batch_tool == tool &&
+               c->batch_count < JOB_MAX_BATCH && c->batch_length + length <= limit;
+    if (!fits && (c->status = flush_batch(c)) != FM_OK) return 1;
+    if (c->stopped) return 1;
+    c->batch[c->batch_count++] = *m;
+    c->batch_tool = tool;
+    c->batch_length += length;
+    /* A PARAM motion's path is valid only while the front end runs this
+     * callback, so such motions are cut at once. */
+    if (m->kind == FM_MOTION_PARAM || c->spec->batch_diameters < 0) {
+        if ((c->status = flush_batch(c)) != FM_OK) return 1;
+        if (c->stopped) return 1;
+    }
+    return 0;
+}
+
+/* ---------------------------------------------------------------- run -- */
+
+fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_result *result,
+                     fm_error *err)
+{
+    memset(result, 0, sizeof *result);
+    double started = now_s();
+    job_tools tools;
+    fm_status st = load_tools(spec, &tools, err);
+    if (st != FM_OK) {
+        free_tools(&tools);
+        fm_stock_free(spec->resume_stock);
+        return st;
+    }
+
+    /* First pass: the whole program is checked before anything is cut, and
+     * its length gives the progress its denominator. */
+    survey sv = {0};
+    st = run_program(spec, tools.use, survey_sink, &sv, err);
+    if (st != FM_OK) {
+        free_tools(&tools);
+        fm_stock_free(spec->resume_stock);
+        return st;
+    }
+
+    fm_stock *stock = spec->resume_stock ? spec->resume_stock
+                                         : fm_job_make_stock(spec->stock_spec, &spec->stock, err);
+    if (!stock) {
+        free_tools(&tools);
+        return err ? err->code : FM_ERR_INPUT;
+    }
+
+    cutter *c = calloc(1, sizeof *c);
+    if (!c) {
+        fm_stock_free(stock);
+        free_tools(&tools);
+        return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    }
+    c->spec = spec;
+    c->hooks = hooks;
+    c->tools = &tools;
+    c->stock = stock;
+    c->err = err;
+    c->started = now_s();
+    c->progress.motions_total = sv.motions;
+    c->progress.program_time_total = sv.time_total;
+    c->progress.block = -1;
+
+    st = run_program(spec, tools.use, cut_sink, c, err);
+    if (st == FM_OK) st = c->status;
+    if (st == FM_OK && !c->stopped) st = flush_batch(c);
+    if (st != FM_OK) {
+        free(c->lines_cut);
+        free(c);
+        fm_stock_free(stock);
+        free_tools(&tools);
+        return st;
+    }
+
+    result->stock = stock;
+    result->stopped = c->stopped;
+    result->initial_volume_mm3 = fm_stock_initial_volume(stock);
+    result->final_volume_mm3 = fm_stock_volume(stock);
+    result->removed_volume_mm3 = fm_stock_removed_volume(stock);
+    double area = 0;
+    fm_error area_err;
+    if (fm_stock_surface_area(stock, &area, &area_err) == FM_OK) result->surface_area_mm2 = area;
+    result->motions = sv.motions;
+    result->blocks = c->blocks;
+    result->program_time_s = sv.time_total;
+    result->voxel_mm = fm_stock_voxel_size(stock);
+    size_t n = fm_stock_tool_volumes(stock, result->tools,
+                                     sizeof result->tools / sizeof result->tools[0]);
+    result->tool_count = n < 64 ? n : 64;
+    result->top_block_count = fm_stock_blocks(stock, result->top_blocks, FM_JOB_TOP_BLOCKS);
+    if (result->top_block_count > FM_JOB_TOP_BLOCKS) result->top_block_count = FM_JOB_TOP_BLOCKS;
+    result->wall_time_s = now_s() - started;
+    result->peak_memory_bytes = fm_job_peak_rss();
+
+    free(c->lines_cut);
+    free(c);
+    free_tools(&tools);
+    return FM_OK;
+}

@@ -1,0 +1,121 @@
+/* job.h: the job runner shared by the CLI (`frepmill simulate`) and the
+ * daemon: program -> motions -> swept volumes -> stock, with progress
+ * reports along the way. Both front ends call fm_job_run, so they run
+ * exactly the same pipeline (DESIGN.md sec. 1). */
+#ifndef FM_JOB_H
+#define FM_JOB_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/core.h"
+#include "stock/stock.h"
+#include "sweep/motion.h"
+#include "tools/tools.h"
+
+typedef enum fm_program_kind {
+    FM_PROGRAM_AUTO = 0, /* by extension: .json is a trajectory, anything else G-code */
+    FM_PROGRAM_GCODE,
+    FM_PROGRAM_TRAJECTORY
+} fm_program_kind;
+
+typedef struct fm_job_spec {
+    /* The program: a file, or text held by the caller (then program_name
+     * names it in errors). */
+    const char *program_path;
+    const char *program_text;
+    size_t program_length;
+    const char *program_name;
+    fm_program_kind program_kind;
+
+    /* Stock: "box:X0,Y0,Z0,X1,Y1,Z1", "cylinder:X,Y,Z0,Z1,R", or the path
+     * of a .hf, .stl or .vdb file. */
+    const char *stock_spec;
+    /* Tools: a JSON or LinuxCNC .tbl file, or a table already parsed (then
+     * tools_path is only used to resolve relative HyperFun tool files). */
+    const char *tools_path;
+    const fm_tool_table *tools;
+
+    fm_stock_options stock;   /* voxel size, band, memory budget, threads */
+    double rapid_rate;        /* mm/min; 0: 5000 */
+    /* Consecutive motions of one tool are cut together while their path
+     * length stays under this many tool diameters (0: 1; negative: never
+     * batch). Batching changes nothing in the result but the per-block
+     * attribution (docs/simulate.md). */
+    double batch_diameters;
+
+    /* Resuming (the daemon after a restart): start from this stock instead
+     * of stock_spec (the job takes ownership, also on error), and cut only
+     * the motions from index skip_motions on (the program is still
+     * interpreted from the start, so modal state is right). */
+    fm_stock *resume_stock;
+    long skip_motions;
+} fm_job_spec;
+
+void fm_job_spec_default(fm_job_spec *spec);
+
+/* A snapshot of where the job is, for progress bars and status endpoints. */
+typedef struct fm_job_progress {
+    long motions_done;
+    long motions_total;
+    double program_time;       /* s, end of the last motion cut */
+    double program_time_total; /* s */
+    int line;                  /* source line of the last motion cut */
+    long block;                /* N number of that line, -1 if none */
+    int tool;
+    double position[3];        /* tool tip at the end of the last motion */
+    double removed_mm3;
+    double elapsed_s;          /* wall time since the cutting started */
+    /* The stock after this cut, valid only during the callback, which runs
+     * on the job's thread between cuts: the place to snapshot it. */
+    fm_stock *stock;
+} fm_job_progress;
+
+typedef struct fm_job_hooks {
+    void *user;
+    /* Called after each cut (a motion or a batch); non-zero stops the job
+     * (FM_ERR_INPUT "cancelled" is not used: the job ends with FM_OK and
+     * result.stopped set). */
+    int (*progress)(void *user, const fm_job_progress *progress);
+    /* Called for every motion before it is cut, with the stock as it is
+     * then (lib/check hooks in here). Non-zero stops the job. */
+    int (*before_motion)(void *user, const fm_motion *motion, const fm_tool *tool,
+                         fm_stock *stock);
+} fm_job_hooks;
+
+#define FM_JOB_TOP_BLOCKS 10
+
+typedef struct fm_job_result {
+    fm_stock *stock;           /* the final stock, owned by the caller (fm_stock_free) */
+    double initial_volume_mm3;
+    double final_volume_mm3;
+    double removed_volume_mm3;
+    double surface_area_mm2;
+    long motions;
+    long blocks;               /* distinct source lines that cut */
+    double program_time_s;
+    double wall_time_s;
+    size_t peak_memory_bytes;  /* peak resident set of the process */
+    double voxel_mm;
+    int stopped;               /* a hook stopped the job */
+    size_t tool_count;
+    fm_stock_tool_volume tools[64];
+    size_t top_block_count;
+    fm_stock_block top_blocks[FM_JOB_TOP_BLOCKS];
+} fm_job_result;
+
+/* Run the whole job. On success result->stock holds the final stock. On
+ * error nothing is left allocated and err says what and where (programs
+ * and models: file:line:column); FM_ERR_INPUT is bad input,
+ * FM_ERR_LIMIT a budget. hooks may be NULL. */
+fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_result *result,
+                     fm_error *err);
+
+/* Parse and create the stock of a spec string (also used by `frepmill
+ * check`). */
+fm_stock *fm_job_make_stock(const char *spec, const fm_stock_options *opt, fm_error *err);
+
+/* Peak resident set size of this process in bytes (0 if unknown). */
+size_t fm_job_peak_rss(void);
+
+#endif
