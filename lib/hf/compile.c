@@ -1080,9 +1080,7 @@ fm_status fm_hf_compile_string(fm_graph *g, const char *source, size_t length,
     if (model_name) {
         size_t i = 0;
         for (; i < p.object_count; i++)
-            if (same_ci(p.names[p.objects[i].name], model_name) &&
-                strlen(p.names[p.objects[i].name]) == strlen(model_name))
-                break;
+            if (fm_hf_edit_distance(p.names[p.objects[i].name], model_name) == 0) break;
         if (i == p.object_count) {
             best_match b = {NULL, (size_t)-1};
             for (size_t k = 0; k < p.object_count; k++) consider(&b, p.spellings[p.objects[k].name], model_name);
