@@ -42,7 +42,7 @@ static fm_status get_num(jctx *c, json_t *tool, const char *field, int required,
     json_t *v = json_object_get(tool, field);
     if (!v) {
         if (required) return tool_fail(c, field, "missing; expected a number", NULL);
-        *out = def;
+        *out = is_length ? def * c->unit : def; /* defaults are given in the table's unit */
         return FM_OK;
     }
     if (!json_is_number(v)) return tool_fail(c, field, "not a number", NULL);
