@@ -692,8 +692,10 @@ double fm_vdb_volume(const fm_vdb *v)
         openvdb::tree::LeafManager<const Tree> leaves(tree);
         double sum = 0;
         v->arena->execute([&] {
-            sum = tbb::parallel_reduce(
-                leaves.leafRange(), 0.0,
+            /* deterministic: the same grid gives the same bits whatever
+             * the thread count, so volumes can be compared exactly */
+            sum = tbb::parallel_deterministic_reduce(
+                leaves.leafRange(64), 0.0,
                 [&](const openvdb::tree::LeafManager<const Tree>::LeafRange &r, double acc) {
                     for (auto it = r.begin(); it; ++it)
                         for (int i = 0; i < LEAF_SIZE; i++)

@@ -169,8 +169,30 @@ static void test_options(void)
     fm_stock_free(s);
 }
 
+/* One thread or several: the same grid, to the bit. */
+static void test_threads(void)
+{
+    fm_error err;
+    double vol[2];
+    for (int j = 0; j < 2; j++) {
+        fm_stock_options o = opts(0.1);
+        o.threads = j ? 2 : 1;
+        const double lo[3] = {0, 0, 0}, hi[3] = {12, 10, 8};
+        fm_stock *s = fm_stock_new_box(lo, hi, &o, &err);
+        CHECK(s != NULL);
+        if (!s) return;
+        shape sp = make_sphere(6, 5, 8, 3);
+        fm_field f = shape_field(&sp);
+        CHECK(fm_stock_subtract(s, &f, NULL, NULL, &err) == FM_OK);
+        vol[j] = fm_stock_volume(s);
+        fm_stock_free(s);
+    }
+    CHECK(vol[0] == vol[1]);
+}
+
 int main(void)
 {
+    test_threads();
     test_box();
     test_cylinder();
     test_field();
