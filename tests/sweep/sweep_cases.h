@@ -11,7 +11,7 @@
 
 #define SC_PI 3.14159265358979323846
 
-static fm_tool_spec sc_spec(fm_tool_shape shape)
+static inline fm_tool_spec sc_spec(fm_tool_shape shape)
 {
     fm_tool_spec s;
     memset(&s, 0, sizeof s);
@@ -37,7 +37,7 @@ typedef struct sc_cutter {
     fm_tool_spec spec;
 } sc_cutter;
 
-static int sc_cutters(sc_cutter out[9])
+static inline int sc_cutters(sc_cutter out[9])
 {
     fm_tool_shape shapes[] = {FM_TOOL_FLAT, FM_TOOL_BALL, FM_TOOL_BULL, FM_TOOL_VBIT, FM_TOOL_DRILL,
                               FM_TOOL_TAPERED, FM_TOOL_TAPERED, FM_TOOL_DOVETAIL, FM_TOOL_LOLLIPOP};
@@ -52,7 +52,7 @@ static int sc_cutters(sc_cutter out[9])
     return 9;
 }
 
-static fm_motion sc_base(fm_motion_kind kind)
+static inline fm_motion sc_base(fm_motion_kind kind)
 {
     fm_motion m;
     memset(&m, 0, sizeof m);
@@ -64,7 +64,7 @@ static fm_motion sc_base(fm_motion_kind kind)
     return m;
 }
 
-static fm_motion sc_line(double x0, double y0, double z0, double x1, double y1, double z1)
+static inline fm_motion sc_line(double x0, double y0, double z0, double x1, double y1, double z1)
 {
     fm_motion m = sc_base(FM_MOTION_LINE);
     m.start[0] = x0, m.start[1] = y0, m.start[2] = z0;
@@ -74,7 +74,7 @@ static fm_motion sc_line(double x0, double y0, double z0, double x1, double y1, 
 
 /* An arc about plane axis k, centre c, from start at angle a0 through
  * sweep (turns sign gives the direction), rising by h along the axis. */
-static fm_motion sc_arc(int k, const double c[3], double radius, double a0, double a1, int turns, double h)
+static inline fm_motion sc_arc(int k, const double c[3], double radius, double a0, double a1, int turns, double h)
 {
     fm_motion m = sc_base(FM_MOTION_ARC);
     int i = (k + 1) % 3, j = (k + 2) % 3;
@@ -92,7 +92,7 @@ static fm_motion sc_arc(int k, const double c[3], double radius, double a0, doub
 
 /* Parametric paths: a curve with a fixed axis, and one whose axis tilts.
  * pose_bounds from Lipschitz constants of each component (sound). */
-static void sc_curve_pose(void *ctx, double t, double pos[3], double axis[3])
+static inline void sc_curve_pose(void *ctx, double t, double pos[3], double axis[3])
 {
     int tilt = ctx != NULL;
     pos[0] = 8 * sin(t);
@@ -103,7 +103,7 @@ static void sc_curve_pose(void *ctx, double t, double pos[3], double axis[3])
     for (int i = 0; i < 3; i++) axis[i] = l[i] / n;
 }
 
-static void sc_curve_bounds(void *ctx, double ta, double tb, double plo[3], double phi[3], double alo[3],
+static inline void sc_curve_bounds(void *ctx, double ta, double tb, double plo[3], double phi[3], double alo[3],
                             double ahi[3])
 {
     double pm[3], am[3], w = 0.5 * (tb - ta);
@@ -119,11 +119,11 @@ static void sc_curve_bounds(void *ctx, double ta, double tb, double plo[3], doub
     }
 }
 
-static int sc_tilt_flag;
-static const fm_path sc_curve_path = {NULL, sc_curve_pose, sc_curve_bounds};
-static const fm_path sc_tilt_path = {&sc_tilt_flag, sc_curve_pose, sc_curve_bounds};
+__attribute__((unused)) static int sc_tilt_flag;
+__attribute__((unused)) static const fm_path sc_curve_path = {NULL, sc_curve_pose, sc_curve_bounds};
+__attribute__((unused)) static const fm_path sc_tilt_path = {&sc_tilt_flag, sc_curve_pose, sc_curve_bounds};
 
-static fm_motion sc_param(int tilted)
+static inline fm_motion sc_param(int tilted)
 {
     fm_motion m = sc_base(FM_MOTION_PARAM);
     m.t0 = 0.2;
@@ -134,10 +134,10 @@ static fm_motion sc_param(int tilted)
 
 enum { SC_LINE, SC_PLUNGE, SC_RAMP, SC_ARC_G17, SC_ARC_G18, SC_ARC_G19, SC_HELIX, SC_PARAM, SC_PARAM_TILT,
        SC_KINDS };
-static const char *sc_kind_names[SC_KINDS] = {"line", "plunge", "ramp", "arc-G17", "arc-G18", "arc-G19",
+__attribute__((unused)) static const char *const sc_kind_names[SC_KINDS] = {"line", "plunge", "ramp", "arc-G17", "arc-G18", "arc-G19",
                                               "helix", "param", "param-tilt"};
 
-static fm_motion sc_motion(int kind)
+static inline fm_motion sc_motion(int kind)
 {
     double c[3] = {1, -2, 0.5};
     switch (kind) {
@@ -157,7 +157,7 @@ static fm_motion sc_motion(int kind)
 /* Brute-force S: 100,000 samples of u, then golden-section refinement
  * around every sampled local maximum within 1e-2 of the best (the spacing
  * error L * du / 2 is below 1e-3 for every motion here). */
-static double sc_golden(const fm_sweep *s, fm_sweep_worker *w, const double p[3], double a, double b)
+static inline double sc_golden(const fm_sweep *s, fm_sweep_worker *w, const double p[3], double a, double b)
 {
     const double g = 0.6180339887498949;
     double x1 = b - g * (b - a), x2 = a + g * (b - a);
@@ -178,9 +178,9 @@ static double sc_golden(const fm_sweep *s, fm_sweep_worker *w, const double p[3]
 }
 
 #define SC_SAMPLES 100000
-static double sc_vals[SC_SAMPLES + 1];
+__attribute__((unused)) static double sc_vals[SC_SAMPLES + 1];
 
-static double sc_brute(const fm_sweep *s, fm_sweep_worker *w, const double p[3])
+static inline double sc_brute(const fm_sweep *s, fm_sweep_worker *w, const double p[3])
 {
     int n = SC_SAMPLES;
     double best = -DBL_MAX;
