@@ -73,7 +73,9 @@ typedef struct fm_stock_cut_stats {
 
 /* stock = stock \ swept. swept is positive inside, first-order distance,
  * negative outside its [lo, hi] (frep.h). cut may be NULL (tool 0, no
- * block). stats may be NULL. On error the stock is unchanged. */
+ * block). stats may be NULL. A cut refused for its budget (FM_ERR_LIMIT)
+ * or bad input leaves the stock unchanged; after an out-of-memory or
+ * internal error in the middle of a cut the stock may be partly cut. */
 fm_status fm_stock_subtract(fm_stock *stock, const fm_field *swept, const fm_stock_cut *cut,
                             fm_stock_cut_stats *stats, fm_error *err);
 

@@ -478,6 +478,14 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
     double before = 0, after = 0;
     size_t changed = 0;
     std::vector<Coord> node1s;
+    /* leaves not yet in the tree are ours to free if anything throws */
+    struct FreeLeft {
+        std::vector<JobResult> &r;
+        ~FreeLeft()
+        {
+            for (auto &x : r) delete x.created;
+        }
+    } free_left{results};
     for (size_t i = 0; i < njobs; i++) {
         JobResult &r = results[i];
         before += r.before;
