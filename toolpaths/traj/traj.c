@@ -132,6 +132,10 @@ static fm_status compile_component(traj_doc *d, size_t i, traj_seg *s, int comp,
         s->cval[comp] = c;
         return FM_OK;
     }
+    if (root == t) {
+        s->is_t[comp] = 1;
+        return FM_OK;
+    }
     s->tape[comp] = fm_tape_compile(d->g, root, &e);
     if (!s->tape[comp])
         return fail_at(d, e.code ? e.code : FM_ERR_INTERNAL, off, "segment %zu: \"%s\": %s", i,

@@ -31,8 +31,11 @@ typedef struct traj_seg {
     double t0, t1;                    /* document time of the expressions */
     double shift;                     /* program time = document time + shift */
     double scale;                     /* mm per document unit */
-    fm_tape *tape[TRAJ_COMPONENTS];   /* NULL: the component is the constant cval */
+    fm_tape *tape[TRAJ_COMPONENTS];   /* NULL: the component is the constant cval, */
     double cval[TRAJ_COMPONENTS];
+    unsigned char is_t[TRAJ_COMPONENTS]; /* or t itself (a tape of no instructions
+                                            is not evaluated: lib/frep's point
+                                            evaluator offsets its NULL array) */
     traj_slot slot[TRAJ_POOL];
     int tool;
     double feed, spindle;             /* mm/min; rpm, negative counter-clockwise */

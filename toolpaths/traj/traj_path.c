@@ -64,7 +64,7 @@ static void eval_raw(const traj_seg *s, traj_slot *sl, double t, double v[TRAJ_C
 {
     double p[4] = {0, 0, 0, t};
     for (int i = 0; i < TRAJ_COMPONENTS; i++)
-        v[i] = s->tape[i] ? (sl ? fm_eval_point(sl->ev[i], p) : NAN) : s->cval[i];
+        v[i] = s->is_t[i] ? t : s->tape[i] ? (sl ? fm_eval_point(sl->ev[i], p) : NAN) : s->cval[i];
 }
 
 static void eval_box(const traj_seg *s, traj_slot *sl, double ta, double tb,
@@ -72,7 +72,9 @@ static void eval_box(const traj_seg *s, traj_slot *sl, double ta, double tb,
 {
     fm_interval box[4] = {{0, 0}, {0, 0}, {0, 0}, {ta, tb}};
     for (int i = 0; i < TRAJ_COMPONENTS; i++) {
-        if (!s->tape[i]) {
+        if (s->is_t[i]) {
+            r[i] = box[3];
+        } else if (!s->tape[i]) {
             r[i].lo = r[i].hi = s->cval[i];
         } else if (sl) {
             r[i] = fm_eval_interval(sl->ev[i], box);
