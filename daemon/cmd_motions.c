@@ -9,6 +9,7 @@
 
 #include "toolpaths/gcode/gcode.h"
 #include "toolpaths/tooltable/tooltable.h"
+#include "toolpaths/traj/traj.h"
 
 static void usage(FILE *out)
 {
@@ -16,7 +17,8 @@ static void usage(FILE *out)
             "usage: frepmill motions PROGRAM [--tools TOOLS] [--format jsonl]\n"
             "                        [--rapid-rate MM_PER_MIN] [--skip N] [--inch]\n"
             "                        [--block-delete]\n\n"
-            "Interpret a G-code program (LinuxCNC dialect) and print one motion per line:\n"
+            "Interpret a G-code program (LinuxCNC dialect), or a parametric trajectory\n"
+            "(PROGRAM.json, docs/trajectory.md), and print one motion per line:\n"
             "  {\"line\":12,\"block\":12,\"kind\":\"arc\",\"start\":[x,y,z],\"end\":[x,y,z],\n"
             "   \"center\":[x,y,z],\"axis\":\"z\",\"turns\":-1,\"feed\":500,\"tool\":1,\n"
             "   \"tip_offset\":[0,0,0],\"t\":[t0,t1]}\n"
@@ -119,7 +121,19 @@ int fm_cmd_motions(int argc, char **argv)
     }
     static char outbuf[1 << 16];
     setvbuf(stdout, outbuf, _IOFBF, sizeof outbuf);
-    fm_status st = fm_gcode_run_file(program, &opt, print_motion, stdout, NULL, &err);
+    fm_status st;
+    size_t plen = strlen(program);
+    if (plen >= 5 && !strcmp(program + plen - 5, ".json")) {
+        /* A parametric trajectory (docs/trajectory.md); its units come from
+         * the document, so --inch and --block-delete do not apply. */
+        fm_traj_options topt;
+        fm_traj_options_default(&topt);
+        topt.rapid_rate = opt.rapid_rate;
+        topt.skip_motions = opt.skip_motions;
+        st = fm_traj_run_file(program, &topt, print_motion, stdout, NULL, &err);
+    } else {
+        st = fm_gcode_run_file(program, &opt, print_motion, stdout, NULL, &err);
+    }
     fflush(stdout);
     fm_tool_table_free(&table);
     if (st) {
