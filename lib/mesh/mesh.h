@@ -221,6 +221,12 @@ fm_mesh *fm_mesh_from_stock(struct fm_stock *stock, const fm_mesh_extract_option
 fm_mesh *fm_mesh_from_stock_chunk(struct fm_stock *stock, const int32_t chunk[3],
                                   const fm_mesh_extract_options *opt, fm_error *err);
 
+/* Mesh an F-rep field (positive inside; frep.h's fm_field, bounds included)
+ * by rasterizing it with lib/stock's narrow-band rasterizer at voxel_mm and
+ * meshing the whole grid. */
+fm_mesh *fm_mesh_from_field(const struct fm_field *field, double voxel_mm,
+                            const fm_mesh_extract_options *opt, fm_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,0 +1,76 @@
+/* mesh_extract.c: the C side of extraction: option defaults, the colour
+ * ramps for depth and tool colouring, and meshing an F-rep field through
+ * lib/stock's narrow-band rasterizer (the same one the stock is made with). */
+#include "mesh/mesh.h"
+
+#include "frep/frep.h"
+#include "stock/stock.h"
+
+#include <math.h>
+#include <string.h>
+
+void fm_mesh_extract_default(fm_mesh_extract_options *opt)
+{
+    memset(opt, 0, sizeof *opt);
+    opt->adaptivity = 0.0;
+    opt->normals = 1;
+    opt->coloring = FM_MESH_COLOR_NONE;
+    opt->depth_range = 10.0;
+    opt->budget.max_vertices = FM_MESH_DEFAULT_MAX_VERTICES;
+    opt->budget.max_triangles = FM_MESH_DEFAULT_MAX_TRIANGLES;
+}
+
+void fm_mesh_depth_color(double depth, double range, uint8_t rgb[3])
+{
+    /* Untouched top grey; then blue, cyan, green, yellow, red as the cut
+     * goes deeper, so that equal colours mean equal depths at a glance. */
+    static const double stops[6][3] = {{200, 200, 200}, {40, 80, 220},  {40, 190, 210},
+                                       {60, 190, 60},   {230, 210, 40}, {220, 50, 40}};
+    double f = range > 0 ? depth / range : 0;
+    if (!(f > 0))
+        f = 0;
+    if (f > 1)
+        f = 1;
+    /* The first stop is only the surface itself (depth within 1% of range). */
+    double s;
+    if (f < 0.01)
+        s = f / 0.01;
+    else
+        s = 1 + (f - 0.01) / 0.99 * 4;
+    int i = (int)floor(s);
+    if (i >= 5)
+        i = 4;
+    double t = s - i;
+    for (int k = 0; k < 3; k++)
+        rgb[k] = (uint8_t)lround(stops[i][k] + t * (stops[i + 1][k] - stops[i][k]));
+}
+
+void fm_mesh_tool_color(int tool, uint8_t rgb[3])
+{
+    /* Twelve distinct hues; tool 0 (never cut) is the stock's grey. */
+    static const uint8_t palette[12][3] = {
+        {230, 25, 75},  {60, 180, 75},  {0, 130, 200},  {245, 130, 48},
+        {145, 30, 180}, {70, 240, 240}, {240, 50, 230}, {210, 245, 60},
+        {250, 190, 190}, {0, 128, 128}, {170, 110, 40}, {128, 0, 0}};
+    if (tool <= 0) {
+        rgb[0] = rgb[1] = rgb[2] = 200;
+        return;
+    }
+    memcpy(rgb, palette[(tool - 1) % 12], 3);
+}
+
+fm_mesh *fm_mesh_from_field(const struct fm_field *field, double voxel_mm,
+                            const fm_mesh_extract_options *opt, fm_error *err)
+{
+    if (!(voxel_mm > 0))
+        return fm_error_set(err, FM_ERR_INPUT, "voxel size must be positive"), NULL;
+    fm_stock_options so;
+    fm_stock_options_default(&so);
+    so.voxel_mm = voxel_mm;
+    fm_stock *stock = fm_stock_new_from_field(field, &so, err);
+    if (!stock)
+        return NULL;
+    fm_mesh *m = fm_mesh_from_stock(stock, opt, err);
+    fm_stock_free(stock);
+    return m;
+}

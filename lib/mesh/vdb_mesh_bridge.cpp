@@ -1,0 +1,302 @@
+// vdb_mesh_bridge.cpp: meshes from the stock's OpenVDB level set, whole grid
+// or one 64^3-voxel chunk at a time, with normals from the level-set gradient
+// and colours by depth. The only lib/mesh file that sees OpenVDB; it reaches
+// the grid through lib/stock's private door (fm_stock_vdb_grid) and never
+// changes it. Every exception stops at the extern "C" functions.
+#include "mesh/mesh.h"
+#include "stock/stock_private.h"
+
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/Interpolation.h>
+#include <openvdb/tools/VolumeToMesh.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <exception>
+#include <mutex>
+#include <new>
+#include <vector>
+
+namespace {
+
+using Grid = openvdb::FloatGrid;
+using Tree = Grid::TreeType;
+using Leaf = Tree::LeafNodeType;
+using Coord = openvdb::Coord;
+using CoordBBox = openvdb::CoordBBox;
+
+void init_openvdb()
+{
+    static std::once_flag once;
+    std::call_once(once, [] { openvdb::initialize(); });
+}
+
+const Grid &stock_grid(fm_stock *stock)
+{
+    auto *ptr = static_cast<Grid::Ptr *>(fm_stock_vdb_grid(stock));
+    return **ptr;
+}
+
+struct Polygons {
+    std::vector<openvdb::Vec3s> points;
+    std::vector<openvdb::Vec3I> triangles;
+    std::vector<openvdb::Vec4I> quads;
+};
+
+double dist2(const openvdb::Vec3s &a, const openvdb::Vec3s &b)
+{
+    double dx = double(a[0]) - b[0], dy = double(a[1]) - b[1], dz = double(a[2]) - b[2];
+    return dx * dx + dy * dy + dz * dz;
+}
+
+bool less(const openvdb::Vec3s &a, const openvdb::Vec3s &b)
+{
+    for (int k = 0; k < 3; k++)
+        if (a[k] != b[k])
+            return a[k] < b[k];
+    return false;
+}
+
+// Turn OpenVDB's output into an fm_mesh: quads split along their shorter
+// diagonal (a choice made from the quad's positions alone, so a chunk and the whole grid
+// split a face alike), faces reversed to fm_mesh's outward counter-clockwise
+// order (OpenVDB's polygons wind the other way for phi < 0 inside), then
+// normals and colours per vertex.
+fm_mesh *to_mesh(const Grid &grid, const Polygons &pg, const fm_mesh_extract_options &o,
+                 fm_error *err)
+{
+    size_t nt = pg.triangles.size() + 2 * pg.quads.size();
+    unsigned attrs = (o.normals ? FM_MESH_NORMALS : 0u) |
+                     (o.coloring != FM_MESH_COLOR_NONE ? FM_MESH_COLORS : 0u);
+    fm_mesh *m = fm_mesh_new(pg.points.size(), nt, attrs, &o.budget, err);
+    if (!m)
+        return nullptr;
+    std::unique_ptr<fm_mesh, void (*)(fm_mesh *)> guard(m, fm_mesh_free);
+    for (size_t i = 0; i < pg.points.size(); i++)
+        for (int k = 0; k < 3; k++)
+            m->positions[3 * i + k] = pg.points[i][k];
+    m->vertex_count = pg.points.size();
+    uint32_t *t = m->triangles;
+    for (const auto &tri : pg.triangles) {
+        t[0] = tri[2], t[1] = tri[1], t[2] = tri[0];
+        t += 3;
+    }
+    for (const auto &q : pg.quads) {
+        double d02 = dist2(pg.points[q[0]], pg.points[q[2]]);
+        double d13 = dist2(pg.points[q[1]], pg.points[q[3]]);
+        bool split02 = d02 < d13;
+        if (d02 == d13) {
+            // Square quads (flat faces) tie: take the diagonal through the
+            // smallest vertex, which does not depend on where the quad's
+            // vertex list starts.
+            int smallest = 0;
+            for (int k = 1; k < 4; k++)
+                if (less(pg.points[q[k]], pg.points[q[smallest]]))
+                    smallest = k;
+            split02 = (smallest % 2) == 0;
+        }
+        if (split02) {
+            t[0] = q[2], t[1] = q[1], t[2] = q[0];
+            t[3] = q[3], t[4] = q[2], t[5] = q[0];
+        } else {
+            t[0] = q[3], t[1] = q[1], t[2] = q[0];
+            t[3] = q[3], t[4] = q[2], t[5] = q[1];
+        }
+        t += 6;
+    }
+    m->triangle_count = nt;
+
+    if (o.normals) {
+        // Central differences of the trilinear phi half a voxel either side:
+        // depends only on the vertex position and the grid, so a vertex
+        // shared by two chunks gets one normal.
+        // The sampler keeps a reference: the accessor must outlive it.
+        Grid::ConstAccessor acc = grid.getConstAccessor();
+        openvdb::tools::GridSampler<Grid::ConstAccessor, openvdb::tools::BoxSampler> sampler(
+            acc, grid.transform());
+        double h = 0.5 * grid.voxelSize()[0];
+        for (size_t i = 0; i < m->vertex_count; i++) {
+            const float *p = m->positions + 3 * i;
+            double g[3];
+            for (int k = 0; k < 3; k++) {
+                openvdb::Vec3d a(p[0], p[1], p[2]), b(p[0], p[1], p[2]);
+                a[k] += h;
+                b[k] -= h;
+                g[k] = double(sampler.wsSample(a)) - double(sampler.wsSample(b));
+            }
+            double len = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+            for (int k = 0; k < 3; k++)
+                m->normals[3 * i + k] = len > 0 ? float(g[k] / len) : 0.0f;
+        }
+    }
+    if (o.coloring == FM_MESH_COLOR_DEPTH)
+        for (size_t i = 0; i < m->vertex_count; i++)
+            fm_mesh_depth_color(o.top_z - m->positions[3 * i + 2], o.depth_range,
+                                m->colors + 3 * i);
+    return guard.release();
+}
+
+fm_status check_options(const fm_mesh_extract_options &o, fm_error *err)
+{
+    if (!(o.adaptivity >= 0 && o.adaptivity <= 1))
+        return fm_error_set(err, FM_ERR_INPUT, "mesh adaptivity must be in 0..1");
+    if (o.coloring == FM_MESH_COLOR_TOOL)
+        // lib/stock keeps no per-voxel record of the cutting tool yet.
+        return fm_error_set(err, FM_ERR_INPUT,
+                            "colouring by tool needs per-voxel tool ids, which the stock does "
+                            "not record; use depth colouring");
+    if (o.coloring == FM_MESH_COLOR_DEPTH && !(o.depth_range > 0))
+        return fm_error_set(err, FM_ERR_INPUT, "depth colour range must be positive");
+    return FM_OK;
+}
+
+// A first budget check before OpenVDB allocates the polygons: a narrow band
+// of half-width w voxels holds about 2w active voxels per surface cell, so
+// active / 6 estimates the vertex count of a band of 3. fm_mesh_new checks
+// the exact count afterwards.
+fm_status check_budget(size_t active_voxels, const fm_mesh_budget &b, fm_error *err)
+{
+    size_t est = active_voxels / 6;
+    if (est > b.max_vertices)
+        return fm_error_set(err, FM_ERR_LIMIT,
+                            "the grid's mesh would have about %zu vertices, over the budget "
+                            "of %zu; use a coarser voxel or a larger budget",
+                            est, b.max_vertices);
+    return FM_OK;
+}
+
+fm_mesh *whole(fm_stock *stock, const fm_mesh_extract_options &o, fm_error *err)
+{
+    if (check_options(o, err) != FM_OK)
+        return nullptr;
+    const Grid &grid = stock_grid(stock);
+    if (check_budget(grid.activeVoxelCount(), o.budget, err) != FM_OK)
+        return nullptr;
+    Polygons pg;
+    openvdb::tools::volumeToMesh(grid, pg.points, pg.triangles, pg.quads, 0.0, o.adaptivity,
+                                 true);
+    return to_mesh(grid, pg, o, err);
+}
+
+constexpr int CHUNK = FM_STOCK_CHUNK_VOXELS;
+
+fm_mesh *chunk(fm_stock *stock, const int32_t index[3], const fm_mesh_extract_options &o,
+               fm_error *err)
+{
+    if (check_options(o, err) != FM_OK)
+        return nullptr;
+    const Grid &grid = stock_grid(stock);
+    Coord lo(index[0] * CHUNK, index[1] * CHUNK, index[2] * CHUNK);
+    Coord hi = lo + Coord(CHUNK - 1);
+
+    // A copy of the grid around the chunk, one leaf wider on every side:
+    // the chunk's faces use cells down to lo - 1 and samples up to hi + 1,
+    // and their normals sample half a voxel further. Whole leaves are shared
+    // values, so the vertices come out bit-identical to the whole-grid run.
+    Grid::Ptr sub = Grid::create(grid.background());
+    // Share the very transform object (read only), not a copy, so that
+    // indexToWorld rounds exactly as in the whole-grid run.
+    sub->setTransform(std::const_pointer_cast<openvdb::math::Transform>(grid.constTransformPtr()));
+    sub->setGridClass(grid.getGridClass());
+    Tree &st = sub->tree();
+    auto acc = grid.getConstAccessor();
+    const int L = int(Leaf::DIM);
+    Coord a = lo - Coord(L), b = hi + Coord(L);
+    size_t leaves = 0;
+    for (int x = a[0]; x <= b[0]; x += L)
+        for (int y = a[1]; y <= b[1]; y += L)
+            for (int z = a[2]; z <= b[2]; z += L) {
+                Coord c(x, y, z);
+                if (const Leaf *leaf = acc.probeConstLeaf(c)) {
+                    st.addLeaf(new Leaf(*leaf));
+                    leaves++;
+                } else {
+                    float v = acc.getValue(c);
+                    bool on = acc.isValueOn(c);
+                    if (on || v != grid.background())
+                        st.addTile(1, c, v, on);
+                }
+            }
+    fm_mesh_extract_options oc = o;
+    oc.adaptivity = 0;
+    if (leaves == 0)
+        return fm_mesh_new(0, 0,
+                           (o.normals ? FM_MESH_NORMALS : 0u) |
+                               (o.coloring != FM_MESH_COLOR_NONE ? FM_MESH_COLORS : 0u),
+                           &o.budget, err);
+
+    // Faces only from the grid edges that start at the chunk's voxels.
+    openvdb::BoolGrid::Ptr mask = openvdb::BoolGrid::create(false);
+    mask->setTransform(grid.transform().copy());
+    mask->tree().fill(CoordBBox(lo, hi), true, true);
+
+    openvdb::tools::VolumeToMesh mesher(0.0, 0.0, true);
+    mesher.setSurfaceMask(mask);
+    mesher(*sub);
+    Polygons pg;
+    pg.points.resize(mesher.pointListSize());
+    for (size_t i = 0; i < mesher.pointListSize(); i++)
+        pg.points[i] = mesher.pointList()[i];
+    openvdb::tools::PolygonPoolList &pools = mesher.polygonPoolList();
+    for (size_t n = 0; n < mesher.polygonPoolListSize(); n++) {
+        openvdb::tools::PolygonPool &pool = pools[n];
+        for (size_t i = 0; i < pool.numQuads(); i++)
+            pg.quads.push_back(pool.quad(i));
+        for (size_t i = 0; i < pool.numTriangles(); i++)
+            pg.triangles.push_back(pool.triangle(i));
+    }
+    fm_mesh *m = to_mesh(grid, pg, oc, err);
+    return m;
+}
+
+template <class F>
+fm_mesh *guarded(fm_error *err, const char *what, F &&f)
+{
+    try {
+        init_openvdb();
+        return f();
+    } catch (const std::bad_alloc &) {
+        fm_error_set(err, FM_ERR_LIMIT, "%s: out of memory", what);
+    } catch (const openvdb::Exception &e) {
+        fm_error_set(err, FM_ERR_INTERNAL, "%s: OpenVDB: %s", what, e.what());
+    } catch (const std::exception &e) {
+        fm_error_set(err, FM_ERR_INTERNAL, "%s: %s", what, e.what());
+    } catch (...) {
+        fm_error_set(err, FM_ERR_INTERNAL, "%s: unknown C++ exception", what);
+    }
+    return nullptr;
+}
+
+void options_or_default(const fm_mesh_extract_options *in, fm_mesh_extract_options *out)
+{
+    if (in)
+        *out = *in;
+    else
+        fm_mesh_extract_default(out);
+    if (!out->budget.max_vertices)
+        out->budget.max_vertices = FM_MESH_DEFAULT_MAX_VERTICES;
+    if (!out->budget.max_triangles)
+        out->budget.max_triangles = FM_MESH_DEFAULT_MAX_TRIANGLES;
+}
+
+} // namespace
+
+extern "C" {
+
+fm_mesh *fm_mesh_from_stock(fm_stock *stock, const fm_mesh_extract_options *opt, fm_error *err)
+{
+    fm_mesh_extract_options o;
+    options_or_default(opt, &o);
+    return guarded(err, "meshing the stock", [&] { return whole(stock, o, err); });
+}
+
+fm_mesh *fm_mesh_from_stock_chunk(fm_stock *stock, const int32_t index[3],
+                                  const fm_mesh_extract_options *opt, fm_error *err)
+{
+    fm_mesh_extract_options o;
+    options_or_default(opt, &o);
+    return guarded(err, "meshing a stock chunk", [&] { return chunk(stock, index, o, err); });
+}
+
+} // extern "C"
