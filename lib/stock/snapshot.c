@@ -508,6 +508,34 @@ out:
     return s;
 }
 
+fm_stock *fm_stock_load_latest(const char *path, const fm_stock_options *opt, int *used_prev,
+                               fm_error *err)
+{
+    if (used_prev) *used_prev = 0;
+    fm_error first;
+    fm_error_clear(&first);
+    fm_stock *s = fm_stock_load_vdb(path, opt, &first);
+    if (s || first.code == FM_ERR_LIMIT) {
+        if (!s && err) *err = first;
+        return s;
+    }
+    char prev[4096 + 16];
+    if (snprintf(prev, sizeof prev, "%s.prev", path) >= (int)sizeof prev) {
+        if (err) *err = first;
+        return NULL;
+    }
+    fm_error second;
+    fm_error_clear(&second);
+    s = fm_stock_load_vdb(prev, opt, &second);
+    if (s) {
+        if (used_prev) *used_prev = 1;
+        return s;
+    }
+    fm_error_set(err, first.code, "%.240s; and the previous generation: %.240s", first.message,
+                 second.message);
+    return NULL;
+}
+
 /* ------------------------------------------------------------ cleanup -- */
 
 fm_status fm_stock_snapshot_cleanup(const char *dir, size_t *removed, fm_error *err)

@@ -51,6 +51,10 @@ fm_stock *fm_stock_new_from_stl(const char *path, const fm_stock_options *opt, f
 /* A snapshot written by fm_stock_save (never a file a network client sent).
  * opt supplies the budget and threads; voxel and band come from the file. */
 fm_stock *fm_stock_load_vdb(const char *path, const fm_stock_options *opt, fm_error *err);
+/* Resume after a crash: path, or "<path>.prev" when path is missing or
+ * damaged. *used_prev (may be NULL) says which. Errors name both files. */
+fm_stock *fm_stock_load_latest(const char *path, const fm_stock_options *opt, int *used_prev,
+                               fm_error *err);
 void fm_stock_free(fm_stock *stock);
 
 /* ----------------------------------------------------------- cutting -- */

@@ -224,6 +224,27 @@ static void test_damaged(void)
     q[8] = 9;
     write_bytes(bad, q, n);
     expect_refused(bad, FM_ERR_INPUT, "format version 9");
+    /* a damaged main file: resume from the previous generation */
+    char copy[512], copy_prev[600];
+    path_in(copy, sizeof copy, "resume.vdb");
+    snprintf(copy_prev, sizeof copy_prev, "%s.prev", copy);
+    write_bytes(copy_prev, p, n);
+    memcpy(q, p, n);
+    q[n / 2] ^= 0x10;
+    write_bytes(copy, q, n);
+    int used_prev = 0;
+    fm_error lerr;
+    fm_stock *r = fm_stock_load_latest(copy, NULL, &used_prev, &lerr);
+    CHECK(r != NULL && used_prev == 1);
+    fm_stock_free(r);
+    unlink(copy_prev);
+    CHECK(fm_stock_load_latest(copy, NULL, &used_prev, &lerr) == NULL);
+    CHECK_STR_CONTAINS(lerr.message, "checksum mismatch");
+    CHECK_STR_CONTAINS(lerr.message, "previous generation");
+    write_bytes(copy, p, n);
+    r = fm_stock_load_latest(copy, NULL, &used_prev, &lerr);
+    CHECK(r != NULL && used_prev == 0);
+    fm_stock_free(r);
     /* larger than the budget: refused before reading */
     fm_stock_options o;
     fm_stock_options_default(&o);
