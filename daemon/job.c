@@ -488,6 +488,7 @@ static fm_status flush_batch(cutter *c)
     p->tool = last->tool;
     for (int a = 0; a < 3; a++) p->position[a] = last->end[a] + last->tip_offset[a];
     p->removed_mm3 = fm_stock_removed_volume(c->stock);
+    p->resume_from = last->index + 1;
     p->elapsed_s = now_s() - c->started;
     p->stock = c->stock;
     if (c->hooks && c->hooks->progress && c->hooks->progress(c->hooks->user, p)) c->stopped = 1;

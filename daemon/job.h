@@ -66,6 +66,11 @@ typedef struct fm_job_progress {
     double position[3];        /* tool tip at the end of the last motion */
     double removed_mm3;
     double elapsed_s;          /* wall time since the cutting started */
+    /* Every motion with an index below this one is in the stock now (the
+     * motion that triggered this cut may still be pending in the next
+     * batch): a snapshot taken in this callback resumes with skip_motions
+     * = resume_from. */
+    long resume_from;
     /* The stock after this cut, valid only during the callback, which runs
      * on the job's thread between cuts: the place to snapshot it. */
     fm_stock *stock;
