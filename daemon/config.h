@@ -1,0 +1,49 @@
+/* config.h: frepmilld's settings: defaults, the config file (key = value
+ * lines, deploy/frepmilld.conf documents every key) and the command-line
+ * flags that override it. */
+#ifndef FM_DAEMON_CONFIG_H
+#define FM_DAEMON_CONFIG_H
+
+#include <stddef.h>
+
+typedef struct fm_daemon_config {
+    char listen[128];          /* HTTP ADDR:PORT; default 127.0.0.1:8470 */
+    char state_dir[1024];      /* default ./frepmilld-state */
+    int workers;               /* simulation threads = jobs at once; default 2 */
+    int threads_per_job;       /* OpenVDB threads of one job; 0: one per core */
+    char modbus_listen[128];   /* ADDR:PORT or "off"; default 127.0.0.1:1502 */
+    int modbus_commands;       /* registers 100-103 writable */
+    int modbus_live;           /* live mode registers writable */
+    int modbus_watchdog_ms;
+    char token[128];           /* bearer token for write endpoints */
+    char log_file[1024];       /* "" or "-": standard error */
+    int log_level;             /* fm_log_level */
+    double snapshot_interval_s; /* seconds of work between stock snapshots */
+    double publish_interval_s;  /* seconds between mesh chunk publications */
+    double max_request_mb;
+    int max_jobs;              /* jobs kept (all states) */
+    double job_memory_mb;      /* grid budget per job */
+    int max_connections;
+    int max_connections_per_ip;
+    int request_deadline_ms;
+    int idle_timeout_s;
+    char viewer_dir[1024];     /* "" = the built-in default */
+    int demo;                  /* submit the bundled demo job at start */
+    char demo_dir[1024];       /* where the demo's files are */
+    double demo_voxel;
+} fm_daemon_config;
+
+void fm_daemon_config_default(fm_daemon_config *cfg);
+
+/* Apply one setting (a config key or a flag without its dashes). 0 on
+ * success, -1 with msg filled. */
+int fm_daemon_config_set(fm_daemon_config *cfg, const char *key, const char *value, char *msg,
+                         size_t msg_size);
+
+/* Read a config file. 0 on success, -1 with msg ("file:line: ...") filled. */
+int fm_daemon_config_load(fm_daemon_config *cfg, const char *path, char *msg, size_t msg_size);
+
+/* Split "ADDR:PORT" (port 0..65535). 0 on success. */
+int fm_daemon_split_addr(const char *spec, char *addr, size_t addr_size, unsigned *port);
+
+#endif

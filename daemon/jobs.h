@@ -1,0 +1,83 @@
+/* jobs.h: the daemon's job manager: a durable table of jobs (one folder per
+ * job under state_dir/jobs), a queue, worker threads that run the shared job
+ * runner (job.h), and what the workers publish for readers: immutable status
+ * snapshots, chunk meshes with versions, and events. Readers (HTTP, Modbus)
+ * never touch a grid being cut. */
+#ifndef FM_DAEMON_JOBS_H
+#define FM_DAEMON_JOBS_H
+
+#include <jansson.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/core.h"
+#include "http/http_server.h"
+
+typedef struct fm_jobs fm_jobs;
+
+typedef struct fm_jobs_config {
+    const char *state_dir;
+    int workers;
+    int threads_per_job;
+    double snapshot_interval_s;
+    double publish_interval_s;
+    int max_jobs;
+    size_t job_memory_bytes;
+} fm_jobs_config;
+
+typedef enum fm_job_state {
+    FM_JOB_QUEUED = 0,
+    FM_JOB_RUNNING,
+    FM_JOB_DONE,
+    FM_JOB_FAILED,
+    FM_JOB_CANCELLED
+} fm_job_state;
+
+const char *fm_job_state_name(fm_job_state state);
+
+/* A plain copy of a job's published status. */
+typedef struct fm_job_view {
+    char id[32];
+    fm_job_state state;
+    int paused;
+    double progress;
+    int line;
+    long block;
+    int tool;
+    double position[3];
+    double program_time_s;
+    double removed_mm3;
+    double stock_mm3;
+    double removal_rate_mm3_s;
+    int finding_count;
+    int first_finding_line;
+    int error_code; /* fm_status of a failed job, 0 if none */
+} fm_job_view;
+
+/* Open the state folder (created if missing), load every stored job (done
+ * ones with their results; unfinished ones queued, to resume from their
+ * last snapshot) and start the workers. */
+fm_jobs *fm_jobs_open(const fm_jobs_config *cfg, fm_error *err);
+/* Stop the workers: running jobs are snapshotted and resume at the next
+ * start. Frees everything. */
+void fm_jobs_close(fm_jobs *jobs);
+/* Wake everything that waits, so that the manager can be closed soon. */
+void fm_jobs_begin_shutdown(fm_jobs *jobs);
+
+/* Store a canonical job (fm_http_job_parse) durably and queue it: 0 and
+ * its id, or the HTTP status of the refusal with err filled. */
+int fm_jobs_submit(fm_jobs *jobs, json_t *spec, char *id, size_t id_size, fm_http_error *err);
+
+/* The fm_http_service over this manager. */
+void fm_jobs_http_service(fm_jobs *jobs, fm_http_service *out);
+
+/* For Modbus: jobs in creation order (slot 1 = the oldest kept job). */
+int fm_jobs_view_slot(fm_jobs *jobs, int slot, fm_job_view *out);
+int fm_jobs_count(fm_jobs *jobs);
+/* Pause (1) or resume (0) a running or queued job; cancel. 0 on success,
+ * -1 unknown job, -2 wrong state. */
+int fm_jobs_pause(fm_jobs *jobs, const char *id, int pause);
+int fm_jobs_cancel(fm_jobs *jobs, const char *id);
+void fm_jobs_pause_all(fm_jobs *jobs);
+
+#endif

@@ -1,0 +1,284 @@
+/* jobs_http.c: the daemon's implementation of the HTTP server's service
+ * interface (protocols/http/http_server.h) over the job manager. Every
+ * call reads what the workers published, under the job's lock, and copies
+ * it out; the full mesh is assembled from the published chunk meshes, so a
+ * download never touches the grid being cut. */
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "jobs_internal.h"
+
+static int not_found(const char *id, fm_http_error *err)
+{
+    return fm_http_error_set(err, 404, "not_found", "no job %s", id);
+}
+
+static int svc_ready(void *ctx)
+{
+    (void)ctx;
+    return 1;
+}
+
+static int svc_submit(void *ctx, json_t *spec, char *id, size_t id_size, fm_http_error *err)
+{
+    return fm_jobs_submit(ctx, spec, id, id_size, err);
+}
+
+static int svc_status(void *ctx, const char *id, json_t **out, fm_http_error *err)
+{
+    job *j = fm_jobs_get(ctx, id);
+    if (!j) return not_found(id, err);
+    *out = fm_jobs_status_json(j);
+    fm_jobs_put(ctx, j);
+    return 0;
+}
+
+static int svc_list(void *ctx, json_t **out, fm_http_error *err)
+{
+    (void)err;
+    fm_jobs *jobs = ctx;
+    /* References first, statuses after: never hold the table lock while
+     * taking a job's lock for long. */
+    pthread_mutex_lock(&jobs->lock);
+    size_t n = jobs->count;
+    job **copy = malloc((n ? n : 1) * sizeof *copy);
+    if (copy)
+        for (size_t i = 0; i < n; i++) {
+            copy[i] = jobs->table[i];
+            copy[i]->refs++;
+        }
+    pthread_mutex_unlock(&jobs->lock);
+    if (!copy) return fm_http_error_set(err, 503, "out_of_memory", "out of memory");
+    json_t *list = json_array();
+    for (size_t i = 0; i < n; i++) {
+        json_array_append_new(list, fm_jobs_status_json(copy[i]));
+        fm_jobs_put(jobs, copy[i]);
+    }
+    free(copy);
+    *out = json_pack("{s:o}", "jobs", list);
+    return 0;
+}
+
+static int svc_report(void *ctx, const char *id, json_t **out, fm_http_error *err)
+{
+    job *j = fm_jobs_get(ctx, id);
+    if (!j) return not_found(id, err);
+    pthread_mutex_lock(&j->lock);
+    int rc = 0;
+    if (j->report) {
+        *out = json_deep_copy(j->report);
+        json_object_set_new(*out, "id", json_string(j->id));
+        json_object_set_new(*out, "state", json_string(fm_job_state_name(j->state)));
+    } else if (j->state == FM_JOB_FAILED) {
+        *out = json_pack("{s:s, s:s, s:O?}", "id", j->id, "state", "failed", "error", j->error);
+    } else {
+        rc = fm_http_error_set(err, 409, "not_finished",
+                               "job %s is %s; its report exists once it is done", j->id,
+                               fm_job_state_name(j->state));
+    }
+    pthread_mutex_unlock(&j->lock);
+    fm_jobs_put(ctx, j);
+    return rc;
+}
+
+static void chunk_name(const job_chunk *c, char *out, size_t size)
+{
+    snprintf(out, size, "%d_%d_%d", c->index[0], c->index[1], c->index[2]);
+}
+
+static int svc_chunks(void *ctx, const char *id, uint64_t since, json_t **out, fm_http_error *err)
+{
+    job *j = fm_jobs_get(ctx, id);
+    if (!j) return not_found(id, err);
+    int rc = fm_jobs_ensure_meshes(ctx, j, err);
+    if (rc) {
+        fm_jobs_put(ctx, j);
+        return rc;
+    }
+    json_t *list = json_array();
+    pthread_mutex_lock(&j->lock);
+    for (size_t i = 0; i < j->chunk_count; i++) {
+        const job_chunk *c = &j->chunks[i];
+        if (c->version <= since) continue;
+        char name[48];
+        chunk_name(c, name, sizeof name);
+        json_array_append_new(
+            list, json_pack("{s:s, s:[i,i,i], s:I, s:I, s:I, s:[f,f,f], s:[f,f,f]}", "id", name,
+                            "index", c->index[0], c->index[1], c->index[2], "version",
+                            (json_int_t)c->version, "triangles",
+                            (json_int_t)(c->mesh ? c->mesh->triangle_count : 0), "bytes",
+                            (json_int_t)c->drc_size, "lo", c->lo[0], c->lo[1], c->lo[2], "hi",
+                            c->hi[0], c->hi[1], c->hi[2]));
+    }
+    *out = json_pack("{s:s, s:I, s:I, s:o}", "id", j->id, "version", (json_int_t)j->mesh_version,
+                     "since", (json_int_t)since, "chunks", list);
+    pthread_mutex_unlock(&j->lock);
+    fm_jobs_put(ctx, j);
+    return 0;
+}
+
+static int svc_chunk(void *ctx, const char *id, const char *name, fm_http_blob *out,
+                     fm_http_error *err)
+{
+    job *j = fm_jobs_get(ctx, id);
+    if (!j) return not_found(id, err);
+    int rc = fm_jobs_ensure_meshes(ctx, j, err);
+    if (rc) {
+        fm_jobs_put(ctx, j);
+        return rc;
+    }
+    rc = fm_http_error_set(err, 404, "not_found", "job %s has no chunk %s", id, name);
+    pthread_mutex_lock(&j->lock);
+    for (size_t i = 0; i < j->chunk_count; i++) {
+        char n[48];
+        chunk_name(&j->chunks[i], n, sizeof n);
+        if (strcmp(n, name) != 0) continue;
+        out->size = j->chunks[i].drc_size;
+        out->data = malloc(out->size ? out->size : 1);
+        if (!out->data) {
+            rc = fm_http_error_set(err, 503, "out_of_memory", "out of memory");
+            break;
+        }
+        if (out->size) memcpy(out->data, j->chunks[i].drc, out->size);
+        out->content_type = "application/octet-stream";
+        rc = 0;
+        break;
+    }
+    pthread_mutex_unlock(&j->lock);
+    fm_jobs_put(ctx, j);
+    return rc;
+}
+
+static int svc_mesh(void *ctx, const char *id, const char *format, fm_http_blob *out,
+                    fm_http_error *err)
+{
+    fm_mesh_format f = !strcmp(format, "drc")   ? FM_MESH_FORMAT_DRACO
+                       : !strcmp(format, "stl") ? FM_MESH_FORMAT_STL
+                       : !strcmp(format, "ply") ? FM_MESH_FORMAT_PLY
+                       : !strcmp(format, "obj") ? FM_MESH_FORMAT_OBJ
+                                                : FM_MESH_FORMAT_UNKNOWN;
+    if (f == FM_MESH_FORMAT_UNKNOWN)
+        return fm_http_error_set(err, 400, "bad_parameter",
+                                 "format=%.16s: expected drc, stl, ply or obj", format);
+    job *j = fm_jobs_get(ctx, id);
+    if (!j) return not_found(id, err);
+    int rc = fm_jobs_ensure_meshes(ctx, j, err);
+    if (rc) {
+        fm_jobs_put(ctx, j);
+        return rc;
+    }
+    fm_error ferr;
+    fm_mesh *mesh = fm_mesh_new(0, 0, FM_MESH_NORMALS, NULL, &ferr);
+    fm_status st = mesh ? FM_OK : FM_ERR_LIMIT;
+    pthread_mutex_lock(&j->lock);
+    for (size_t i = 0; st == FM_OK && i < j->chunk_count; i++)
+        if (j->chunks[i].mesh) st = fm_mesh_append(mesh, j->chunks[i].mesh, &ferr);
+    pthread_mutex_unlock(&j->lock);
+    fm_jobs_put(ctx, j);
+    /* The chunk meshes share their boundary vertices bit for bit: welding
+     * gives the whole-grid mesh (mesh.h). */
+    if (st == FM_OK) st = fm_mesh_weld(mesh, &ferr);
+    if (st == FM_OK) {
+        switch (f) {
+        case FM_MESH_FORMAT_DRACO:
+            st = mesh->triangle_count ? fm_mesh_encode_draco(mesh, NULL, &out->data, &out->size, &ferr)
+                                      : fm_error_set(&ferr, FM_ERR_INPUT, "the mesh is empty");
+            break;
+        case FM_MESH_FORMAT_STL: st = fm_mesh_encode_stl(mesh, &out->data, &out->size, &ferr); break;
+        case FM_MESH_FORMAT_PLY: st = fm_mesh_encode_ply(mesh, &out->data, &out->size, &ferr); break;
+        default: st = fm_mesh_encode_obj(mesh, &out->data, &out->size, &ferr); break;
+        }
+    }
+    fm_mesh_free(mesh);
+    if (st != FM_OK)
+        return fm_http_error_set(err, st == FM_ERR_INPUT ? 404 : 503, "mesh",
+                                 "cannot build the mesh: %s", ferr.message);
+    out->content_type = f == FM_MESH_FORMAT_OBJ ? "text/plain" : "application/octet-stream";
+    return 0;
+}
+
+static int svc_cancel(void *ctx, const char *id, fm_http_error *err)
+{
+    int rc = fm_jobs_cancel(ctx, id);
+    if (rc == -1) return not_found(id, err);
+    if (rc == -2)
+        return fm_http_error_set(err, 409, "bad_state", "job %s has already ended", id);
+    return 0;
+}
+
+static int svc_remove(void *ctx, const char *id, fm_http_error *err)
+{
+    return fm_jobs_remove(ctx, id, err);
+}
+
+static int svc_stock_path(void *ctx, const char *id, char *path, size_t size, fm_http_error *err)
+{
+    job *j = fm_jobs_get(ctx, id);
+    if (!j) return not_found(id, err);
+    snprintf(path, size, "%s/stock.vdb", j->dir);
+    fm_jobs_put(ctx, j);
+    if (access(path, R_OK) != 0)
+        return fm_http_error_set(err, 404, "no_snapshot", "job %s has no stock snapshot yet", id);
+    return 0;
+}
+
+static int svc_events(void *ctx, const char *id, uint64_t after, int timeout_ms,
+                      fm_http_event *out, int cap, int *finished)
+{
+    *finished = 0;
+    job *j = fm_jobs_get(ctx, id);
+    if (!j) return -1;
+    struct timespec until;
+    clock_gettime(CLOCK_REALTIME, &until);
+    until.tv_sec += timeout_ms / 1000;
+    until.tv_nsec += (long)(timeout_ms % 1000) * 1000000L;
+    if (until.tv_nsec >= 1000000000L) {
+        until.tv_sec++;
+        until.tv_nsec -= 1000000000L;
+    }
+    pthread_mutex_lock(&j->lock);
+    while (j->next_event - 1 <= after && !j->ended) {
+        if (pthread_cond_timedwait(&j->cond, &j->lock, &until) != 0) break;
+    }
+    /* Events older than the ring are gone: start from the oldest kept. */
+    uint64_t first = after + 1;
+    if (j->next_event > JOB_EVENT_RING && first < j->next_event - JOB_EVENT_RING)
+        first = j->next_event - JOB_EVENT_RING;
+    int n = 0;
+    for (uint64_t e = first; e < j->next_event && n < cap; e++) {
+        const job_event *ev = &j->ring[e % JOB_EVENT_RING];
+        out[n].id = ev->id;
+        snprintf(out[n].type, sizeof out[n].type, "%s", ev->type);
+        out[n].data = strdup(ev->data ? ev->data : "{}");
+        if (!out[n].data) break;
+        n++;
+    }
+    uint64_t last = n ? out[n - 1].id : after;
+    *finished = j->ended && last + 1 >= j->next_event;
+    pthread_mutex_unlock(&j->lock);
+    fm_jobs_put(ctx, j);
+    return n;
+}
+
+void fm_jobs_http_service(fm_jobs *jobs, fm_http_service *out)
+{
+    memset(out, 0, sizeof *out);
+    out->ctx = jobs;
+    out->ready = svc_ready;
+    out->submit = svc_submit;
+    out->status = svc_status;
+    out->list = svc_list;
+    out->report = svc_report;
+    out->chunks = svc_chunks;
+    out->cancel = svc_cancel;
+    out->remove = svc_remove;
+    out->mesh = svc_mesh;
+    out->chunk = svc_chunk;
+    out->stock_path = svc_stock_path;
+    out->events = svc_events;
+    out->check = NULL; /* lib/check is not built yet: 501 */
+}

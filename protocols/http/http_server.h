@@ -1,0 +1,167 @@
+/* http_server.h: the HTTP face of frepmill (docs/api.md). A JSON job API,
+ * server-sent events and static files for the browser viewer, on
+ * libmicrohttpd. The server owns its sockets and threads and knows nothing
+ * of the daemon: the daemon hands it an fm_http_service, the small set of
+ * calls the API needs (submit a job, read a status snapshot, fetch a mesh or
+ * a chunk, wait for events, cancel). Request bodies are read and parsed here
+ * (JSON with jansson, multipart/form-data by our own bounded parser), never
+ * by libmicrohttpd's PostProcessor. */
+#ifndef FM_HTTP_SERVER_H
+#define FM_HTTP_SERVER_H
+
+#include <jansson.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/core.h"
+
+/* An API error: the HTTP status, a stable machine code ("bad_json",
+ * "not_found", ...), a message a person can act on, and where known the
+ * line and column in the request body (1-based; 0 = unknown). */
+typedef struct fm_http_error {
+    int status;
+    char code[40];
+    char message[512];
+    int line;
+    int column;
+} fm_http_error;
+
+/* Fill err and return status. */
+int fm_http_error_set(fm_http_error *err, int status, const char *code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+
+/* ------------------------------------------------------------ job specs -- */
+
+/* Parse and validate a job request (docs/api.md, POST /v1/jobs) into its
+ * canonical JSON form: {"stock": "SPEC" | {"hyperfun": TEXT} | {"stl_base64":
+ * TEXT}, "voxel": MM, "tools": {...}, "program": {"gcode": TEXT} |
+ * {"trajectory": {...}}, "fixtures": [...], "options": {...}}. Unknown keys
+ * are refused (a typo must not be silently ignored). Returns a new
+ * reference, or NULL with err filled (status 400 or 413). The daemon stores
+ * this form and reads it back with the same function after a restart. */
+json_t *fm_http_job_parse(const char *text, size_t len, fm_http_error *err);
+
+/* Decode standard base64 (padding optional, no whitespace but line breaks)
+ * into a malloc'd buffer. 0 on success, -1 for invalid text. */
+int fm_http_base64_decode(const char *in, size_t len, uint8_t **out, size_t *out_len);
+
+/* The most bytes of a program, a tool table, a stock model in a job. */
+#define FM_HTTP_JOB_MAX_TEXT ((size_t)256 << 20)
+
+/* ------------------------------------------------------------ multipart -- */
+
+typedef struct fm_http_part {
+    char name[64];        /* the form field name */
+    char filename[256];   /* "" when the part is not a file */
+    char content_type[128];
+    const char *data;     /* points into the body given to the parser */
+    size_t size;
+} fm_http_part;
+
+#define FM_HTTP_MAX_PARTS 16
+
+/* Split a multipart/form-data body (RFC 7578) whose Content-Type header is
+ * content_type into at most max_parts parts (data points into body). Returns
+ * the number of parts, or -1 with err filled (400). Bounded: the header
+ * block of a part is at most 8 KiB, a boundary at most 70 characters. */
+int fm_http_multipart_parse(const char *content_type, const char *body, size_t len,
+                            fm_http_part *parts, int max_parts, fm_http_error *err);
+
+/* Turn a multipart job upload into the JSON job text fm_http_job_parse
+ * takes: a "job" (or "spec") part with the JSON job (its program may be
+ * absent), and optional "program" (G-code, or a trajectory when its file
+ * name ends in .json) and "tools" (JSON tool table) parts that replace the
+ * corresponding keys. Returns a new reference to the canonical job, or NULL
+ * with err filled. */
+json_t *fm_http_job_from_multipart(const fm_http_part *parts, int count, fm_http_error *err);
+
+/* ------------------------------------------------------------- service -- */
+
+/* A byte buffer handed to the server, which frees it with free(). */
+typedef struct fm_http_blob {
+    uint8_t *data;
+    size_t size;
+    const char *content_type; /* static string */
+} fm_http_blob;
+
+/* One server-sent event. */
+typedef struct fm_http_event {
+    uint64_t id;       /* increasing per job; the SSE "id:" line */
+    char type[24];     /* progress | block | chunks | finding | end */
+    char *data;        /* one line of JSON, malloc'd (freed by the server) */
+} fm_http_event;
+
+/* What the daemon implements. Calls come from the server's connection
+ * threads, many at once: each must be thread-safe and must never wait for a
+ * job's simulation (read the published snapshots). Calls returning int give
+ * 0 on success or the HTTP status of the error with err filled. */
+typedef struct fm_http_service {
+    void *ctx;
+    /* 1 when ready to take jobs (GET /healthz). */
+    int (*ready)(void *ctx);
+    /* Store the job durably, then return its id (202). job is the canonical
+     * form; the service takes a new reference if it keeps it. */
+    int (*submit)(void *ctx, json_t *job, char *id, size_t id_size, fm_http_error *err);
+    /* New references. */
+    int (*status)(void *ctx, const char *id, json_t **out, fm_http_error *err);
+    int (*list)(void *ctx, json_t **out, fm_http_error *err);
+    int (*report)(void *ctx, const char *id, json_t **out, fm_http_error *err);
+    int (*chunks)(void *ctx, const char *id, uint64_t since, json_t **out, fm_http_error *err);
+    int (*cancel)(void *ctx, const char *id, fm_http_error *err);
+    int (*remove)(void *ctx, const char *id, fm_http_error *err);
+    /* format: drc | stl | ply | obj. */
+    int (*mesh)(void *ctx, const char *id, const char *format, fm_http_blob *out,
+                fm_http_error *err);
+    /* chunk: "I_J_K" (chunk indices). */
+    int (*chunk)(void *ctx, const char *id, const char *chunk, fm_http_blob *out,
+                 fm_http_error *err);
+    /* The path of the job's stock snapshot (a file the daemon wrote). */
+    int (*stock_path)(void *ctx, const char *id, char *path, size_t size, fm_http_error *err);
+    /* Wait up to timeout_ms for events after *after; fill up to cap events
+     * and return how many (0 on timeout), or -1 when the job is unknown.
+     * *finished is set once the job's last event ("end") has been given. */
+    int (*events)(void *ctx, const char *id, uint64_t after, int timeout_ms, fm_http_event *out,
+                  int cap, int *finished);
+    /* POST /v1/check: the synchronous collision check. NULL: 501. */
+    int (*check)(void *ctx, json_t *request, json_t **out, fm_http_error *err);
+} fm_http_service;
+
+enum { FM_HTTP_LOG_ERROR = 0, FM_HTTP_LOG_WARN = 1, FM_HTTP_LOG_INFO = 2, FM_HTTP_LOG_DEBUG = 3 };
+
+typedef struct fm_http_config {
+    char listen_addr[64];        /* numeric IPv4 address; "127.0.0.1" by default */
+    uint16_t port;               /* 0 = ephemeral; see fm_http_server_port() */
+    char token[128];             /* bearer token for write endpoints; "" = none */
+    int require_token;           /* refuse writes without the token (set when not loopback) */
+    size_t max_request_bytes;    /* headers + body; default 64 MiB */
+    int max_connections;         /* in all; default 256 */
+    int max_connections_per_ip;  /* default 64 */
+    int request_deadline_ms;     /* whole request (headers and body); default 30000 */
+    int idle_timeout_s;          /* a connection silent this long is closed; default 60 */
+    int threads;                 /* unused: one thread per connection */
+    char viewer_dir[1024];       /* static files for GET /; "" = none */
+    /* Optional: where the server's messages go (never printed otherwise). */
+    void (*log)(void *log_ctx, int level, const char *message);
+    void *log_ctx;
+} fm_http_config;
+
+void fm_http_config_default(fm_http_config *cfg);
+
+typedef struct fm_http_server fm_http_server;
+
+/* Bind, listen and start serving. The service is copied; its ctx must
+ * outlive the server. On failure *out is NULL and err says why. */
+fm_status fm_http_server_start(const fm_http_config *cfg, const fm_http_service *svc,
+                               fm_http_server **out, fm_error *err);
+uint16_t fm_http_server_port(const fm_http_server *server);
+/* Stop accepting, close every connection, join the threads and free. NULL
+ * is fine. No service call is made after this returns. */
+void fm_http_server_stop(fm_http_server *server);
+
+/* "127.0.0.1", "localhost", "::1" and 127.x.y.z are loopback. */
+int fm_http_is_loopback(const char *addr);
+
+#endif
