@@ -113,7 +113,9 @@ double fm_eval_point(fm_evaluator *ev, const double p[4])
     r[2] = p[2];
     r[3] = p[3];
     for (uint32_t i = FM_AXES; i < t->nleaf; i++) r[i] = t->param_values[i - FM_AXES];
-    const fm_insn *in = t->insns, *end = t->insns + t->ninsns;
+    /* A tape of a bare coordinate has no instructions and a NULL array:
+     * no arithmetic on it (NULL + 0 is undefined). */
+    const fm_insn *in = t->insns, *end = t->ninsns ? t->insns + t->ninsns : t->insns;
     for (; in < end; in++) {
         fm_op op = (fm_op)in->op;
         double v;
@@ -181,7 +183,9 @@ static void run_chunk(fm_evaluator *ev, size_t m)
     const fm_tape *t = ev->tape;
     double *regs = ev->batch;
 #define R(slot) (regs + (size_t)(slot) * FM_CHUNK)
-    const fm_insn *in = t->insns, *end = t->insns + t->ninsns;
+    /* A tape of a bare coordinate has no instructions and a NULL array:
+     * no arithmetic on it (NULL + 0 is undefined). */
+    const fm_insn *in = t->insns, *end = t->ninsns ? t->insns + t->ninsns : t->insns;
     for (; in < end; in++) {
         double *restrict O = R(in->out);
         fm_op op = (fm_op)in->op;
