@@ -1,0 +1,136 @@
+"""daemon_util.py: shared helpers of the frepmilld tests: start the daemon on
+a free loopback port (port 0; the daemon writes the address it bound to
+STATE_DIR/http.addr), stop it, run curl, read STL volumes. Every wait is
+bounded."""
+import json
+import os
+import signal
+import struct
+import subprocess
+import time
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+DEMO = os.path.join(ROOT, "deploy", "demo")
+DEMO_STOCK = "box:0,0,-30,100,60,0"
+
+
+class Daemon:
+    def __init__(self, binary, state_dir, *extra):
+        self.state_dir = state_dir
+        os.makedirs(state_dir, exist_ok=True)
+        addr_file = os.path.join(state_dir, "http.addr")
+        if os.path.exists(addr_file):
+            os.unlink(addr_file)
+        self.log_path = os.path.join(state_dir, "daemon.log")
+        self.log = open(self.log_path, "ab")
+        self.proc = subprocess.Popen(
+            [binary, "--listen", "127.0.0.1:0", "--state-dir", state_dir,
+             "--modbus-listen", "off", *extra],
+            stdout=self.log, stderr=self.log)
+        deadline = time.time() + 30
+        while time.time() < deadline:
+            if self.proc.poll() is not None:
+                raise RuntimeError("frepmilld exited with %d; log:\n%s" %
+                                   (self.proc.returncode, self.read_log()))
+            if os.path.exists(addr_file):
+                self.url = open(addr_file).read().strip()
+                if self.url:
+                    return
+            time.sleep(0.05)
+        raise RuntimeError("frepmilld did not start within 30 s")
+
+    def read_log(self):
+        with open(self.log_path, "rb") as f:
+            return f.read().decode(errors="replace")
+
+    def stop(self, sig=signal.SIGTERM, timeout=60):
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+            try:
+                self.proc.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(timeout=10)
+                raise RuntimeError("frepmilld did not stop within %d s" % timeout)
+        self.log.close()
+        return self.proc.returncode
+
+
+def curl(*args, timeout=60):
+    """Run curl; returns (http status, body bytes)."""
+    out = subprocess.run(["curl", "-s", "-S", "-m", str(timeout), "-w", "\n%{http_code}", *args],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=timeout + 10)
+    if out.returncode != 0:
+        raise RuntimeError("curl %s failed: %s" % (args, out.stderr.decode()))
+    body, _, code = out.stdout.rpartition(b"\n")
+    return int(code), body
+
+
+def curl_json(*args, timeout=60):
+    code, body = curl(*args, timeout=timeout)
+    return code, json.loads(body) if body.strip() else None
+
+
+def demo_job(voxel, name="demo"):
+    with open(os.path.join(DEMO, "pocket.ngc")) as f:
+        program = f.read()
+    with open(os.path.join(DEMO, "tools.json")) as f:
+        tools = json.load(f)
+    return {"stock": DEMO_STOCK, "voxel": voxel, "tools": tools,
+            "program": {"gcode": program}, "options": {"name": name}}
+
+
+def submit(url, job, tmpdir):
+    path = os.path.join(tmpdir, "job.json")
+    with open(path, "w") as f:
+        json.dump(job, f)
+    code, body = curl_json("-X", "POST", "-H", "Content-Type: application/json",
+                           "--data-binary", "@" + path, url + "/v1/jobs")
+    if code != 202:
+        raise RuntimeError("submit: %d %s" % (code, body))
+    return body["id"]
+
+
+def wait_state(url, job_id, states, timeout):
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        code, status = curl_json(url + "/v1/jobs/" + job_id)
+        if code == 200 and status["state"] in states:
+            return status
+        time.sleep(0.2)
+    raise RuntimeError("job %s not in %s within %d s" % (job_id, states, timeout))
+
+
+def cli_reference(frepmill, voxel, tmpdir):
+    """The CLI's result for the demo job: its report and its mesh volume."""
+    report = os.path.join(tmpdir, "cli_report.json")
+    stl = os.path.join(tmpdir, "cli.stl")
+    subprocess.run([frepmill, "simulate", os.path.join(DEMO, "pocket.ngc"), "--stock", DEMO_STOCK,
+                    "--tools", os.path.join(DEMO, "tools.json"), "--voxel", str(voxel),
+                    "--report", report, "--out", stl], check=True, timeout=600,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    with open(report) as f:
+        rep = json.load(f)
+    with open(stl, "rb") as f:
+        rep["mesh_volume_mm3"] = stl_volume(f.read())
+    return rep
+
+
+def stl_volume(data):
+    """Signed volume of a binary STL (divergence theorem, sum of tetrahedra
+    against the origin): computed here independently of lib/mesh."""
+    count = struct.unpack_from("<I", data, 80)[0]
+    if len(data) != 84 + 50 * count:
+        raise ValueError("STL size %d does not match %d triangles" % (len(data), count))
+    total = 0.0
+    for i in range(count):
+        v = struct.unpack_from("<9f", data, 84 + 50 * i + 12)
+        ax, ay, az, bx, by, bz, cx, cy, cz = v
+        total += (ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx))
+    return total / 6.0
+
+
+def check(cond, message):
+    if not cond:
+        raise AssertionError(message)
+    print("ok:", message)
