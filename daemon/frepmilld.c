@@ -54,7 +54,7 @@ static void http_log(void *ctx, int level, const char *message)
 static void modbus_log(void *ctx, int level, const char *message)
 {
     (void)ctx;
-    fm_log((fm_log_level)level, "modbus: %s", message);
+    fm_log((fm_log_level)level, "%s", message); /* the server names itself */
 }
 #endif
 
@@ -118,6 +118,16 @@ static int submit_demo(fm_jobs *jobs, const fm_daemon_config *cfg, unsigned port
 
 int main(int argc, char **argv)
 {
+    /* Signals are blocked first, so every thread started later inherits
+     * the mask, and taken by sigwaitinfo in the loop at the end. */
+    sigset_t signals;
+    sigemptyset(&signals);
+    sigaddset(&signals, SIGTERM);
+    sigaddset(&signals, SIGINT);
+    sigaddset(&signals, SIGHUP);
+    pthread_sigmask(SIG_BLOCK, &signals, NULL);
+    signal(SIGPIPE, SIG_IGN);
+
     fm_daemon_config cfg;
     fm_daemon_config_default(&cfg);
     char msg[1024];
@@ -170,15 +180,6 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-
-    /* Signals are blocked in every thread and taken by sigtimedwait below. */
-    sigset_t signals;
-    sigemptyset(&signals);
-    sigaddset(&signals, SIGTERM);
-    sigaddset(&signals, SIGINT);
-    sigaddset(&signals, SIGHUP);
-    pthread_sigmask(SIG_BLOCK, &signals, NULL);
-    signal(SIGPIPE, SIG_IGN);
 
     if (fm_log_open(cfg.log_file, (fm_log_level)cfg.log_level) != 0)
         fprintf(stderr, "frepmilld: cannot open the log file %s; logging to stderr\n",
