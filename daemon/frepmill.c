@@ -6,6 +6,9 @@
 #include <string.h>
 
 static const fm_command commands[] = {
+#ifdef FM_HAVE_CMD_CHECK
+    {"check", "find collisions and unsafe moves in a program before it runs", fm_cmd_check},
+#endif
 #ifdef FM_HAVE_CMD_EVAL
     {"eval", "evaluate a HyperFun model at a point", fm_cmd_eval},
 #endif
