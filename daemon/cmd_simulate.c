@@ -22,6 +22,7 @@ static void usage(FILE *out)
             "                         [--out FILE]... [--report FILE.json] [--progress]\n"
             "                         [--band VOXELS] [--memory-budget MB] [--threads N]\n"
             "                         [--rapid-rate MM_PER_MIN] [--batch DIAMETERS]\n"
+            "                         [--png FILE] [--png-size WxH] [--color depth|tool|none]\n"
             "\n"
             "PROGRAM   G-code, or a parametric trajectory (.json)\n"
             "SPEC      box:X0,Y0,Z0,X1,Y1,Z1 | cylinder:X,Y,Z0,Z1,R | FILE.hf | FILE.stl | FILE.vdb\n"
@@ -29,11 +30,15 @@ static void usage(FILE *out)
             "--voxel   voxel edge in mm (default 0.1)\n"
             "--out     final stock; format by extension: %s (may be given several times)\n"
             "--report  JSON report (default: none; `-` for standard output)\n"
+            "--png     a shaded isometric picture with the toolpath (same as --out FILE.png)\n"
+            "--color   mesh and picture colours: depth below the stock top (default), the tool\n"
+            "          that cut last, or none\n"
             "Exit status: 0 success, 2 bad input, 3 resource limit, 4 I/O error.\n",
             fm_output_formats());
 }
 
 typedef struct progress_bar {
+    fm_toolpath *toolpath;
     int enabled;
     int is_tty;
     double last_shown;
@@ -71,6 +76,12 @@ static int show_progress(void *user, const fm_job_progress *p)
     }
     fflush(stderr);
     return 0;
+}
+
+static void collect_motion(void *user, const fm_motion *motion)
+{
+    progress_bar *bar = user;
+    fm_toolpath_add(bar->toolpath, motion);
 }
 
 static int parse_double(const char *s, double *out)
@@ -125,6 +136,9 @@ int fm_cmd_simulate(int argc, char **argv)
     int output_count = 0;
     const char *report_path = NULL;
     int force_progress = 0;
+    fm_output_options out_opt;
+    fm_output_options_default(&out_opt);
+    int want_png = 0;
 
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -150,21 +164,42 @@ int fm_cmd_simulate(int argc, char **argv)
             return 2;
         }
         i++;
-        if (!strcmp(a, "--stock")) {
+        int is_png = !strcmp(a, "--png");
+        if (is_png || !strcmp(a, "--out")) {
+            if (output_count == SIMULATE_MAX_OUTPUTS) {
+                fprintf(stderr, "frepmill simulate: at most %d output files\n", SIMULATE_MAX_OUTPUTS);
+                return 2;
+            }
+            size_t n = strlen(v);
+            if (is_png ? n < 5 || strcmp(v + n - 4, ".png") : !fm_output_format_known(v)) {
+                fprintf(stderr, "frepmill simulate: %s %s: unknown format (use %s)\n", a, v,
+                        is_png ? ".png" : fm_output_formats());
+                return 2;
+            }
+            if (n >= 4 && !strcmp(v + n - 4, ".png")) want_png = 1;
+            outputs[output_count++] = v;
+        } else if (!strcmp(a, "--png-size")) {
+            int w, h;
+            char tail;
+            if (sscanf(v, "%dx%d%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 8192 ||
+                h > 8192) {
+                fprintf(stderr, "frepmill simulate: --png-size %s: expected WxH, 16..8192\n", v);
+                return 2;
+            }
+            out_opt.png_width = w;
+            out_opt.png_height = h;
+        } else if (!strcmp(a, "--color")) {
+            if (!strcmp(v, "depth")) out_opt.coloring = FM_MESH_COLOR_DEPTH;
+            else if (!strcmp(v, "tool")) out_opt.coloring = FM_MESH_COLOR_TOOL;
+            else if (!strcmp(v, "none")) out_opt.coloring = FM_MESH_COLOR_NONE;
+            else {
+                fprintf(stderr, "frepmill simulate: --color %s: expected depth, tool or none\n", v);
+                return 2;
+            }
+        } else if (!strcmp(a, "--stock")) {
             spec.stock_spec = v;
         } else if (!strcmp(a, "--tools")) {
             spec.tools_path = v;
-        } else if (!strcmp(a, "--out")) {
-            if (output_count == SIMULATE_MAX_OUTPUTS) {
-                fprintf(stderr, "frepmill simulate: at most %d --out files\n", SIMULATE_MAX_OUTPUTS);
-                return 2;
-            }
-            if (!fm_output_format_known(v)) {
-                fprintf(stderr, "frepmill simulate: --out %s: unknown format (use %s)\n", v,
-                        fm_output_formats());
-                return 2;
-            }
-            outputs[output_count++] = v;
         } else if (!strcmp(a, "--report")) {
             report_path = v;
         } else if (!strcmp(a, "--voxel") && parse_double(v, &d) && d > 0) {
@@ -202,7 +237,12 @@ int fm_cmd_simulate(int argc, char **argv)
     bar.is_tty = isatty(STDERR_FILENO);
     bar.enabled = bar.is_tty || force_progress;
     bar.last_permille = -10;
+    if (want_png && !(bar.toolpath = fm_toolpath_new(0))) {
+        fprintf(stderr, "frepmill simulate: out of memory\n");
+        return 3;
+    }
     fm_job_hooks hooks = {.user = &bar, .progress = show_progress};
+    if (bar.toolpath) hooks.on_motion = collect_motion;
 
     fm_job_result result;
     fm_error err;
@@ -212,18 +252,25 @@ int fm_cmd_simulate(int argc, char **argv)
     if (st != FM_OK) {
         char buf[1024];
         fprintf(stderr, "frepmill simulate: %s\n", fm_error_format(&err, buf, sizeof buf));
+        fm_toolpath_free(bar.toolpath);
         return exit_status(st);
     }
 
     int status = 0;
-    for (int i = 0; i < output_count && status == 0; i++) {
-        st = fm_output_write(outputs[i], result.stock, &err);
-        if (st != FM_OK) {
-            char buf[1024];
-            fprintf(stderr, "frepmill simulate: %s\n", fm_error_format(&err, buf, sizeof buf));
-            status = exit_status(st);
-        }
+    out_opt.top_z = result.initial_hi[2];
+    out_opt.have_stock_box = 1;
+    memcpy(out_opt.stock_lo, result.initial_lo, sizeof out_opt.stock_lo);
+    memcpy(out_opt.stock_hi, result.initial_hi, sizeof out_opt.stock_hi);
+    out_opt.toolpath = bar.toolpath;
+    st = fm_outputs_write(outputs, (size_t)output_count, result.stock, &out_opt, &err);
+    if (st != FM_OK) {
+        char buf[1024];
+        fprintf(stderr, "frepmill simulate: %s\n", fm_error_format(&err, buf, sizeof buf));
+        status = exit_status(st);
     }
+    if (fm_toolpath_truncated(bar.toolpath))
+        fprintf(stderr, "frepmill simulate: the picture shows only the start of the toolpath "
+                        "(too many points)\n");
 
     fprintf(stderr,
             "frepmill simulate: %ld motions, %.1f s of program time; removed %.1f mm3 of %.1f mm3 "
@@ -246,5 +293,6 @@ int fm_cmd_simulate(int argc, char **argv)
         }
     }
     fm_stock_free(result.stock);
+    fm_toolpath_free(bar.toolpath);
     return status;
 }

@@ -499,6 +499,7 @@ static int cut_sink(void *user, const fm_motion *m)
 {
     cutter *c = user;
     c->progress.motions_done++;
+    if (c->hooks && c->hooks->on_motion) c->hooks->on_motion(c->hooks->user, m);
     if (m->index < c->spec->skip_motions) return 0; /* cut before the snapshot we resume from */
     if (c->hooks && c->hooks->before_motion) {
         /* The hook must see the stock as it is when this motion starts. */
@@ -563,6 +564,21 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
         return err ? err->code : FM_ERR_INPUT;
     }
 
+    double initial_lo[3] = {0, 0, 0}, initial_hi[3] = {0, 0, 0};
+    int32_t ilo[3], ihi[3];
+    fm_error bounds_err;
+    if (fm_stock_active_bounds(stock, ilo, ihi, &bounds_err) == FM_OK) {
+        double a[3] = {ilo[0], ilo[1], ilo[2]}, b[3] = {ihi[0], ihi[1], ihi[2]};
+        fm_stock_index_to_world(stock, a, initial_lo);
+        fm_stock_index_to_world(stock, b, initial_hi);
+        /* Active voxels reach a band beyond the surface on either side. */
+        double band = fm_stock_band_voxels(stock) * fm_stock_voxel_size(stock);
+        for (int k = 0; k < 3; k++) {
+            initial_lo[k] += band;
+            initial_hi[k] -= band;
+        }
+    }
+
     cutter *c = calloc(1, sizeof *c);
     if (!c) {
         fm_stock_free(stock);
@@ -602,6 +618,8 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     result->blocks = c->blocks;
     result->program_time_s = sv.time_total;
     result->voxel_mm = fm_stock_voxel_size(stock);
+    memcpy(result->initial_lo, initial_lo, sizeof initial_lo);
+    memcpy(result->initial_hi, initial_hi, sizeof initial_hi);
     size_t n = fm_stock_tool_volumes(stock, result->tools,
                                      sizeof result->tools / sizeof result->tools[0]);
     result->tool_count = n < 64 ? n : 64;

@@ -86,6 +86,11 @@ typedef struct fm_job_hooks {
      * then (lib/check hooks in here). Non-zero stops the job. */
     int (*before_motion)(void *user, const fm_motion *motion, const fm_tool *tool,
                          fm_stock *stock);
+    /* Called for every motion as the program produces it, without
+     * touching the stock (and so without ending a batch early): for
+     * toolpath overlays and logs. A PARAM motion's path is valid during the
+     * call. */
+    void (*on_motion)(void *user, const fm_motion *motion);
 } fm_job_hooks;
 
 #define FM_JOB_TOP_BLOCKS 10
@@ -102,6 +107,7 @@ typedef struct fm_job_result {
     double wall_time_s;
     size_t peak_memory_bytes;  /* peak resident set of the process */
     double voxel_mm;
+    double initial_lo[3], initial_hi[3]; /* bounds of the stock before the first cut, mm (within a voxel) */
     int stopped;               /* a hook stopped the job */
     size_t tool_count;
     fm_stock_tool_volume tools[64];

@@ -1,12 +1,186 @@
 /* outputs.c: the final stock to files, by extension: .vdb snapshots through
- * lib/stock, meshes through lib/mesh (whole-grid extraction, coloured by
- * the tool that cut last when the stock tracks it). */
+ * lib/stock, meshes and pictures through lib/mesh, and the toolpath
+ * polylines drawn over pictures. */
 #include "outputs.h"
 
 #include <ctype.h>
+#include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
-#include "mesh/mesh.h"
+#define OUT_PI 3.14159265358979323846
+/* Arcs are drawn with a chord every 5 degrees at most. */
+#define OUT_ARC_STEP (OUT_PI / 36)
+#define OUT_PARAM_SAMPLES 32
+
+typedef struct polyline {
+    size_t first, count; /* into points */
+    int rapid;
+} polyline;
+
+struct fm_toolpath {
+    double *points;
+    size_t count, capacity, max_points;
+    polyline *lines;
+    size_t line_count, line_capacity;
+    int truncated;
+    int have_last;
+    double last[3];
+};
+
+fm_toolpath *fm_toolpath_new(size_t max_points)
+{
+    fm_toolpath *p = calloc(1, sizeof *p);
+    if (p) p->max_points = max_points ? max_points : 4000000;
+    return p;
+}
+
+void fm_toolpath_free(fm_toolpath *path)
+{
+    if (!path) return;
+    free(path->points);
+    free(path->lines);
+    free(path);
+}
+
+int fm_toolpath_truncated(const fm_toolpath *path)
+{
+    return path && path->truncated;
+}
+
+static int push_point(fm_toolpath *p, const double xyz[3])
+{
+    if (p->count >= p->max_points) {
+        p->truncated = 1;
+        return 0;
+    }
+    if (p->count == p->capacity) {
+        size_t cap = p->capacity ? p->capacity * 2 : 1024;
+        double *pts = realloc(p->points, cap * 3 * sizeof *pts);
+        if (!pts) {
+            p->truncated = 1;
+            return 0;
+        }
+        p->points = pts;
+        p->capacity = cap;
+    }
+    memcpy(p->points + 3 * p->count, xyz, 3 * sizeof *xyz);
+    p->count++;
+    return 1;
+}
+
+/* Start a new polyline unless the last one has the same kind and ends
+ * where this motion starts. */
+static int begin_line(fm_toolpath *p, int rapid, const double start[3])
+{
+    if (p->line_count > 0) {
+        polyline *l = &p->lines[p->line_count - 1];
+        if (l->rapid == rapid && p->have_last && start[0] == p->last[0] &&
+            start[1] == p->last[1] && start[2] == p->last[2])
+            return 1;
+    }
+    if (p->line_count == p->line_capacity) {
+        size_t cap = p->line_capacity ? p->line_capacity * 2 : 256;
+        polyline *lines = realloc(p->lines, cap * sizeof *lines);
+        if (!lines) {
+            p->truncated = 1;
+            return 0;
+        }
+        p->lines = lines;
+        p->line_capacity = cap;
+    }
+    polyline *l = &p->lines[p->line_count++];
+    l->first = p->count;
+    l->count = 0;
+    l->rapid = rapid;
+    if (!push_point(p, start)) return 0;
+    l->count = 1;
+    return 1;
+}
+
+static void add_point(fm_toolpath *p, const double xyz[3])
+{
+    if (!push_point(p, xyz)) return;
+    p->lines[p->line_count - 1].count++;
+    memcpy(p->last, xyz, sizeof p->last);
+    p->have_last = 1;
+}
+
+/* The two in-plane axes of an arc, in the right-handed order LinuxCNC
+ * uses for G17 (X, Y), G18 (Z, X) and G19 (Y, Z). */
+static void plane_axes(int plane_axis, int *a, int *b)
+{
+    *a = (plane_axis + 1) % 3;
+    *b = (plane_axis + 2) % 3;
+}
+
+static void add_arc(fm_toolpath *p, const fm_motion *m, const double off[3])
+{
+    int a, b, n = m->plane_axis;
+    plane_axes(n, &a, &b);
+    double sa = m->start[a] - m->center[a], sb = m->start[b] - m->center[b];
+    double ea = m->end[a] - m->center[a], eb = m->end[b] - m->center[b];
+    double r0 = hypot(sa, sb), r1 = hypot(ea, eb);
+    double th0 = atan2(sb, sa), th1 = atan2(eb, ea);
+    int turns = m->turns == 0 ? 1 : m->turns;
+    double sweep;
+    if (turns > 0) {
+        sweep = th1 - th0;
+        while (sweep <= 1e-12) sweep += 2 * OUT_PI;
+        sweep += 2 * OUT_PI * (turns - 1);
+    } else {
+        sweep = th1 - th0;
+        while (sweep >= -1e-12) sweep -= 2 * OUT_PI;
+        sweep -= 2 * OUT_PI * (-turns - 1);
+    }
+    int steps = (int)ceil(fabs(sweep) / OUT_ARC_STEP);
+    if (steps < 1) steps = 1;
+    if (steps > 100000) steps = 100000;
+    for (int i = 1; i <= steps; i++) {
+        double u = (double)i / steps, th = th0 + u * sweep, r = r0 + u * (r1 - r0);
+        double q[3];
+        q[a] = m->center[a] + r * cos(th);
+        q[b] = m->center[b] + r * sin(th);
+        q[n] = m->start[n] + u * (m->end[n] - m->start[n]);
+        for (int k = 0; k < 3; k++) q[k] += off[k];
+        add_point(p, q);
+    }
+}
+
+void fm_toolpath_add(fm_toolpath *path, const fm_motion *m)
+{
+    if (!path || path->truncated || m->kind == FM_MOTION_DWELL) return;
+    double start[3], end[3];
+    for (int k = 0; k < 3; k++) {
+        start[k] = m->start[k] + m->tip_offset[k];
+        end[k] = m->end[k] + m->tip_offset[k];
+    }
+    if (m->kind == FM_MOTION_PARAM && m->path) {
+        double pos[3], axis[3];
+        m->path->pose(m->path->ctx, m->t0, pos, axis);
+        if (!begin_line(path, 0, pos)) return;
+        for (int i = 1; i <= OUT_PARAM_SAMPLES; i++) {
+            m->path->pose(m->path->ctx, m->t0 + (m->t1 - m->t0) * i / OUT_PARAM_SAMPLES, pos, axis);
+            add_point(path, pos);
+        }
+        return;
+    }
+    if (!begin_line(path, m->kind == FM_MOTION_RAPID, start)) return;
+    if (m->kind == FM_MOTION_ARC)
+        add_arc(path, m, m->tip_offset);
+    else
+        add_point(path, end);
+}
+
+/* ------------------------------------------------------------ writing -- */
+
+void fm_output_options_default(fm_output_options *opt)
+{
+    memset(opt, 0, sizeof *opt);
+    opt->coloring = FM_MESH_COLOR_DEPTH;
+    opt->png_width = 1024;
+    opt->png_height = 768;
+}
 
 static int ends_with(const char *path, const char *ext)
 {
@@ -19,25 +193,95 @@ static int ends_with(const char *path, const char *ext)
 
 const char *fm_output_formats(void)
 {
-    return ".vdb, .drc, .stl, .ply, .obj";
+    return ".vdb, .drc, .stl, .ply, .obj, .png";
 }
 
 int fm_output_format_known(const char *path)
 {
-    return ends_with(path, ".vdb") || fm_mesh_format_from_path(path) != FM_MESH_FORMAT_UNKNOWN;
+    return ends_with(path, ".vdb") || ends_with(path, ".png") ||
+           fm_mesh_format_from_path(path) != FM_MESH_FORMAT_UNKNOWN;
 }
 
-fm_status fm_output_write(const char *path, fm_stock *stock, fm_error *err)
+/* Vertices on the original stock's bounding box are uncut surface: give
+ * them a neutral grey instead of a depth colour. The box is known to about
+ * a voxel (job.h), hence the tolerance the caller passes. */
+static void grey_uncut(fm_mesh *mesh, const fm_output_options *opt, double tol)
 {
-    if (ends_with(path, ".vdb")) return fm_stock_save(stock, path, NULL, err);
-    if (fm_mesh_format_from_path(path) == FM_MESH_FORMAT_UNKNOWN)
-        return fm_error_set(err, FM_ERR_INPUT, "%s: unknown output format (use %s)", path,
-                            fm_output_formats());
-    fm_mesh_extract_options opt;
-    fm_mesh_extract_default(&opt);
-    fm_mesh *mesh = fm_mesh_from_stock(stock, &opt, err);
-    if (!mesh) return err ? err->code : FM_ERR_INTERNAL;
-    fm_status st = fm_mesh_write_file(mesh, path, NULL, err);
+    static const uint8_t grey[3] = {196, 196, 202};
+    if (!mesh->colors || !opt->have_stock_box) return;
+    for (size_t v = 0; v < mesh->vertex_count; v++) {
+        const float *p = mesh->positions + 3 * v;
+        for (int k = 0; k < 3; k++) {
+            if (fabs(p[k] - opt->stock_lo[k]) <= tol || fabs(p[k] - opt->stock_hi[k]) <= tol) {
+                memcpy(mesh->colors + 3 * v, grey, 3);
+                break;
+            }
+        }
+    }
+}
+
+static fm_status write_png(const fm_mesh *mesh, const char *path, const fm_output_options *opt,
+                           fm_error *err)
+{
+    fm_render_options ro;
+    fm_render_default(&ro);
+    ro.width = opt->png_width;
+    ro.height = opt->png_height;
+    fm_render_polyline *lines = NULL;
+    const fm_toolpath *tp = opt->toolpath;
+    if (tp && tp->line_count) {
+        lines = calloc(tp->line_count, sizeof *lines);
+        if (!lines) return fm_error_set(err, FM_ERR_LIMIT, "out of memory for the toolpath overlay");
+        for (size_t i = 0; i < tp->line_count; i++) {
+            lines[i].points = tp->points + 3 * tp->lines[i].first;
+            lines[i].count = tp->lines[i].count;
+            lines[i].rapid = tp->lines[i].rapid;
+        }
+        ro.paths = lines;
+        ro.path_count = tp->line_count;
+    }
+    fm_status st = fm_render_png(mesh, &ro, path, err);
+    free(lines);
+    return st;
+}
+
+fm_status fm_outputs_write(const char *const *paths, size_t count, fm_stock *stock,
+                           const fm_output_options *opt, fm_error *err)
+{
+    fm_output_options defaults;
+    if (!opt) {
+        fm_output_options_default(&defaults);
+        opt = &defaults;
+    }
+    fm_mesh *mesh = NULL;
+    fm_status st = FM_OK;
+    for (size_t i = 0; i < count && st == FM_OK; i++) {
+        const char *path = paths[i];
+        if (ends_with(path, ".vdb")) {
+            st = fm_stock_save(stock, path, NULL, err);
+            continue;
+        }
+        int png = ends_with(path, ".png");
+        if (!png && fm_mesh_format_from_path(path) == FM_MESH_FORMAT_UNKNOWN) {
+            st = fm_error_set(err, FM_ERR_INPUT, "%s: unknown output format (use %s)", path,
+                              fm_output_formats());
+            break;
+        }
+        if (!mesh) {
+            fm_mesh_extract_options eo;
+            fm_mesh_extract_default(&eo);
+            eo.coloring = opt->coloring;
+            eo.top_z = opt->top_z;
+            mesh = fm_mesh_from_stock(stock, &eo, err);
+            if (!mesh) {
+                st = err ? err->code : FM_ERR_INTERNAL;
+                break;
+            }
+            if (opt->coloring == FM_MESH_COLOR_DEPTH)
+                grey_uncut(mesh, opt, 1.5 * fm_stock_voxel_size(stock));
+        }
+        st = png ? write_png(mesh, path, opt, err) : fm_mesh_write_file(mesh, path, NULL, err);
+    }
     fm_mesh_free(mesh);
     return st;
 }

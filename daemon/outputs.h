@@ -1,14 +1,43 @@
-/* outputs.h: writing a job's final stock in the format its file name asks
- * for: a frepmill .vdb snapshot, or a mesh (.drc, .stl, .ply, .obj). */
+/* outputs.h: writing a job's final stock in the formats its file names ask
+ * for: a frepmill .vdb snapshot, meshes (.drc, .stl, .ply, .obj) and a
+ * shaded picture (.png) with the toolpath drawn over it. The stock is
+ * meshed once for all mesh and picture outputs. */
 #ifndef FM_OUTPUTS_H
 #define FM_OUTPUTS_H
 
+#include <stddef.h>
+
 #include "core/core.h"
+#include "mesh/mesh.h"
 #include "stock/stock.h"
+#include "sweep/motion.h"
+
+/* The toolpath as polylines (rapids and feeds apart), collected from the
+ * motion stream; arcs and parametric segments are tessellated. Past
+ * max_points points further motions are dropped (fm_toolpath_truncated). */
+typedef struct fm_toolpath fm_toolpath;
+fm_toolpath *fm_toolpath_new(size_t max_points);
+void fm_toolpath_free(fm_toolpath *path);
+void fm_toolpath_add(fm_toolpath *path, const fm_motion *motion);
+int fm_toolpath_truncated(const fm_toolpath *path);
+
+typedef struct fm_output_options {
+    fm_mesh_coloring coloring; /* default FM_MESH_COLOR_DEPTH */
+    double top_z;              /* original stock top for depth colours */
+    /* The original stock's bounding box: with depth colours, surface still
+     * on it (uncut) keeps a neutral colour, so that cuts stand out. */
+    int have_stock_box;
+    double stock_lo[3], stock_hi[3];
+    int png_width, png_height; /* default 1024 x 768 */
+    const fm_toolpath *toolpath; /* overlay for pictures; may be NULL */
+} fm_output_options;
+void fm_output_options_default(fm_output_options *opt);
 
 /* "a, b, c" list of the extensions understood, for messages. */
 const char *fm_output_formats(void);
 int fm_output_format_known(const char *path);
-fm_status fm_output_write(const char *path, fm_stock *stock, fm_error *err);
+/* Write every path; stops at the first failure (err names the file). */
+fm_status fm_outputs_write(const char *const *paths, size_t count, fm_stock *stock,
+                           const fm_output_options *opt, fm_error *err);
 
 #endif
