@@ -550,10 +550,19 @@ static fm_status relate(fm_check *c, const fm_motion *m, const fm_tool *tool, fm
     if (st != FM_OK) return st;
     out->penetration = mx.value > 0 ? mx.value : 0;
 
-    /* First contact: scan the poses along the motion, then bisect. */
-    bb.clear = clear;
     double len = motion_length(m);
     double dur = m->t1 - m->t0;
+    if (!c->need_first) {
+        /* extends an open finding, whose first contact is known */
+        double axis[3];
+        memcpy(out->contact, r.at, sizeof out->contact);
+        out->time = m->t0;
+        fm_sweep_pose(sweep, m->t0, out->tip, axis);
+        return FM_OK;
+    }
+    /* First contact: scan the poses along the motion, then bisect to a
+     * fraction of the tolerance. */
+    bb.clear = clear;
     int n = (int)ceil(len / CHECK_SCAN_STEP_MM);
     if (n < 1) n = 1;
     if (n > CHECK_SCAN_MAX) n = CHECK_SCAN_MAX;
@@ -574,7 +583,7 @@ static fm_status relate(fm_check *c, const fm_motion *m, const fm_tool *tool, fm
     }
     if (u_hit > 0) {
         double lo = u_prev, hi = u_hit;
-        for (int i = 0; i < CHECK_BISECT; i++) {
+        for (int i = 0; i < CHECK_BISECT && (hi - lo) * len > 0.5 * c->opt.tolerance_mm; i++) {
             double mid = 0.5 * (lo + hi);
             check_bb_result sr;
             int found;
@@ -605,6 +614,15 @@ static fm_status relate(fm_check *c, const fm_motion *m, const fm_tool *tool, fm
     fm_sweep_pose(sweep, t, out->tip, axis);
     out->time = t;
     return FM_OK;
+}
+
+/* Whether (kind, part[, fixture]) has a finding open: then the motion only
+ * extends it and its first contact need not be looked for. */
+static int is_open(const fm_check *c, fm_check_kind kind, fm_check_part part, int fixture)
+{
+    if (kind == FM_CHECK_FIXTURE_CONTACT)
+        return c->open_fixture && c->open_fixture[fixture * FM_CHECK_PART_COUNT + part] >= 0;
+    return c->open[kind][part] >= 0;
 }
 
 /* The flutes against the stock, skipping what the motion retraces. */
@@ -654,6 +672,7 @@ static fm_status check_start(fm_check *c, const fm_motion *first, const fm_tool 
 {
     const double axis[3] = {0, 0, 1};
     fm_motion sm;
+    c->need_first = 1;
     static_motion(NULL, c->opt.machine.start, axis, first->t0, &sm);
     sm.tool = first->tool;
     for (int p = 0; p < FM_CHECK_PART_COUNT; p++) {
@@ -769,12 +788,16 @@ fm_status fm_check_motion(fm_check *c, const fm_motion *m, const fm_tool *tool,
         relation_out r;
         if (p == FM_CHECK_PART_FLUTES) {
             if (rapid) {
+                c->need_first = !is_open(c, FM_CHECK_RAPID_INTO_STOCK, FM_CHECK_PART_FLUTES, -1);
                 st = relate_flutes(c, m, tool, s, w, stock, c->opt.clearance_mm[p], &r, err);
                 if (st == FM_OK && r.found)
                     st = report(c, FM_CHECK_RAPID_INTO_STOCK, (fm_check_part)p, -1, m, &r, err);
             } else if (spindle_off || plunge) {
                 /* cutting is what a feed motion's flutes do: these only
                  * matter when they meet material */
+                c->need_first =
+                    (spindle_off && !is_open(c, FM_CHECK_SPINDLE_OFF_CUT, FM_CHECK_PART_FLUTES, -1)) ||
+                    (plunge && !is_open(c, FM_CHECK_NON_CENTER_PLUNGE, FM_CHECK_PART_FLUTES, -1));
                 st = relate_flutes(c, m, tool, s, w, stock, 0.0, &r, err);
                 if (st == FM_OK && r.found && spindle_off)
                     st = report(c, FM_CHECK_SPINDLE_OFF_CUT, (fm_check_part)p, -1, m, &r, err);
@@ -782,6 +805,10 @@ fm_status fm_check_motion(fm_check *c, const fm_motion *m, const fm_tool *tool,
                     st = report(c, FM_CHECK_NON_CENTER_PLUNGE, (fm_check_part)p, -1, m, &r, err);
             }
         } else {
+            c->need_first = !is_open(c,
+                                     p == FM_CHECK_PART_SHANK ? FM_CHECK_SHANK_CONTACT
+                                                              : FM_CHECK_HOLDER_CONTACT,
+                                     (fm_check_part)p, -1);
             st = relate(c, m, tool, (fm_check_part)p, s, w, stock, -1, c->opt.clearance_mm[p], &r,
                         err);
             if (st == FM_OK && r.found)
@@ -790,6 +817,7 @@ fm_status fm_check_motion(fm_check *c, const fm_motion *m, const fm_tool *tool,
                             (fm_check_part)p, -1, m, &r, err);
         }
         for (size_t fx = 0; st == FM_OK && fx < c->fixture_count; fx++) {
+            c->need_first = !is_open(c, FM_CHECK_FIXTURE_CONTACT, (fm_check_part)p, (int)fx);
             st = relate(c, m, tool, (fm_check_part)p, s, w, NULL, (int)fx, c->opt.clearance_mm[p], &r,
                         err);
             if (st == FM_OK && r.found)

@@ -122,6 +122,7 @@ struct fm_check {
     int bounds_ok;
     double bounds_lo[3], bounds_hi[3];
 
+    int need_first; /* the relation being run must find its first contact */
     check_box *stack;
     size_t stack_cap;
     fm_check_stats stats;
