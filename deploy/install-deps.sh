@@ -10,7 +10,7 @@ set -eu
 group=${1:-build}
 
 build_pkgs="build-essential cmake pkg-config libopenvdb-dev libboost-iostreams-dev libtbb-dev \
-libblosc-dev libdraco-dev libmodbus-dev libmicrohttpd-dev libjansson-dev libstb-dev"
+libblosc-dev libdraco-dev libmodbus-dev libmicrohttpd-dev libjansson-dev libstb-dev curl"
 test_pkgs="valgrind python3 linuxcnc-uspace mbpoll draco curl"
 dev_pkgs="clang libclang-rt-14-dev"
 
