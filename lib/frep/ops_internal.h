@@ -17,7 +17,7 @@
  * values. While 0, fm_remap refuses to move a voxel grid, since the tape
  * would sample the unmoved grid at the raw point and be silently wrong. */
 #ifndef FM_VOXELS_SAMPLE_CHILDREN
-#define FM_VOXELS_SAMPLE_CHILDREN 0
+#define FM_VOXELS_SAMPLE_CHILDREN 1
 #endif
 
 #endif

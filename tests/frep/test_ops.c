@@ -543,6 +543,35 @@ static void test_voxel_placement(void)
     /* The sample point is now (x - 2, y, z). */
     CHECK_NEAR(ev4(g, fm_node_child(g, moved, 0), 2.5, 0, 0, 0), 0.5, 0);
     CHECK(fm_node_child(g, moved, 1) == fm_var(g, FM_Y));
+    /* Through the tape: the moved grid holds x - 2 on [2, 3] x [0, 1]^2. */
+    fm_tape *tape = fm_tape_compile(g, moved, NULL);
+    fm_evaluator *ev = tape ? fm_evaluator_new(tape, NULL) : NULL;
+    CHECK(ev != NULL);
+    if (ev) {
+        for (int i = 0; i < 50; i++) {
+            double p[4] = {test_uniform(2, 3), test_uniform(0, 1), test_uniform(0, 1), 0};
+            CHECK_NEAR(fm_eval_point(ev, p), p[0] - 2, 1e-6);
+        }
+        for (int i = 0; i < 50; i++) {
+            fm_interval box[4];
+            for (int k = 0; k < 3; k++) {
+                double a = test_uniform(1.5, 3.5), b = test_uniform(1.5, 3.5);
+                if (k > 0) a -= 2, b -= 2;
+                box[k].lo = a < b ? a : b;
+                box[k].hi = a < b ? b : a;
+            }
+            box[3].lo = box[3].hi = 0;
+            fm_interval iv = fm_eval_interval(ev, box);
+            for (int j = 0; j < 40; j++) {
+                double p[4] = {test_uniform(box[0].lo, box[0].hi), test_uniform(box[1].lo, box[1].hi),
+                               test_uniform(box[2].lo, box[2].hi), 0};
+                double value = fm_eval_point(ev, p);
+                CHECK(value >= iv.lo && value <= iv.hi);
+            }
+        }
+    }
+    fm_evaluator_free(ev);
+    fm_tape_free(tape);
     fm_node tmap[FM_AXES] = {fm_add(g, fm_var(g, FM_X), fm_var(g, FM_T)), FM_NONE, FM_NONE, FM_NONE};
     expect_error(g, fm_remap(g, vox, tmap), FM_ERR_INPUT, "neither t nor parameters");
     free_graph(g);
