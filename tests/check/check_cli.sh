@@ -27,7 +27,10 @@ expect 2 "no stock" "$FM" check rapid_through.ngc --tools tools.json
 echo '{"limits": {"w": [0, 1]}}' > "$TMP/bad.json"
 expect 2 "bad machine" "$FM" check rapid_through.ngc --stock box:0,0,-20,50,50,0 --tools tools.json --machine "$TMP/bad.json"
 grep -q 'limits.w' "$TMP/err.txt" || { echo "FAIL: machine error names the member"; fail=1; }
-expect 2 "bad fixture" "$FM" check rapid_through.ngc --stock box:0,0,-20,50,50,0 --tools tools.json --fixture "$TMP/none.hf"
+echo 'clamp(x[3], a[1]) { clamp = x[1] +; }' > "$TMP/bad.hf"
+expect 2 "bad fixture" "$FM" check rapid_through.ngc --stock box:0,0,-20,50,50,0 --tools tools.json --fixture "$TMP/bad.hf"
+# a fixture file that cannot be read: I/O, 4
+expect 4 "missing fixture" "$FM" check rapid_through.ngc --stock box:0,0,-20,50,50,0 --tools tools.json --fixture "$TMP/none.hf"
 # resource limit: 3
 expect 3 "budget" "$FM" check rapid_through.ngc --stock box:0,0,-20,50,50,0 --tools tools.json --voxel 0.0001
 # the demo is clean
