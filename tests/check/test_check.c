@@ -249,14 +249,24 @@ static void test_spindle_plunge_travel(void)
     fm_check_free(c);
 }
 
-int main(void)
+/* Arguments name the cases to run (all by default): valgrind runs the
+ * quick ones. */
+static int wanted(int argc, char **argv, const char *name)
 {
-    test_rapid_through();
-    test_rapid_over();
-    test_deep_pocket_shank();
-    test_fixture_clamp();
-    test_start_in_stock();
-    test_spindle_plunge_travel();
+    if (argc < 2) return 1;
+    for (int i = 1; i < argc; i++)
+        if (!strcmp(argv[i], name)) return 1;
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    if (wanted(argc, argv, "rapid_through")) test_rapid_through();
+    if (wanted(argc, argv, "rapid_over")) test_rapid_over();
+    if (wanted(argc, argv, "deep_pocket")) test_deep_pocket_shank();
+    if (wanted(argc, argv, "fixture")) test_fixture_clamp();
+    if (wanted(argc, argv, "start")) test_start_in_stock();
+    if (wanted(argc, argv, "spindle_plunge_travel")) test_spindle_plunge_travel();
     fprintf(stderr, "%d checks, %d failures\n", fm_test_checks, fm_test_failures);
     return fm_test_failures != 0;
 }
