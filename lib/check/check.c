@@ -97,7 +97,10 @@ void fm_check_free(fm_check *c)
     for (size_t i = 0; i < c->history_count; i++) fm_sweep_free(c->history[i].sweep);
     free(c->history);
     for (size_t i = 0; i < c->worker_count; i++)
-        for (int p = 0; p < FM_CHECK_PART_COUNT; p++) fm_sweep_worker_free(c->workers[i].w[p]);
+        for (int p = 0; p < FM_CHECK_PART_COUNT; p++) {
+            fm_sweep_worker_free(c->workers[i].w[p]);
+            fm_sweep_free(c->workers[i].keep[p]);
+        }
     free(c->workers);
     for (size_t i = 0; i < c->fixture_count; i++) check_fixture_free(&c->fixtures[i]);
     free(c->fixtures);
@@ -135,10 +138,10 @@ void fm_check_get_stats(const fm_check *c, fm_check_stats *stats) { *stats = c->
 
 /* ------------------------------------------------------- bookkeeping -- */
 
-static fm_sweep_worker **worker_slot(fm_check *c, int tool, fm_check_part part)
+static check_workers *worker_slot(fm_check *c, int tool)
 {
     for (size_t i = 0; i < c->worker_count; i++)
-        if (c->workers[i].tool == tool) return &c->workers[i].w[part];
+        if (c->workers[i].tool == tool) return &c->workers[i];
     if (c->worker_count == c->worker_cap) {
         size_t cap = c->worker_cap ? 2 * c->worker_cap : 8;
         check_workers *w = realloc(c->workers, cap * sizeof *w);
@@ -149,17 +152,29 @@ static fm_sweep_worker **worker_slot(fm_check *c, int tool, fm_check_part part)
     check_workers *w = &c->workers[c->worker_count++];
     memset(w, 0, sizeof *w);
     w->tool = tool;
-    return &w->w[part];
+    return w;
 }
 
 /* A worker for the part of this tool (one per tool and part: a worker made
- * for one sweep serves every sweep of the same part). */
-static fm_sweep_worker *worker_for(fm_check *c, int tool, fm_check_part part, const fm_sweep *s)
+ * for one sweep serves every sweep of the same part), made from a still
+ * sweep of the part kept with it. */
+static fm_sweep_worker *worker_for(fm_check *c, int tool, fm_check_part part,
+                                   const fm_tool_part *tp)
 {
-    fm_sweep_worker **slot = worker_slot(c, tool, part);
+    check_workers *slot = worker_slot(c, tool);
     if (!slot) return NULL;
-    if (!*slot) *slot = fm_sweep_worker_new(s);
-    return *slot;
+    if (!slot->w[part]) {
+        if (!slot->keep[part]) {
+            fm_motion still;
+            memset(&still, 0, sizeof still);
+            still.kind = FM_MOTION_RAPID;
+            still.axis_start[2] = still.axis_end[2] = 1;
+            fm_error err;
+            if (fm_sweep_new(&still, tp, NULL, &slot->keep[part], &err) != FM_OK) return NULL;
+        }
+        slot->w[part] = fm_sweep_worker_new(slot->keep[part]);
+    }
+    return slot->w[part];
 }
 
 static int is_straight(const fm_motion *m)
@@ -681,7 +696,7 @@ static fm_status check_start(fm_check *c, const fm_motion *first, const fm_tool 
         fm_sweep *s = NULL;
         fm_status st = fm_sweep_new(&sm, tp, NULL, &s, err);
         if (st != FM_OK) return st;
-        fm_sweep_worker *w = worker_for(c, first->tool, (fm_check_part)p, s);
+        fm_sweep_worker *w = worker_for(c, first->tool, (fm_check_part)p, tp);
         if (!w) {
             fm_sweep_free(s);
             return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
@@ -779,7 +794,7 @@ fm_status fm_check_motion(fm_check *c, const fm_motion *m, const fm_tool *tool,
         fm_sweep *s = NULL;
         st = fm_sweep_new(m, tp, NULL, &s, err);
         if (st != FM_OK) break;
-        fm_sweep_worker *w = worker_for(c, m->tool, (fm_check_part)p, s);
+        fm_sweep_worker *w = worker_for(c, m->tool, (fm_check_part)p, tp);
         if (!w) {
             fm_sweep_free(s);
             st = fm_error_set(err, FM_ERR_LIMIT, "out of memory");

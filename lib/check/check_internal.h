@@ -18,9 +18,12 @@ typedef struct check_history {
     double tip0[3], tip1[3], axis[3];
 } check_history;
 
+/* A worker points into the sweep it was made from: each is made from a
+ * sweep of its own that lives as long as it does. */
 typedef struct check_workers {
     int tool;
     fm_sweep_worker *w[FM_CHECK_PART_COUNT];
+    fm_sweep *keep[FM_CHECK_PART_COUNT];
 } check_workers;
 
 typedef struct check_fixture {
