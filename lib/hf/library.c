@@ -442,6 +442,170 @@ static fm_node lib_dtorus_x(ctx_t *c, hf_value *a) { return dtorus(c, a, 0); }
 static fm_node lib_dtorus_y(ctx_t *c, hf_value *a) { return dtorus(c, a, 1); }
 static fm_node lib_dtorus_z(ctx_t *c, hf_value *a) { return dtorus(c, a, 2); }
 
+/* ------------------------------------------- SARDF set operations -- */
+
+/* hfDUni, hfDInt, hfDSub: HyperFun's signed approximate real distance
+ * set operations (Fayolle, Pasko, Schmitt, Mirenkov; HyperFun library
+ * sardf.c, uni_sardef_1 / int_sardef_1). In the plane of the two values
+ * (x, y) = (f1, f2) the level curve of value d of the union is the corner
+ * of max(x, y) = d with the corner rounded:
+ *   quadrant I   the arc of the circle centre (t d, t d), radius (1 - t) d,
+ *                t = tan(alpha), between the rays x/y = t and x/y = 1/t;
+ *                outside those rays x or y;
+ *   quadrant III near the origin (level >= -R, HyperFun's "bounded" test)
+ *                the circle centre (-2 s m, -2 s m), radius 2 s m - m^2,
+ *                d = -m^2, s = sqrt(R), between the parabolas
+ *                x = -y^2 / 4R and y = -x^2 / 4R; farther out, the circle
+ *                of fixed radius R centre (d - R, d - R) in the strip
+ *                |x - y| <= R; outside those, x or y;
+ *   quadrants II, IV and the axes: max(x, y).
+ * Intersection is the mirror image: int(x, y) = -uni(-x, -y) holds
+ * branch by branch in HyperFun's code, and hfDSub(f1, f2) = hfDInt(f1, -f2)
+ * as HyperFun computes it. */
+
+/* Newton steps for the quartic branch. The branch solves
+ * psi(m) = (2 s m - m^2) - |(x, y) + 2 s m (1, 1)| = 0, which HyperFun
+ * expands to m^4 - 4 s m^3 - 4 R m^2 - 4 s (x + y) m - (x^2 + y^2) = 0 and
+ * solves with Ferrari's formulas. psi is concave (a concave radius minus the
+ * norm of an affine function) and decreasing on the branch, so Newton from
+ * a point right of the root converges monotonically; measured over 10^6
+ * points with |x|, |y| from 1e-8 R to 3 R, 9 steps reach the root to 4e-16
+ * (HyperFun's Ferrari root is off by up to 4e-10 at small scales). */
+#define SARDF_NEWTON_STEPS 10
+
+static fm_node lt(ctx_t *c, fm_node a, fm_node b) { return bin(c, FM_OP_LT, a, b); }
+static fm_node le(ctx_t *c, fm_node a, fm_node b) { return bin(c, FM_OP_LE, a, b); }
+static fm_node and2(ctx_t *c, fm_node a, fm_node b) { return bin(c, FM_OP_AND, a, b); }
+static fm_node or2(ctx_t *c, fm_node a, fm_node b) { return bin(c, FM_OP_OR, a, b); }
+static fm_node sel(ctx_t *c, fm_node cond, fm_node a, fm_node b) { return fm_select(c->g, cond, a, b); }
+/* v limited to [lo, hi]: where v is a root the limits are true bounds of,
+ * the value is unchanged and the interval of the result stays within
+ * [lo, hi] even where the root's own interval is unbounded. */
+static fm_node clamp(ctx_t *c, fm_node v, fm_node lo, fm_node hi)
+{
+    return fm_min(c->g, fm_max(c->g, v, lo), hi);
+}
+
+/* Quadrant I of the union (x, y > 0), HyperFun's angle approach. The
+ * circle's quadratic (t^2 + 2t - 1) d^2 - 2t (x + y) d + x^2 + y^2 = 0 is
+ * solved in the conjugate form d = (x^2 + y^2) / (t (x + y) + sqrt(D)),
+ * D = 2 t^2 x y + (1 - 2t)(x^2 + y^2): the same root as HyperFun's
+ * (-b - sqrt(b^2 - 4ac)) / 2a, without its 0/0 at t = sqrt(2) - 1. */
+static fm_node sardf_q1(ctx_t *c, fm_node x, fm_node y, fm_node t)
+{
+    fm_node xx_yy = add(c, sq(c, x), sq(c, y));
+    fm_node disc = add(c, mul(c, K(c, 2.0), mul(c, sq(c, t), mul(c, x, y))),
+                       mul(c, sub(c, K(c, 1.0), mul(c, K(c, 2.0), t)), xx_yy));
+    fm_node circle = dvd(c, xx_yy, add(c, mul(c, t, add(c, x, y)), rt(c, fm_max(c->g, disc, K(c, 0.0)))));
+    /* On the arc max(x, y) <= d <= x + y (the arc lies in x, y <= d and
+     * its ends (d, t d), (t d, d) are its points nearest the line x + y = d). */
+    circle = clamp(c, circle, fm_max(c->g, x, y), add(c, x, y));
+    /* x/y >= 1/t: x; x/y <= t: y (multiplied out, y > 0) */
+    return sel(c, le(c, y, mul(c, t, x)), x, sel(c, le(c, x, mul(c, t, y)), y, circle));
+}
+
+/* Quadrant III of the union (x, y < 0), HyperFun's bounded approach. */
+static fm_node sardf_q3(ctx_t *c, fm_node x, fm_node y, fm_node r)
+{
+    fm_node s = rt(c, r), two_s = mul(c, K(c, 2.0), s);
+    fm_node minus_r = fm_neg(c->g, r), minus_2r = mul(c, K(c, -2.0), r);
+    fm_node lim2 = add(c, sq(c, sub(c, x, minus_2r)), sq(c, sub(c, y, minus_2r)));
+    fm_node bounded = or2(c, or2(c, le(c, minus_r, x), le(c, minus_r, y)),
+                          and2(c, and2(c, le(c, minus_2r, x), le(c, minus_2r, y)),
+                               le(c, sq(c, r), lim2)));
+    fm_node four_r = mul(c, K(c, 4.0), r);
+    fm_node xx = fm_neg(c->g, dvd(c, sq(c, x), four_r)); /* the parabola y = -x^2 / 4R */
+    fm_node yy = fm_neg(c->g, dvd(c, sq(c, y), four_r));
+    fm_node inside_angle = and2(c, le(c, x, yy), le(c, y, xx));
+
+    /* The root lies in [max(-x, -y) / 2s, min(s, sqrt(min(-x, -y)))]: at the
+     * lower end P - C has a zero component (the parabolas are where it
+     * becomes negative), at the upper end the level -m^2 is below both x and
+     * y or below -R. Newton starts at the upper end, where psi <= 0. */
+    fm_node neg_min = fm_neg(c->g, fm_min(c->g, x, y)), neg_max = fm_neg(c->g, fm_max(c->g, x, y));
+    fm_node m_lo = dvd(c, neg_min, two_s);
+    /* max(.., 0): the same value on the branch (x, y < 0), and never NaN
+     * elsewhere, since a maybe-NaN operand of min/max makes its interval
+     * take the other operand whole, and the Newton iterate's is unbounded. */
+    fm_node m_hi = fm_min(c->g, s, rt(c, fm_max(c->g, neg_max, K(c, 0.0))));
+    fm_node m = m_hi;
+    for (int i = 0; i < SARDF_NEWTON_STEPS; i++) {
+        fm_node shift = mul(c, two_s, m);
+        fm_node px = add(c, x, shift), py = add(c, y, shift);
+        fm_node dist = rt(c, add(c, sq(c, px), sq(c, py)));
+        fm_node psi = sub(c, sub(c, shift, sq(c, m)), dist);
+        fm_node dpsi = sub(c, sub(c, two_s, mul(c, K(c, 2.0), m)),
+                           dvd(c, mul(c, two_s, add(c, px, py)), dist));
+        m = sub(c, m, dvd(c, psi, dpsi));
+    }
+    m = clamp(c, m, m_lo, m_hi);
+    fm_node angle = sel(c, inside_angle, fm_neg(c->g, sq(c, m)), sel(c, lt(c, xx, y), y, x));
+
+    /* Fixed radius R: (x - d + R)^2 + (y - d + R)^2 = R^2, HyperFun's root
+     * (-b - sqrt(b^2 - 8c)) / 4 of 2d^2 - 2(x + y + 2R) d + c = 0, which
+     * simplifies to d = (x + y + 2R - sqrt(2R^2 - (x - y)^2)) / 2. */
+    fm_node diff = sub(c, x, y);
+    fm_node disc = sub(c, mul(c, K(c, 2.0), sq(c, r)), sq(c, diff));
+    fm_node strip_d = mul(c, K(c, 0.5), sub(c, add(c, add(c, x, y), mul(c, K(c, 2.0), r)),
+                                            rt(c, fm_max(c->g, disc, K(c, 0.0)))));
+    fm_node strip = sel(c, lt(c, y, sub(c, x, r)), x, sel(c, lt(c, add(c, x, r), y), y, strip_d));
+    return sel(c, bounded, angle, strip);
+}
+
+/* HyperFun's uni_sardef_1(f1, f2, R, alpha). HyperFun snaps |f| < 1e-7 to
+ * the axis cases; those values are the limits of the neighbouring cases,
+ * so the cases are taken here on the exact signs (a continuous function,
+ * within 1e-7 of HyperFun's in that band). */
+static fm_node sardf_union(ctx_t *c, fm_node x, fm_node y, fm_node r, fm_node alpha)
+{
+    fm_node zero = K(c, 0.0);
+    fm_node t = un(c, FM_OP_TAN, alpha);
+    fm_node q1 = and2(c, lt(c, zero, x), lt(c, zero, y));
+    fm_node q3 = and2(c, lt(c, x, zero), lt(c, y, zero));
+    return sel(c, q1, sardf_q1(c, x, y, t), sel(c, q3, sardf_q3(c, x, y, r), fm_max(c->g, x, y)));
+}
+
+/* R > 0 (it divides) and 0 <= alpha < pi/4 (tan alpha < 1 keeps the rays
+ * x/y = tan alpha and x/y = 1/tan alpha in order) when they are constants. */
+static int sardf_args(ctx_t *c, hf_value *a)
+{
+    double k;
+    if (fm_node_is_const(c->g, a[2].scalar, &k) && !(k > 0)) {
+        bad(c, "the radius R must be positive, found %g", k);
+        return 0;
+    }
+    if (fm_node_is_const(c->g, a[3].scalar, &k) && !(k >= 0 && k < atan(1.0))) {
+        bad(c, "the angle alpha must be in [0, pi/4) radians, found %g", k);
+        return 0;
+    }
+    return 1;
+}
+
+/* hfDUni(f1, f2, R, alpha) */
+static fm_node lib_duni(ctx_t *c, hf_value *a)
+{
+    if (!sardf_args(c, a)) return FM_NONE;
+    return sardf_union(c, a[0].scalar, a[1].scalar, a[2].scalar, a[3].scalar);
+}
+
+/* hfDInt(f1, f2, R, alpha) = -uni(-f1, -f2): R bounds quadrant I, alpha
+ * shapes quadrant III. */
+static fm_node lib_dint(ctx_t *c, hf_value *a)
+{
+    if (!sardf_args(c, a)) return FM_NONE;
+    fm_graph *g = c->g;
+    return fm_neg(g, sardf_union(c, fm_neg(g, a[0].scalar), fm_neg(g, a[1].scalar), a[2].scalar,
+                                 a[3].scalar));
+}
+
+/* hfDSub(f1, f2, R, alpha) = hfDInt(f1, -f2, R, alpha) = -uni(-f1, f2) */
+static fm_node lib_dsub(ctx_t *c, hf_value *a)
+{
+    if (!sardf_args(c, a)) return FM_NONE;
+    fm_graph *g = c->g;
+    return fm_neg(g, sardf_union(c, fm_neg(g, a[0].scalar), a[1].scalar, a[2].scalar, a[3].scalar));
+}
+
 /* The table. Signatures: p a point array (read), x a point array changed in
  * place, c a 3-element array (centre, vertex, vector), a an array, r a
  * number. */
@@ -489,6 +653,9 @@ static const hf_lib_fn library[] = {
     {"hfDTorusX", "pcrr", lib_dtorus_x},
     {"hfDTorusY", "pcrr", lib_dtorus_y},
     {"hfDTorusZ", "pcrr", lib_dtorus_z},
+    {"hfDUni", "rrrr", lib_duni},
+    {"hfDInt", "rrrr", lib_dint},
+    {"hfDSub", "rrrr", lib_dsub},
 };
 
 #define LIBRARY_SIZE (sizeof library / sizeof library[0])

@@ -204,6 +204,216 @@ static double f_dtorus_x(const double x[3]) { return dtorus(D0, sqrt(sqr(D1) + s
 static double f_dtorus_y(const double x[3]) { return dtorus(D1, sqrt(sqr(D0) + sqr(D2))); }
 static double f_dtorus_z(const double x[3]) { return dtorus(D2, sqrt(sqr(D0) + sqr(D1))); }
 
+
+/* ---- SARDF set operations (HyperFun sardf.c, uni_sardef_1 / int_sardef_1),
+ * written out here case by case as HyperFun does, with its quadratics in
+ * their textbook form and its quartics solved by bisection on the quartic
+ * polynomial itself (the library uses Newton on the circle distance). ---- */
+
+/* The root of HyperFun's quartic m^4 - 4s m^3 - 4R m^2 + 4s k m - (x^2 + y^2)
+ * (k = -(x + y) for the union, x + y for the intersection) in
+ * [lo, s], where it is positive at lo and negative at s. */
+static double quartic_root(double x, double y, double r, double k, double lo)
+{
+    double s = sqrt(r), hi = s;
+    for (int i = 0; i < 200; i++) {
+        double m = 0.5 * (lo + hi);
+        double h = m * m * m * m - 4 * s * m * m * m - 4 * r * m * m + 4 * s * k * m - (x * x + y * y);
+        if (h > 0) lo = m;
+        else hi = m;
+    }
+    return 0.5 * (lo + hi);
+}
+
+static double ref_union(double x, double y, double r, double alpha)
+{
+    if (x > 0 && y > 0) {
+        double t = tan(alpha), g = 1 / t, g2 = t, gt = x / y;
+        if (gt < g && gt > g2) {
+            double a = t * t + 2 * t - 1, b = -2 * t * (x + y), c = x * x + y * y;
+            return (-b - sqrt(b * b - 4 * a * c)) / (2 * a);
+        }
+        return gt >= g ? x : y;
+    }
+    if (x < 0 && y < 0) {
+        double lim2 = sqr(x + 2 * r) + sqr(y + 2 * r);
+        if (x >= -r || y >= -r || (x >= -2 * r && y >= -2 * r && lim2 >= r * r)) {
+            double xx = -x * x / (4 * r), yy = -y * y / (4 * r);
+            if (x <= yy && y <= xx) {
+                double m = quartic_root(x, y, r, -(x + y), fmax(-x, -y) / (2 * sqrt(r)));
+                return -m * m;
+            }
+            return y > xx ? y : x;
+        }
+        if (y <= x + r && y >= x - r) {
+            double a = 2, b = -2 * x - 4 * r - 2 * y, c = x * x + y * y + r * r + 2 * x * r + 2 * y * r;
+            return (-b - sqrt(b * b - 4 * a * c)) / (2 * a);
+        }
+        return y < x - r ? x : y;
+    }
+    return x > y ? x : y;
+}
+
+static double ref_inter(double x, double y, double r, double alpha)
+{
+    if (x > 0 && y > 0) {
+        double lim = sqr(x - 2 * r) + sqr(y - 2 * r);
+        if (x <= r || y <= r || (x <= 2 * r && y <= 2 * r && lim >= r * r)) {
+            double xx = x * x / (4 * r), yy = y * y / (4 * r);
+            if (xx <= y && yy <= x) {
+                double m = quartic_root(x, y, r, x + y, fmax(x, y) / (2 * sqrt(r)));
+                return m * m;
+            }
+            return xx > y ? y : x;
+        }
+        if (y <= x + r && y >= x - r) {
+            double a = 2, b = -2 * x + 4 * r - 2 * y, c = x * x + y * y + r * r - 2 * x * r - 2 * y * r;
+            return (-b + sqrt(b * b - 4 * a * c)) / (2 * a);
+        }
+        return y < x - r ? y : x;
+    }
+    if (x < 0 && y < 0) {
+        double t = tan(alpha), g = 1 / t, g2 = t, gt = x / y;
+        if (gt < g && gt > g2) {
+            double a = 1 - t * t - 2 * t, b = 2 * t * (x + y), c = -x * x - y * y;
+            return (-b - sqrt(b * b - 4 * a * c)) / (2 * a);
+        }
+        return gt >= g ? x : y;
+    }
+    return x < y ? x : y;
+}
+
+static double f_duni(const double x[3]) { return ref_union(x[0], x[1], 1, 0.3); }
+static double f_duni_a0(const double x[3]) { return ref_union(x[0], x[1], 0.5, 0); }
+static double f_duni_a45(const double x[3]) { return ref_union(x[0], x[1], 2, 0.45); }
+static double f_dint(const double x[3]) { return ref_inter(x[0] - x[2], x[1], 0.7, 0.2); }
+static double f_dsub(const double x[3]) { return ref_inter(x[0], -(0.5 * x[1] + x[2]), 1.3, 0.1); }
+/* a torus minus a cylinder, the way a model uses them */
+static double f_dsub_solids(const double x[3])
+{
+    return ref_inter(dtorus(D2, sqrt(sqr(D0) + sqr(D1))), -f_dcylinder(x), 0.25, 0.15);
+}
+
+/* Values worked by hand at chosen points. */
+static double eval_at(const char *expr, double x, double y)
+{
+    char src[512];
+    snprintf(src, sizeof src, "t(x[3], a[1])\n{\nt = %s;\n}\n", expr);
+    fm_graph *g = fm_graph_new(0);
+    fm_hf_model m;
+    fm_error err;
+    double v = NAN;
+    if (fm_hf_compile_string(g, src, strlen(src), "lib", NULL, NULL, &m, &err) == FM_OK) {
+        double p[4] = {x, y, 0, 0};
+        v = fm_graph_eval_reference(g, m.root, p);
+    }
+    fm_graph_free(g);
+    return v;
+}
+
+static void check_sardf_by_hand(void)
+{
+    const char *uni0 = "hfDUni(x[1], x[2], 1, 0)";
+    /* alpha = 0: the quadrant I circle has centre 0, radius d: |(x, y)| */
+    CHECK_NEAR(eval_at(uni0, 3, 4), 5.0, 1e-14);
+    CHECK_NEAR(eval_at(uni0, -1, 2), 2.0, 1e-14); /* quadrant II: the positive one */
+    /* far in quadrant III, in the strip: circle radius R centre (d - R, d - R)
+     * through (-10, -10): d = -10 + R - R / sqrt 2 */
+    CHECK_NEAR(eval_at(uni0, -10, -10), -10 + 1 - sqrt(0.5), 1e-14);
+    CHECK_NEAR(eval_at(uni0, -10, -20), -10.0, 1e-14); /* outside the strip: x */
+    /* quadrant III near the corner: on the diagonal the quartic factors,
+     * x = y = -2sm + (2sm - m^2)/sqrt 2; m = 1/2, R = 1 gives
+     * x = -1 + 0.75/sqrt 2 and d = -1/4 */
+    CHECK_NEAR(eval_at(uni0, -1 + 0.75 * sqrt(0.5), -1 + 0.75 * sqrt(0.5)), -0.25, 1e-14);
+    /* intersection, quadrant I beyond 2R, in the strip: the circle radius
+     * R = 1 centre (d + 1, d + 1) through (3, 4) has d = 3 */
+    CHECK_NEAR(eval_at("hfDInt(x[1], x[2], 1, 0.2)", 3, 4), 3.0, 1e-14);
+    /* subtraction of a positive f2 from f1 in quadrant IV: min(f1, -f2) */
+    CHECK_NEAR(eval_at("hfDSub(x[1], x[2], 1, 0.2)", 2, 0.5), -0.5, 1e-14);
+}
+
+/* Interval soundness on random boxes (every sampled value inside the
+ * enclosure, the enclosure finite) and the gradient against central
+ * differences wherever the function is smooth at the step's scale. */
+static void check_sardf_eval(const char *expr)
+{
+    char src[512];
+    snprintf(src, sizeof src, "t(x[3], a[1])\n{\nt = %s;\n}\n", expr);
+    fm_graph *g = fm_graph_new(0);
+    fm_hf_model m;
+    fm_error err;
+    CHECK(fm_hf_compile_string(g, src, strlen(src), "lib", NULL, NULL, &m, &err) == FM_OK);
+    fm_tape *tape = fm_tape_compile(g, m.root, &err);
+    CHECK(tape != NULL);
+    fm_evaluator *ev = tape ? fm_evaluator_new(tape, &err) : NULL;
+    CHECK(ev != NULL);
+    int unsound = 0, infinite = 0, grad_bad = 0, smooth = 0;
+    for (int b = 0; ev && b < 400; b++) {
+        double w = test_uniform(0.001, 2);
+        fm_interval box[4] = {{0, 0}, {0, 0}, {0, 0}, {0, 0}};
+        for (int i = 0; i < 3; i++) {
+            box[i].lo = test_uniform(-3, 3);
+            box[i].hi = box[i].lo + w * test_rand01();
+        }
+        fm_interval r = fm_eval_interval(ev, box);
+        if ((!isfinite(r.lo) || !isfinite(r.hi)) && infinite++ < 2)
+            fprintf(stderr, "%s: [%g, %g] on [%g, %g] x [%g, %g] x [%g, %g]\n", expr, r.lo, r.hi,
+                    box[0].lo, box[0].hi, box[1].lo, box[1].hi, box[2].lo, box[2].hi);
+        for (int k = 0; k < 40; k++) {
+            double p[4] = {0, 0, 0, 0};
+            for (int i = 0; i < 3; i++) p[i] = test_uniform(box[i].lo, box[i].hi);
+            double v = fm_eval_point(ev, p);
+            if (!(v >= r.lo && v <= r.hi) && unsound++ < 3)
+                fprintf(stderr, "%s: f(%g, %g, %g) = %.17g outside [%.17g, %.17g]\n", expr, p[0],
+                        p[1], p[2], v, r.lo, r.hi);
+        }
+        double p[4] = {test_uniform(-3, 3), test_uniform(-3, 3), test_uniform(-3, 3), 0}, gr[4];
+        double v = fm_eval_grad(ev, p, gr);
+        CHECK_NEAR(v, fm_graph_eval_reference(g, m.root, p), 1e-12);
+        const double h = 1e-6;
+        for (int i = 0; i < 3; i++) {
+            double q[4] = {p[0], p[1], p[2], 0};
+            q[i] = p[i] + h;
+            double up = fm_eval_point(ev, q);
+            q[i] = p[i] - h;
+            double down = fm_eval_point(ev, q);
+            /* a branch boundary within h shows as unequal one-sided slopes */
+            if (fabs((up - v) / h - (v - down) / h) > 1e-4) continue;
+            smooth++;
+            if (!(fabs(gr[i] - (up - down) / (2 * h)) <= 1e-5 * (1 + fabs(gr[i]))) && grad_bad++ < 3)
+                fprintf(stderr, "%s: df/dx%d at (%g, %g, %g) = %.12g, differences %.12g\n", expr,
+                        i + 1, p[0], p[1], p[2], gr[i], (up - down) / (2 * h));
+        }
+    }
+    CHECK(unsound == 0);
+    CHECK(infinite == 0);
+    CHECK(grad_bad == 0);
+    CHECK(smooth > 900);
+    fm_evaluator_free(ev);
+    fm_tape_free(tape);
+    fm_graph_free(g);
+}
+
+static void check_sardf_errors(void)
+{
+    const char *bad[][2] = {
+        {"hfDUni(x[1], x[2], 0, 0.2)", "hfDUni: the radius R must be positive"},
+        {"hfDInt(x[1], x[2], -1, 0.2)", "hfDInt: the radius R must be positive"},
+        {"hfDSub(x[1], x[2], 1, 0.8)", "hfDSub: the angle alpha must be in [0, pi/4)"},
+        {"hfDUni(x[1], x[2], 1, -0.1)", "hfDUni: the angle alpha must be in [0, pi/4)"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        char src[256], buf[800];
+        snprintf(src, sizeof src, "t(x[3], a[1])\n{\nt = %s;\n}\n", bad[i][0]);
+        fm_graph *g = fm_graph_new(0);
+        fm_hf_model m;
+        fm_error err;
+        CHECK(fm_hf_compile_string(g, src, strlen(src), "lib", NULL, NULL, &m, &err) != FM_OK);
+        CHECK_STR_CONTAINS(fm_error_format(&err, buf, sizeof buf), bad[i][1]);
+        fm_graph_free(g);
+    }
+}
+
 int main(void)
 {
     const double tol = 1e-12;
@@ -256,5 +466,17 @@ int main(void)
     check("", "hfDTorusX(x, c, 2, 0.5)", f_dtorus_x, tol);
     check("", "hfDTorusY(x, c, 2, 0.5)", f_dtorus_y, tol);
     check("", "hfDTorusZ(x, c, 2, 0.5)", f_dtorus_z, tol);
+    check("", "hfDUni(x[1], x[2], 1, 0.3)", f_duni, tol);
+    check("", "hfDUni(x[1], x[2], 0.5, 0)", f_duni_a0, tol);
+    check("", "hfDUni(x[1], x[2], 2, 0.45)", f_duni_a45, tol);
+    check("", "hfDInt(x[1] - x[3], x[2], 0.7, 0.2)", f_dint, tol);
+    check("", "hfDSub(x[1], 0.5*x[2] + x[3], 1.3, 0.1)", f_dsub, tol);
+    check("", "hfDSub(hfDTorusZ(x, c, 2, 0.5), hfDCylinder(x, c, u, 1), 0.25, 0.15)",
+          f_dsub_solids, tol);
+    check_sardf_by_hand();
+    check_sardf_eval("hfDUni(x[1], x[2], 1, 0.3)");
+    check_sardf_eval("hfDInt(x[1] - x[3], x[2], 0.7, 0.2)");
+    check_sardf_eval("hfDSub(x[1], 0.5*x[2] + x[3], 1.3, 0.1)");
+    check_sardf_errors();
     return test_summary("hf_library");
 }
