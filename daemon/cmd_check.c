@@ -13,15 +13,13 @@
 #include <string.h>
 
 #include "check/check.h"
+#include "check_pass.h"
 #include "commands.h"
 #include "findings_json.h"
 #include "job.h"
 
 #define CHECK_MAX_FIXTURES 32
-/* The check's own voxel: coarse, because the relations bound the stock's
- * distance from above instead of trusting the grid (docs/check.md). */
-#define CHECK_DEFAULT_VOXEL 0.5
-#define CHECK_DEFAULT_BAND 4
+#define CHECK_DEFAULT_VOXEL FM_CHECK_PASS_VOXEL
 
 static void usage(FILE *out)
 {
@@ -64,32 +62,9 @@ static int has_extension(const char *path, const char *ext)
     return 1;
 }
 
-/* "box:X0,Y0,Z0,X1,Y1,Z1" gives the check the exact initial stock. */
-static int parse_box(const char *spec, double lo[3], double hi[3])
-{
-    double v[6];
-    if (strncmp(spec, "box:", 4)) return 0;
-    if (sscanf(spec + 4, "%lf,%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5]) != 6)
-        return 0;
-    for (int a = 0; a < 3; a++) {
-        lo[a] = v[a];
-        hi[a] = v[a + 3];
-    }
-    return 1;
-}
-
 typedef struct check_run {
     fm_check *check;
-    fm_status status;
-    fm_error err;
 } check_run;
-
-static int before_motion(void *user, const fm_motion *m, const fm_tool *tool, fm_stock *stock)
-{
-    check_run *r = user;
-    r->status = fm_check_motion(r->check, m, tool, stock, &r->err);
-    return r->status != FM_OK;
-}
 
 static int exit_status(fm_status st)
 {
@@ -126,12 +101,11 @@ static void summary(const fm_check *check, const fm_job_result *res)
 
 int fm_cmd_check(int argc, char **argv)
 {
-    fm_job_spec spec;
-    fm_job_spec_default(&spec);
+    fm_check_pass_input in;
+    fm_check_pass_input_default(&in);
+    fm_job_spec spec = in.spec;
     spec.stock.voxel_mm = CHECK_DEFAULT_VOXEL;
-    spec.stock.band_voxels = CHECK_DEFAULT_BAND;
-    fm_check_options opt;
-    fm_check_options_default(&opt);
+    fm_check_options opt = in.options;
     const char *fixtures[CHECK_MAX_FIXTURES];
     int fixture_count = 0;
     const char *report_path = NULL, *machine_path = NULL;
@@ -221,41 +195,19 @@ int fm_cmd_check(int argc, char **argv)
     }
     if (rapid_rate > 0) spec.rapid_rate = rapid_rate;
 
+    in.spec = spec;
+    in.check_voxel_mm = spec.stock.voxel_mm;
+    in.options = opt;
+    for (int i = 0; i < fixture_count; i++) in.fixtures[i] = fixtures[i];
+    in.fixture_count = fixture_count;
     check_run run = {0};
-    run.check = fm_check_new(&opt, &err);
-    if (!run.check) {
-        fprintf(stderr, "frepmill check: %s\n", fm_error_format(&err, buf, sizeof buf));
-        return exit_status(err.code);
-    }
-    double lo[3], hi[3];
-    if (parse_box(spec.stock_spec, lo, hi)) fm_check_set_initial_box(run.check, lo, hi);
-    for (int i = 0; i < fixture_count; i++) {
-        fm_status st = has_extension(fixtures[i], ".hf")
-                           ? fm_check_add_fixture_hf(run.check, fixtures[i], NULL, &err)
-                           : fm_check_add_fixture_stl(run.check, fixtures[i], spec.stock.voxel_mm, &err);
-        if (st != FM_OK) {
-            fprintf(stderr, "frepmill check: %s\n", fm_error_format(&err, buf, sizeof buf));
-            fm_check_free(run.check);
-            return exit_status(st);
-        }
-    }
-
-    fm_job_hooks hooks = {.user = &run, .before_motion = before_motion};
     fm_job_result result;
-    fm_status st = fm_job_run(&spec, &hooks, &result, &err);
-    if (st == FM_OK && run.status != FM_OK) {
-        fm_stock_free(result.stock);
-        st = run.status;
-        err = run.err;
-    }
+    fm_status st = fm_check_pass_run(&in, &run.check, &result, &err);
     if (st != FM_OK) {
         fprintf(stderr, "frepmill check: %s\n", fm_error_format(&err, buf, sizeof buf));
-        fm_check_free(run.check);
         return exit_status(st);
     }
-    fm_check_finish(run.check);
     summary(run.check, &result);
-    fm_stock_free(result.stock);
 
     int status = fm_check_count(run.check) ? 1 : 0;
     json_t *report = fm_findings_json(run.check);

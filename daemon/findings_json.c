@@ -54,6 +54,15 @@ fm_status fm_check_machine_load(const char *path, fm_check_machine *m, fm_error 
                                je.text);
         return fm_error_at(err, FM_ERR_INPUT, path, je.line, je.column, "%s", je.text);
     }
+    fm_status st = fm_check_machine_from_json(root, path, m, err);
+    json_decref(root);
+    return st;
+}
+
+fm_status fm_check_machine_from_json(json_t *root, const char *path, fm_check_machine *m,
+                                     fm_error *err)
+{
+    memset(m, 0, sizeof *m);
     fm_status st = FM_OK;
     if (!json_is_object(root)) {
         st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "a machine file is a JSON object");
@@ -119,6 +128,5 @@ fm_status fm_check_machine_load(const char *path, fm_check_machine *m, fm_error 
         goto done;
     }
 done:
-    json_decref(root);
     return st;
 }

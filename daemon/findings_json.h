@@ -18,5 +18,9 @@ json_t *fm_findings_json(const fm_check *check);
  * "z": [...]}, "rapid_rate": mm/min, "start": [x, y, z]}; every member is
  * optional. FM_ERR_INPUT names the file and the member when it is wrong. */
 fm_status fm_check_machine_load(const char *path, fm_check_machine *machine, fm_error *err);
+/* The same from a JSON value (the daemon's options.check.machine); name
+ * stands for the file in messages. */
+fm_status fm_check_machine_from_json(json_t *root, const char *name, fm_check_machine *machine,
+                                     fm_error *err);
 
 #endif

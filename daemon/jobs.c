@@ -23,6 +23,9 @@
 #include <unistd.h>
 
 #include "job.h"
+#ifdef FM_HAVE_CHECK
+#include "jobs_check.h"
+#endif
 #include "jobs_internal.h"
 #include "log.h"
 #include "store.h"
@@ -96,6 +99,7 @@ static void job_free(job *j)
     json_decref(j->spec);
     json_decref(j->error);
     json_decref(j->report);
+    json_decref(j->findings);
     pthread_mutex_destroy(&j->lock);
     pthread_mutex_destroy(&j->load_lock);
     pthread_cond_destroy(&j->cond);
@@ -146,14 +150,15 @@ json_t *fm_jobs_status_json(job *j)
     const fm_job_view *v = &j->view;
     json_t *name = json_object_get(json_object_get(j->spec, "options"), "name");
     json_t *out = json_pack(
-        "{s:s, s:s, s:b, s:f, s:i, s:I, s:i, s:[f,f,f], s:f, s:f, s:f, s:f, s:I, s:I, s:[], "
+        "{s:s, s:s, s:b, s:f, s:i, s:I, s:i, s:[f,f,f], s:f, s:f, s:f, s:f, s:I, s:I, s:o, "
         "s:O?, s:I, s:f, s:O?}",
         "id", j->id, "state", fm_job_state_name(j->state), "paused", j->paused, "progress",
         v->progress, "line", v->line, "block", (json_int_t)v->block, "tool", v->tool, "position",
         v->position[0], v->position[1], v->position[2], "program_time_s", v->program_time_s,
         "removed_volume_mm3", v->removed_mm3, "stock_volume_mm3", v->stock_mm3,
         "initial_volume_mm3", j->initial_mm3, "motions_done", (json_int_t)j->motions_done,
-        "motions_total", (json_int_t)j->motions_total, "findings", "error", j->error,
+        "motions_total", (json_int_t)j->motions_total, "findings",
+        j->findings ? json_incref(j->findings) : json_array(), "error", j->error,
         "mesh_version", (json_int_t)j->mesh_version, "created", j->created, "name", name);
     pthread_mutex_unlock(&j->lock);
     return out;
@@ -185,6 +190,26 @@ static void write_result(fm_jobs *jobs, job *j)
     json_decref(result);
 }
 
+/* Publish the check's findings (caller holds j->lock, or owns j alone). */
+static void set_findings(job *j, json_t *findings)
+{
+    json_decref(j->findings);
+    j->findings = json_incref(findings);
+    fm_job_view *v = &j->view;
+    v->finding_count = (int)json_array_size(findings);
+    v->error_finding_count = 0;
+    size_t i;
+    json_t *f;
+    json_array_foreach(findings, i, f)
+    {
+        const char *severity = json_string_value(json_object_get(f, "severity"));
+        if (severity && !strcmp(severity, "error")) v->error_finding_count++;
+    }
+    v->first_finding_line =
+        v->finding_count ? (int)json_integer_value(json_object_get(json_array_get(findings, 0), "line"))
+                         : 0;
+}
+
 static void view_from_status(job *j, json_t *status)
 {
     fm_job_view *v = &j->view;
@@ -200,6 +225,10 @@ static void view_from_status(job *j, json_t *status)
     j->initial_mm3 = json_number_value(json_object_get(status, "initial_volume_mm3"));
     j->motions_done = (long)json_integer_value(json_object_get(status, "motions_done"));
     j->motions_total = (long)json_integer_value(json_object_get(status, "motions_total"));
+    json_t *findings = json_object_get(status, "findings");
+    if (json_is_array(findings)) {
+        set_findings(j, findings);
+    }
     json_t *error = json_object_get(status, "error");
     if (json_is_object(error)) {
         j->error = json_incref(error);
@@ -412,6 +441,9 @@ static int check_tools(json_t *spec, fm_http_error *err)
 int fm_jobs_submit(fm_jobs *jobs, json_t *spec, char *id, size_t id_size, fm_http_error *err)
 {
     if (check_tools(spec, err) || check_budget(jobs, spec, err)) return err->status;
+#ifdef FM_HAVE_CHECK
+    if (fm_jobs_check_validate(spec, err)) return err->status;
+#endif
     pthread_mutex_lock(&jobs->lock);
     size_t live = 0;
     for (size_t i = 0; i < jobs->count; i++) live += !jobs->table[i]->deleted;
@@ -854,6 +886,28 @@ static void run_job(fm_jobs *jobs, job *j)
             fm_error_clear(&err);
         }
     }
+#ifdef FM_HAVE_CHECK
+    /* The collision check first, as its own coarse pass (check_pass.h):
+     * the findings are known before the simulation starts (a gate wants
+     * them early) and are the ones `frepmill check` gives. */
+    if (st == FM_OK && fm_jobs_check_enabled(j->spec)) {
+        fm_jobs_check_result cr;
+        double t0 = mono_s();
+        st = fm_jobs_check_run(j->spec, j->dir, spec.stock.memory_budget, &cr, &err);
+        if (st == FM_OK) {
+            pthread_mutex_lock(&j->lock);
+            set_findings(j, cr.findings);
+            size_t i;
+            json_t *f;
+            json_array_foreach(cr.findings, i, f) emit(j, "finding", json_incref(f));
+            pthread_mutex_unlock(&j->lock);
+            fm_log(cr.errors ? FM_LOG_WARN : FM_LOG_INFO,
+                   "job %s: check: %d errors, %d warnings (first at line %d) in %.2f s", j->id,
+                   cr.errors, cr.warnings, cr.first_line, mono_s() - t0);
+            json_decref(cr.findings);
+        }
+    }
+#endif
     if (st == FM_OK) fm_log(FM_LOG_INFO, "job %s: running", j->id);
 
     fm_job_result result;

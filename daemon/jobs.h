@@ -50,6 +50,7 @@ typedef struct fm_job_view {
     double stock_mm3;
     double removal_rate_mm3_s;
     int finding_count;
+    int error_finding_count; /* findings of severity "error": the collision alarm */
     int first_finding_line;
     int error_code; /* fm_status of a failed job, 0 if none */
 } fm_job_view;

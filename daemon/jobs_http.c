@@ -10,6 +10,9 @@
 #include <time.h>
 #include <unistd.h>
 
+#ifdef FM_HAVE_CHECK
+#include "jobs_check.h"
+#endif
 #include "jobs_internal.h"
 
 static int not_found(const char *id, fm_http_error *err)
@@ -264,6 +267,17 @@ static int svc_events(void *ctx, const char *id, uint64_t after, int timeout_ms,
     return n;
 }
 
+#ifdef FM_HAVE_CHECK
+/* Runs on the request's own connection thread (libmicrohttpd's thread per
+ * connection), so a check blocks only its caller; size and concurrency are
+ * bounded in fm_jobs_check_request. */
+static int svc_check(void *ctx, json_t *request, json_t **out, fm_http_error *err)
+{
+    fm_jobs *jobs = ctx;
+    return fm_jobs_check_request(jobs->state_dir, jobs->cfg.job_memory_bytes, request, out, err);
+}
+#endif
+
 void fm_jobs_http_service(fm_jobs *jobs, fm_http_service *out)
 {
     memset(out, 0, sizeof *out);
@@ -280,5 +294,9 @@ void fm_jobs_http_service(fm_jobs *jobs, fm_http_service *out)
     out->chunk = svc_chunk;
     out->stock_path = svc_stock_path;
     out->events = svc_events;
-    out->check = NULL; /* lib/check is not built yet: 501 */
+#ifdef FM_HAVE_CHECK
+    out->check = svc_check;
+#else
+    out->check = NULL; /* lib/check is not built: 501 */
+#endif
 }

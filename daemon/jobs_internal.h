@@ -53,6 +53,7 @@ typedef struct job {
     double initial_mm3;
     json_t *error;     /* {"code","message","line","column","file"} or NULL */
     json_t *report;    /* the result of a finished job, or NULL */
+    json_t *findings;  /* the collision check's findings (array), NULL until checked */
     job_chunk *chunks;
     size_t chunk_count, chunk_cap;
     uint64_t mesh_version; /* stock version of the published chunks */

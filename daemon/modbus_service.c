@@ -31,7 +31,9 @@ static void read_status(void *ctx, fm_modbus_status *out)
     if (v.paused) out->bits |= FM_MODBUS_BIT_PAUSED;
     if (v.state == FM_JOB_DONE) out->bits |= FM_MODBUS_BIT_DONE;
     if (v.state == FM_JOB_FAILED) out->bits |= FM_MODBUS_BIT_ERROR;
-    if (v.finding_count) out->bits |= FM_MODBUS_BIT_COLLISION;
+    /* The alarm is for errors (contact deeper than the tolerance); warnings
+     * (near misses) only count in register 23. */
+    if (v.error_finding_count) out->bits |= FM_MODBUS_BIT_COLLISION;
     out->block = v.block >= 0 ? (uint32_t)v.block : 0;
     out->source_line = v.line > 0 ? (uint32_t)v.line : 0;
     out->progress_permille = (uint16_t)(v.progress * 1000 + 0.5);

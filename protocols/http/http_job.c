@@ -216,13 +216,26 @@ static int fixtures_ok(json_t *fixtures, fm_http_error *err)
     json_array_foreach(fixtures, i, f) {
         char where[64];
         snprintf(where, sizeof where, "fixtures[%zu]", i);
-        static const char *const keys[] = {"hyperfun", "name", NULL};
-        if (!json_is_object(f) || !json_object_get(f, "hyperfun")) {
-            fm_http_error_set(err, 400, "bad_fixture", "%s must be {\"hyperfun\": TEXT}", where);
+        static const char *const keys[] = {"hyperfun", "stl_base64", "name", NULL};
+        json_t *hf = json_is_object(f) ? json_object_get(f, "hyperfun") : NULL;
+        json_t *stl = json_is_object(f) ? json_object_get(f, "stl_base64") : NULL;
+        if (!hf == !stl) {
+            fm_http_error_set(err, 400, "bad_fixture",
+                              "%s must be {\"hyperfun\": TEXT} or {\"stl_base64\": TEXT}", where);
             return 0;
         }
         if (!only_keys(f, keys, where, err)) return 0;
-        if (!text_ok(json_object_get(f, "hyperfun"), where, FM_HTTP_JOB_MAX_TEXT, err)) return 0;
+        if (!text_ok(hf ? hf : stl, where, FM_HTTP_JOB_MAX_TEXT, err)) return 0;
+        if (stl) {
+            uint8_t *bytes;
+            size_t n;
+            if (fm_http_base64_decode(json_string_value(stl), json_string_length(stl), &bytes, &n)) {
+                fm_http_error_set(err, 400, "bad_fixture", "%s.stl_base64 is not valid base64",
+                                  where);
+                return 0;
+            }
+            free(bytes);
+        }
         json_t *name = json_object_get(f, "name");
         if (name && !text_ok(name, where, 128, err)) return 0;
     }
@@ -236,9 +249,16 @@ static int options_ok(json_t *options, fm_http_error *err)
         return 0;
     }
     static const char *const keys[] = {"name", "band", "batch", "rapid_rate", "memory_budget_mb",
-                                       "threads", NULL};
+                                       "threads", "check", NULL};
     if (!only_keys(options, keys, "options", err)) return 0;
     json_t *v;
+    /* The members of a check object are the daemon's to validate (they
+     * are lib/check's options); here only its shape. */
+    if ((v = json_object_get(options, "check")) && !json_is_object(v) && !json_is_boolean(v)) {
+        fm_http_error_set(err, 400, "bad_type",
+                          "options.check must be false (no collision check) or an object");
+        return 0;
+    }
     if ((v = json_object_get(options, "name")) && !text_ok(v, "options.name", 128, err)) return 0;
     if ((v = json_object_get(options, "band")) &&
         (!number_in(v, "options.band", 2, 32, NULL, err))) return 0;
