@@ -37,24 +37,116 @@ static double box_dist(const double p[3], const double lo[3], const double hi[3]
     return sqrt(d2);
 }
 
+/* Below this many sweeps the per-call ordering costs more than it saves. */
+#define MANY_ORDER_MIN 3
+
+typedef struct many_rank {
+    double up; /* proven upper bound of S_i at the centre of the points' box */
+    size_t i;
+} many_rank;
+
+static int rank_by_up_desc(const void *a, const void *b)
+{
+    double x = ((const many_rank *)a)->up, y = ((const many_rank *)b)->up;
+    return x > y ? -1 : x < y ? 1 : 0;
+}
+
 static void many_batch(void *ctx, void *worker, size_t n, const double *x, const double *y, const double *z,
                        double *out)
 {
     many_ctx *c = ctx;
+    if (n == 0) return;
+    if (c->n < MANY_ORDER_MIN) {
+        for (size_t k = 0; k < n; k++) {
+            double p[3] = {x[k], y[k], z ? z[k] : 0};
+            double best = -DBL_MAX;
+            for (size_t i = 0; i < c->n; i++) {
+                double v = fm_sweep_eval(c->sweeps[i], worker, p);
+                if (v > best) best = v;
+            }
+            out[k] = best;
+        }
+        return;
+    }
+    /* Each S_i is 1-Lipschitz (max of exact distances; for custom parts the
+     * interval of the points' box stands in), so with q the centre of the
+     * points' box, S_i(p) <= U_i + |p - q| where U_i bounds S_i(q), and
+     * S(p) >= L = max_i of the lower ends over the box. Sweeps whose bound
+     * stays below L anywhere in the box never win; the rest, tried in
+     * decreasing U_i, stop as soon as U_i + |p - q| cannot beat the best
+     * value found at p. The result is the same max. */
+    double lo[3] = {x[0], y[0], z ? z[0] : 0}, hi[3] = {x[0], y[0], z ? z[0] : 0};
+    for (size_t k = 1; k < n; k++) {
+        double p[3] = {x[k], y[k], z ? z[k] : 0};
+        for (int a = 0; a < 3; a++) {
+            if (p[a] < lo[a]) lo[a] = p[a];
+            if (p[a] > hi[a]) hi[a] = p[a];
+        }
+    }
+    fm_interval box[3];
+    double q[3], hd2 = 0;
+    for (int a = 0; a < 3; a++) {
+        box[a].lo = lo[a];
+        box[a].hi = hi[a];
+        q[a] = 0.5 * (lo[a] + hi[a]);
+        hd2 += 0.25 * (hi[a] - lo[a]) * (hi[a] - lo[a]);
+    }
+    double hd = sqrt(hd2);
+    int lipschitz = c->sweeps[0]->part.kind == FM_TOOL_PART_PROFILE;
+    many_rank stack_rank[64];
+    many_rank *rank = c->n <= 64 ? stack_rank : malloc(c->n * sizeof *rank);
+    if (!rank) {
+        /* No memory for the ordering: every sweep at every point. */
+        for (size_t k = 0; k < n; k++) {
+            double p[3] = {x[k], y[k], z ? z[k] : 0}, best = -DBL_MAX;
+            for (size_t i = 0; i < c->n; i++) {
+                double v = fm_sweep_eval(c->sweeps[i], worker, p);
+                if (v > best) best = v;
+            }
+            out[k] = best;
+        }
+        return;
+    }
+    double L = -DBL_MAX;
+    size_t m = 0;
+    for (size_t i = 0; i < c->n; i++) {
+        const fm_sweep *s = c->sweeps[i];
+        double up, low;
+        if (lipschitz) {
+            /* S_i <= -dist(p, box_i): far from its box, the box alone
+             * bounds it and it needs no evaluation. */
+            double bd = box_dist(q, s->lo, s->hi);
+            if (bd > hd && -(bd - hd) < L) continue;
+            fm_sweep_value v;
+            fm_sweep_eval_ex(s, worker, q, &v);
+            up = v.upper;
+            if (bd > 0 && -bd < up) up = -bd;
+            low = v.value - hd;
+        } else {
+            fm_interval iv = fm_sweep_interval(s, worker, box);
+            up = iv.hi;
+            low = iv.lo;
+        }
+        if (low > L) L = low;
+        rank[m].up = up;
+        rank[m].i = i;
+        m++;
+    }
+    qsort(rank, m, sizeof *rank, rank_by_up_desc);
     for (size_t k = 0; k < n; k++) {
         double p[3] = {x[k], y[k], z ? z[k] : 0};
+        double e[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
+        double reach = lipschitz ? sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) : 0;
         double best = -DBL_MAX;
-        for (size_t i = 0; i < c->n; i++) {
-            const fm_sweep *s = c->sweeps[i];
-            /* Outside its box S_i is at most minus the distance to it; inside
-             * there is no such bound. */
-            double d = box_dist(p, s->lo, s->hi);
-            if (d > 0 && -d <= best) continue;
-            double v = fm_sweep_eval(s, worker, p);
+        for (size_t j = 0; j < m; j++) {
+            if (rank[j].up + reach < L) break; /* never wins in the box; nor do the rest */
+            if (rank[j].up + reach <= best) break;
+            double v = fm_sweep_eval(c->sweeps[rank[j].i], worker, p);
             if (v > best) best = v;
         }
         out[k] = best;
     }
+    if (rank != stack_rank) free(rank);
 }
 
 static fm_interval many_interval(void *ctx, void *worker, const fm_interval box[3])

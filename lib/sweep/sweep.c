@@ -162,6 +162,66 @@ static double planar_arc(const fm_sweep *s, void *pw, const double p[3], double 
     return fm_tool_profile_eval(&s->part, pw, rho, zeta, NULL);
 }
 
+/* Squared distance from p to the strip {C0 + u d + s a : u in [0, 1],
+ * s >= 0} swept by the ray up the axis from the ball centre C0 + u d, and
+ * the u of a nearest ray. The squared distance to the ray at u is
+ * |w⊥(u)|^2 where h(u) = a.w(u) >= 0 and |w(u)|^2 where h(u) <= 0
+ * (w(u) = p - C0 - u d), two convex quadratics on the two sides of the
+ * root of the linear h: minimize each over its side. */
+static double ray_dist2(const double w0[3], const double d[3], const double a[3], double u)
+{
+    double w[3] = {w0[0] - u * d[0], w0[1] - u * d[1], w0[2] - u * d[2]};
+    double h = dot3(w, a);
+    if (h > 0)
+        for (int i = 0; i < 3; i++) w[i] -= h * a[i];
+    return dot3(w, w);
+}
+
+static double clampd(double x, double lo, double hi) { return x < lo ? lo : x > hi ? hi : x; }
+
+static double strip_dist2(const fm_sweep *s, const double p[3], double *u_at)
+{
+    const double *a = s->a0, *d = s->d;
+    double off = s->part.z_lo + s->part.ball_radius;
+    double w0[3];
+    for (int i = 0; i < 3; i++) w0[i] = p[i] - s->c0[i] - off * a[i];
+    double h0 = dot3(w0, a), da = dot3(d, a);
+    /* Sides: "up" where h >= 0 (the ray's side), "down" where h <= 0. */
+    double up_lo = 0, up_hi = 1, dn_lo = 0, dn_hi = 1;
+    if (da > 0) {
+        double ub = h0 / da;
+        up_hi = fmin(1, ub);
+        dn_lo = fmax(0, ub);
+    } else if (da < 0) {
+        double ub = h0 / da;
+        up_lo = fmax(0, ub);
+        dn_hi = fmin(1, ub);
+    } else if (h0 >= 0) {
+        dn_lo = 1, dn_hi = 0;
+    } else {
+        up_lo = 1, up_hi = 0;
+    }
+    double best = DBL_MAX, ubest = 0;
+    if (up_lo <= up_hi) {
+        double dp[3], wp[3];
+        for (int i = 0; i < 3; i++) {
+            dp[i] = d[i] - da * a[i];
+            wp[i] = w0[i] - h0 * a[i];
+        }
+        double dd = dot3(dp, dp);
+        double u = clampd(dd > 0 ? dot3(wp, dp) / dd : up_lo, up_lo, up_hi);
+        double g = ray_dist2(w0, d, a, u);
+        if (g < best) best = g, ubest = u;
+    }
+    if (dn_lo <= dn_hi) {
+        double u = clampd(dot3(w0, d) / s->dd, dn_lo, dn_hi);
+        double g = ray_dist2(w0, d, a, u);
+        if (g < best) best = g, ubest = u;
+    }
+    *u_at = ubest;
+    return best;
+}
+
 /* --------------------------------------------- local, concave search -- */
 
 /* Maximize F on [ua, ub] from the values and derivatives at both ends.
@@ -541,20 +601,20 @@ void fm_sweep_eval_ex(const fm_sweep *s, fm_sweep_worker *worker, const double p
         out->evaluations = 1;
         return;
     case FM_SWEEP_CAPSULE: {
-        /* Ball centre path C(u) = c0 + (z_lo + R) a + u d. If p is not above
-         * the ball centre nearest to it, the nearest point of the
-         * parallelogram swept by the capsule core is on that path (KKT), so
-         * the sweep equals the capsule (docs/sweep.md). */
-        double R = s->part.ball_radius, off = s->part.z_lo + R;
-        double w[3];
-        for (int i = 0; i < 3; i++) w[i] = p[i] - s->c0[i] - off * s->a0[i];
-        double uu = dot3(w, s->d) / s->dd;
-        uu = uu < 0 ? 0 : uu > 1 ? 1 : uu;
-        for (int i = 0; i < 3; i++) w[i] -= uu * s->d[i];
-        if (dot3(w, s->a0) <= 0) {
-            out->value = out->upper = R - norm3(w);
+        /* The part lies in B = ball(R) + ray up the axis from the ball
+         * centre, whose signed distance is R - dist(q, ray) inside and out,
+         * so S <= R - dist(p, strip) (strip: the rays from every centre of
+         * the path). The part attains that bound at the nearest time unless
+         * its top decides there; then the concave search (docs/sweep.md). */
+        double R = s->part.ball_radius, uu;
+        double bound = R - sqrt(strip_dist2(s, p, &uu));
+        double v = eval_F(s, pw, p, uu, NULL);
+        double up = bound + 1e-12 * (1 + fabs(bound));
+        if (up - v <= 0.5 * s->tol) {
+            out->value = v;
+            out->upper = up > v ? up : v;
             out->t = s->t0 + uu * (s->t1 - s->t0);
-            out->evaluations = 0;
+            out->evaluations = 1;
             return;
         }
         concave_search(s, pw, p, out);

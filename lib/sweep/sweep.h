@@ -39,7 +39,8 @@ typedef enum fm_sweep_method {
     FM_SWEEP_STATIC = 0,  /* no movement (dwell, zero-length move): S = the part at the start pose */
     FM_SWEEP_PLANAR_LINE, /* line perpendicular to a fixed axis: closed form (stadium extrusion) */
     FM_SWEEP_PLANAR_ARC,  /* arc in the plane perpendicular to a fixed axis: closed form (ring) */
-    FM_SWEEP_CAPSULE,     /* ball-tipped part on any line: capsule where the ball decides, else CONCAVE */
+    FM_SWEEP_CAPSULE,     /* ball-tipped part on any line: closed form (the ball swept up its axis) wherever
+                             the part's top does not decide, else CONCAVE */
     FM_SWEEP_CONCAVE,     /* convex part on a line, fixed axis: t -> T is concave; certified bracketing */
     FM_SWEEP_SEARCH       /* everything else: branch-and-bound on t, then local search */
 } fm_sweep_method;

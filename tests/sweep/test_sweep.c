@@ -176,6 +176,98 @@ static void check_closed_forms(void)
     fm_sweep_free(s);
 }
 
+/* Ball end mill on 3D lines, everywhere including above the ball centres
+ * (where the cylinder body matters): the closed form (ball swept up its
+ * axis, R - distance to the strip of rays) against brute force over t,
+ * against the general path, and against the same strip distance computed
+ * here another way (2D in the strip's plane). Below the tool top's reach
+ * the closed form must decide alone (one evaluation). */
+static double strip_dist_2d(const double p[3], const double c0[3], const double d[3])
+{
+    /* Plane basis: e1 = axis (0, 0, 1), e2 = the horizontal part of d. */
+    double w[3] = {p[0] - c0[0], p[1] - c0[1], p[2] - c0[2]};
+    double dh = sqrt(d[0] * d[0] + d[1] * d[1]);
+    if (dh < 1e-12) {
+        /* A vertical move: the strip is the ray from the lower centre. */
+        double zlo = fmin(0, d[2]);
+        double dz = w[2] < zlo ? zlo - w[2] : 0;
+        return sqrt(w[0] * w[0] + w[1] * w[1] + dz * dz);
+    }
+    double e2[3] = {d[0] / dh, d[1] / dh, 0};
+    double pa = w[2], pb = w[0] * e2[0] + w[1] * e2[1];
+    double pn2 = w[0] * w[0] + w[1] * w[1] - pb * pb;
+    double da = d[2];
+    /* Region in (a, b): 0 <= b <= dh, a >= b da / dh. */
+    double in2d;
+    if (pb >= 0 && pb <= dh && pa >= pb * da / dh) {
+        in2d = 0;
+    } else {
+        /* Nearest of: the centre segment, the ray at b = 0, the ray at b = dh. */
+        double t = (pa * da + pb * dh) / (da * da + dh * dh);
+        t = t < 0 ? 0 : t > 1 ? 1 : t;
+        double s1 = hypot(pa - t * da, pb - t * dh);
+        double s2 = hypot(pa < 0 ? pa : 0, pb);
+        double s3 = hypot(pa < da ? pa - da : 0, pb - dh);
+        in2d = fmin(s1, fmin(s2, s3));
+    }
+    return sqrt(in2d * in2d + (pn2 > 0 ? pn2 : 0));
+}
+
+static void check_ball_strip(void)
+{
+    fm_tool t;
+    fm_tool_spec spec = sc_spec(FM_TOOL_BALL);
+    CHECK(fm_tool_build(&spec, &t, NULL) == FM_OK);
+    double R = 3, H = t.flutes.z_hi;
+    fm_motion moves[] = {sc_line(0, 0, 2, 10, -4, -1.5), sc_line(1, 1, -2, 4, 2, 3),
+                         sc_line(0, 0, 0, 0.3, 0.1, -0.2), sc_line(0, 0, 0, 0.05, 0, 4),
+                         sc_line(2, 1, 3, 2, 1, -4), sc_line(0, 0, 0, -6, 2, 0.01)};
+    int decided = 0, below = 0;
+    for (size_t k = 0; k < sizeof moves / sizeof moves[0]; k++) {
+        fm_sweep *fast, *slow;
+        fm_sweep_options opt = {0};
+        opt.no_fast_paths = 1;
+        CHECK(fm_sweep_new(&moves[k], &t.flutes, NULL, &fast, NULL) == FM_OK);
+        CHECK(fm_sweep_new(&moves[k], &t.flutes, &opt, &slow, NULL) == FM_OK);
+        CHECK(fm_sweep_method_of(fast) == FM_SWEEP_CAPSULE);
+        fm_sweep_worker *w = fm_sweep_worker_new(fast);
+        double c0[3] = {moves[k].start[0], moves[k].start[1], moves[k].start[2] + R};
+        double d[3] = {moves[k].end[0] - moves[k].start[0], moves[k].end[1] - moves[k].start[1],
+                       moves[k].end[2] - moves[k].start[2]};
+        double zmin = fmin(moves[k].start[2], moves[k].end[2]);
+        for (int i = 0; i < 150; i++) {
+            double p[3];
+            if (i % 2) {
+                pick_point(fast, &moves[k], &t.flutes, 1, p);
+            } else {
+                double lo[3], hi[3];
+                fm_sweep_bounds(fast, lo, hi);
+                for (int a = 0; a < 3; a++) p[a] = test_uniform(lo[a] - 1, hi[a] + 1);
+            }
+            fm_sweep_value v;
+            fm_sweep_eval_ex(fast, w, p, &v);
+            double b = sc_brute(fast, w, p), g = fm_sweep_eval(slow, w, p);
+            if ((fabs(v.value - b) > 1e-6 || fabs(v.value - g) > 1e-6) && failures_shown++ < 10)
+                fprintf(stderr, "ball strip move %zu at (%g, %g, %g): fast %.10g, brute %.10g, general %.10g\n", k,
+                        p[0], p[1], p[2], v.value, b, g);
+            CHECK(fabs(v.value - b) <= 1e-6);
+            CHECK(fabs(v.value - g) <= 1e-6);
+            CHECK(v.upper >= b - 1e-9);
+            CHECK(v.upper - v.value <= FM_SWEEP_TOL);
+            if (p[2] < zmin + H - R - 1e-6) {
+                below++;
+                if (v.evaluations == 1) decided++;
+                CHECK_NEAR(v.value, R - strip_dist_2d(p, c0, d), 1e-9);
+            }
+        }
+        fm_sweep_worker_free(w);
+        fm_sweep_free(fast);
+        fm_sweep_free(slow);
+    }
+    CHECK(below > 300);
+    CHECK(decided == below);
+}
+
 static void check_intervals_and_fields(const fm_tool_part *part, int kind)
 {
     fm_error err;
@@ -267,6 +359,48 @@ static void check_field_many(const fm_tool_part *part)
     f.worker_free(f.ctx, fw);
     f.release(f.ctx);
     for (int i = 0; i < 4; i++) fm_sweep_free(s[i]);
+}
+
+/* Batches as lib/stock sends them (the voxels of a leaf, or scattered
+ * points) over a run of short 3D moves: the culled, ordered max equals the
+ * plain max over every sweep, bit for bit. */
+static void check_field_many_batches(const fm_tool_part *part)
+{
+    enum { NM = 16, NP = 64 };
+    fm_motion ms[NM];
+    double at[3] = {0, 0, 0};
+    for (int i = 0; i < NM; i++) {
+        double to[3] = {at[0] + test_uniform(-0.2, 0.6), at[1] + test_uniform(-0.3, 0.3),
+                        at[2] + test_uniform(-0.3, 0.3)};
+        ms[i] = sc_line(at[0], at[1], at[2], to[0], to[1], to[2]);
+        memcpy(at, to, sizeof at);
+    }
+    ms[5] = sc_arc(2, at, 2, 0, 1, 1, 0.5); /* one arc and one helix among them */
+    fm_field f;
+    fm_error err;
+    CHECK(fm_sweep_field_many(&f, ms, NM, part, &err) == FM_OK);
+    fm_sweep *s[NM];
+    for (int i = 0; i < NM; i++) CHECK(fm_sweep_new(&ms[i], part, NULL, &s[i], &err) == FM_OK);
+    void *fw = f.worker_new(f.ctx);
+    for (int j = 0; j < 60; j++) {
+        double x[NP], y[NP], z[NP], out[NP];
+        double c[3], h = j % 3 == 2 ? 3 : 0.4;
+        pick_point(s[j % NM], &ms[j % NM], part, 1, c);
+        for (int k = 0; k < NP; k++) {
+            x[k] = c[0] + test_uniform(-h, h);
+            y[k] = c[1] + test_uniform(-h, h);
+            z[k] = c[2] + test_uniform(-h, h);
+        }
+        f.batch(f.ctx, fw, NP, x, y, z, out);
+        for (int k = 0; k < NP; k++) {
+            double p[3] = {x[k], y[k], z[k]}, ref = -DBL_MAX;
+            for (int i = 0; i < NM; i++) ref = fmax(ref, fm_sweep_eval(s[i], NULL, p));
+            CHECK(out[k] == ref);
+        }
+    }
+    f.worker_free(f.ctx, fw);
+    f.release(f.ctx);
+    for (int i = 0; i < NM; i++) fm_sweep_free(s[i]);
 }
 
 /* T(p, t) as a DAG against the native moving tool. */
@@ -363,6 +497,7 @@ int main(int argc, char **argv)
         check_fast_paths(&t.flutes, cut[c].name);
         check_intervals_and_fields(&t.flutes, c % SC_KINDS);
         check_intervals_and_fields(&t.flutes, (c + 4) % SC_KINDS);
+        check_field_many_batches(&t.flutes);
         if (c == 1) {
             check_dag(&t.flutes);
             check_field_many(&t.flutes);
@@ -371,6 +506,7 @@ int main(int argc, char **argv)
         }
     }
     check_closed_forms();
+    check_ball_strip();
     check_arc_semantics();
     return test_summary("sweep");
 }
