@@ -68,9 +68,10 @@ typedef struct fm_stock_cut {
 /* What one subtraction did; for tests, benchmarks and the report. */
 typedef struct fm_stock_cut_stats {
     double removed_mm3;      /* volume before - volume after, of the touched region */
-    size_t intervals;        /* interval evaluations of the swept field */
-    size_t leaves_evaluated; /* 8^3 leaves evaluated voxel by voxel */
-    size_t voxels_evaluated; /* = 512 * leaves_evaluated */
+    size_t intervals;        /* interval evaluations of the swept field (boxes and leaf octants) */
+    size_t leaves_evaluated; /* 8^3 leaves that got voxel work */
+    size_t voxels_evaluated; /* voxels the field was evaluated at: at most 512 per leaf, fewer
+                                where the stock value there is at or above the field's bound */
     size_t interior_boxes;   /* boxes found all inside the swept volume */
     size_t leaves_changed;   /* leaves whose values changed */
 } fm_stock_cut_stats;

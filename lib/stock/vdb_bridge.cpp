@@ -169,6 +169,7 @@ enum class Mode { build, subtract };
 struct LeafJob {
     Coord origin;
     Leaf *leaf;
+    double field_hi; /* upper end of the field's interval over the leaf */
 };
 
 struct Box {
@@ -248,7 +249,7 @@ struct Classifier {
                     return;
                 }
             }
-            jobs.push_back(LeafJob{o, leaf});
+            jobs.push_back(LeafJob{o, leaf, r.hi});
             return;
         }
         const int h = s / 2;
@@ -261,6 +262,8 @@ enum : uint8_t { ACT_NONE = 0, ACT_CHANGED, ACT_NEW_LEAF, ACT_TILE_OUT, ACT_TILE
 
 struct JobResult {
     Leaf *created = nullptr;
+    size_t evaluated = 0; /* voxels the field was evaluated at */
+    size_t intervals = 0; /* interval evaluations over octants of the leaf */
     double before = 0, after = 0; /* volume in voxels */
     uint8_t action = ACT_NONE;
 };
@@ -271,15 +274,64 @@ struct JobResult {
 void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, const LeafJob &job,
              JobResult &res)
 {
-    double x[LEAF_SIZE], y[LEAF_SIZE], z[LEAF_SIZE], f[LEAF_SIZE];
-    for (int i = 0; i < LEAF_SIZE; i++) {
-        x[i] = v->origin[0] + v->voxel * (job.origin.x() + (i >> 6));
-        y[i] = v->origin[1] + v->voxel * (job.origin.y() + ((i >> 3) & 7));
-        z[i] = v->origin[2] + v->voxel * (job.origin.z() + (i & 7));
-    }
-    field->batch(field->ctx, worker, LEAF_SIZE, x, y, z, f);
-
     const float bg = v->background;
+    double x[LEAF_SIZE], y[LEAF_SIZE], z[LEAF_SIZE], f[LEAF_SIZE];
+    int todo[LEAF_SIZE];
+    int n = 0;
+    if (mode == Mode::build) {
+        for (int i = 0; i < LEAF_SIZE; i++) todo[n++] = i;
+    } else {
+        /* phi = max(a, clamp(f)) keeps a wherever a >= the field's upper
+         * bound (or the band): already cut there, or deeper in the stock
+         * than the cut can reach. Those voxels need no evaluation; f = -bg
+         * stands for them. Where the leaf's bound leaves some, the bounds of
+         * its eight 4^3 octants, each asked for only when it has a voxel
+         * the leaf's bound did not settle, settle more. The result is the
+         * same as evaluating every voxel. */
+        const double cap = std::min<double>(bg, job.field_hi);
+        for (int oct = 0; oct < 8; oct++) {
+            const int ox = (oct & 4) ? 4 : 0, oy = (oct & 2) ? 4 : 0, oz = (oct & 1) ? 4 : 0;
+            int cand[64];
+            int nc = 0;
+            for (int k = 0; k < 64; k++) {
+                const int i = ((ox + (k >> 4)) << 6) | ((oy + ((k >> 2) & 3)) << 3) | (oz + (k & 3));
+                const double a = job.leaf ? job.leaf->getValue(i) : -bg;
+                f[i] = -bg;
+                if (a < cap) cand[nc++] = i;
+            }
+            if (nc == 0) continue;
+            fm_interval box[3];
+            const int o[3] = {job.origin.x() + ox, job.origin.y() + oy, job.origin.z() + oz};
+            for (int k = 0; k < 3; k++) {
+                box[k].lo = v->origin[k] + v->voxel * o[k];
+                box[k].hi = v->origin[k] + v->voxel * (o[k] + 3);
+            }
+            const fm_interval r = field->interval(field->ctx, worker, box);
+            res.intervals++;
+            const double octcap = std::min<double>(cap, r.hi);
+            for (int k = 0; k < nc; k++) {
+                const int i = cand[k];
+                const double a = job.leaf ? job.leaf->getValue(i) : -bg;
+                if (a >= octcap) continue;
+                if (r.lo >= bg) {
+                    f[i] = bg; /* deep inside the cut: clamped to the band anyway */
+                    continue;
+                }
+                todo[n++] = i;
+            }
+        }
+    }
+    for (int k = 0; k < n; k++) {
+        const int i = todo[k];
+        x[k] = v->origin[0] + v->voxel * (job.origin.x() + (i >> 6));
+        y[k] = v->origin[1] + v->voxel * (job.origin.y() + ((i >> 3) & 7));
+        z[k] = v->origin[2] + v->voxel * (job.origin.z() + (i & 7));
+    }
+    double fv[LEAF_SIZE];
+    if (n > 0) field->batch(field->ctx, worker, (size_t)n, x, y, z, fv);
+    for (int k = 0; k < n; k++) f[todo[k]] = fv[k];
+    res.evaluated = (size_t)n;
+
     const double inv = 1.0 / v->voxel;
     float out[LEAF_SIZE];
     bool active[LEAF_SIZE];
@@ -486,8 +538,11 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
             for (auto &x : r) delete x.created;
         }
     } free_left{results};
+    size_t evaluated = 0, octant_intervals = 0;
     for (size_t i = 0; i < njobs; i++) {
         JobResult &r = results[i];
+        evaluated += r.evaluated;
+        octant_intervals += r.intervals;
         before += r.before;
         after += r.after;
         const Coord &o = cls.jobs[i].origin;
@@ -542,9 +597,9 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
     if (stats) {
         const double vox3 = v->voxel * v->voxel * v->voxel;
         stats->removed_mm3 = (before - after) * vox3;
-        stats->intervals = cls.intervals;
+        stats->intervals = cls.intervals + octant_intervals;
         stats->leaves_evaluated = njobs;
-        stats->voxels_evaluated = njobs * LEAF_SIZE;
+        stats->voxels_evaluated = evaluated;
         stats->interior_boxes = cls.inside.size();
         stats->leaves_changed = changed;
     }
