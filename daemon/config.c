@@ -32,6 +32,8 @@ void fm_daemon_config_default(fm_daemon_config *cfg)
     cfg->request_deadline_ms = 30000;
     cfg->idle_timeout_s = 60;
     cfg->demo_voxel = 0.1;
+    cfg->live_voxel = 0.25;
+    cfg->live_feed = 1000;
 }
 
 int fm_daemon_split_addr(const char *spec, char *addr, size_t addr_size, unsigned *port)
@@ -111,6 +113,10 @@ static const key_def keys[] = {
     BOOL("demo", demo),
     TEXT("demo_dir", demo_dir),
     REAL("demo_voxel", demo_voxel, 0.01, 10),
+    TEXT("live_stock", live_stock),
+    TEXT("live_tools", live_tools),
+    REAL("live_voxel", live_voxel, 0.01, 10),
+    REAL("live_feed", live_feed, 0.001, 1e7),
 };
 
 int fm_daemon_config_set(fm_daemon_config *cfg, const char *key, const char *value, char *msg,

@@ -31,6 +31,12 @@ typedef struct fm_daemon_config {
     int demo;                  /* submit the bundled demo job at start */
     char demo_dir[1024];       /* where the demo's files are */
     double demo_voxel;
+    /* Modbus live mode (docs/modbus.md): the live job's stock, tool table
+     * file and voxel; without stock or tools, the selected job's are used. */
+    char live_stock[1024];
+    char live_tools[1024];
+    double live_voxel;
+    double live_feed;          /* mm/min: the program time given to each live move */
 } fm_daemon_config;
 
 void fm_daemon_config_default(fm_daemon_config *cfg);

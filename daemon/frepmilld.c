@@ -208,7 +208,11 @@ int main(int argc, char **argv)
                            .snapshot_interval_s = cfg.snapshot_interval_s,
                            .publish_interval_s = cfg.publish_interval_s,
                            .max_jobs = cfg.max_jobs,
-                           .job_memory_bytes = (size_t)(cfg.job_memory_mb * 1048576.0)};
+                           .job_memory_bytes = (size_t)(cfg.job_memory_mb * 1048576.0),
+                           .live_stock = cfg.live_stock,
+                           .live_tools = cfg.live_tools,
+                           .live_voxel = cfg.live_voxel,
+                           .live_feed = cfg.live_feed};
     fm_jobs *jobs = fm_jobs_open(&jcfg, &err);
     if (!jobs) {
         fm_log(FM_LOG_ERROR, "cannot open the job store: %s", err.message);
@@ -273,6 +277,14 @@ int main(int argc, char **argv)
         } else {
             fm_log(FM_LOG_INFO, "modbus: listening on %s:%u", mcfg.listen_addr,
                    fm_modbus_server_port(modbus));
+            /* Like http.addr: with port 0 this is how clients and tests
+             * learn the port bound. */
+            char maddr[128];
+            int mn = snprintf(maddr, sizeof maddr, "%s:%u\n", mcfg.listen_addr,
+                              fm_modbus_server_port(modbus));
+            if (fm_store_write_atomic(cfg.state_dir, "modbus.addr", maddr, (size_t)mn, &err) !=
+                FM_OK)
+                fm_log(FM_LOG_WARN, "cannot write %s/modbus.addr: %s", cfg.state_dir, err.message);
         }
     }
 

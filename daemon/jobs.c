@@ -1024,6 +1024,7 @@ fm_jobs *fm_jobs_open(const fm_jobs_config *cfg, fm_error *err)
         return NULL;
     }
     pthread_mutex_init(&jobs->lock, NULL);
+    pthread_mutex_init(&jobs->live_lock, NULL);
     pthread_cond_init(&jobs->queue_cond, NULL);
     load_all(jobs);
     jobs->workers = calloc((size_t)cfg->workers, sizeof *jobs->workers);
@@ -1035,6 +1036,33 @@ fm_jobs *fm_jobs_open(const fm_jobs_config *cfg, fm_error *err)
         return NULL;
     }
     return jobs;
+}
+
+job *fm_jobs_add_unstored(fm_jobs *jobs, json_t *spec)
+{
+    char id[32];
+    make_id(jobs, id, sizeof id);
+    job *j = job_new(id, jobs->jobs_dir, spec, wall_s());
+    if (!j) return NULL;
+    /* The folder lets DELETE work like for any job; without spec.json the
+     * next start removes it. */
+    if (mkdir(j->dir, 0750) != 0)
+        fm_log(FM_LOG_WARN, "job %s: cannot create %s: %s", id, j->dir, strerror(errno));
+    pthread_mutex_lock(&jobs->lock);
+    table_add(jobs, j);
+    j->refs++;
+    pthread_mutex_unlock(&jobs->lock);
+    return j;
+}
+
+void fm_jobs_emit(job *j, const char *type, json_t *data)
+{
+    emit(j, type, data);
+}
+
+void fm_jobs_publish_chunks(job *j, fm_stock *stock)
+{
+    publish_chunks(j, stock);
 }
 
 void fm_jobs_begin_shutdown(fm_jobs *jobs)
@@ -1055,6 +1083,7 @@ void fm_jobs_close(fm_jobs *jobs)
 {
     if (!jobs) return;
     fm_jobs_begin_shutdown(jobs);
+    fm_jobs_live_close(jobs);
     for (int i = 0; i < jobs->worker_count; i++) pthread_join(jobs->workers[i], NULL);
     free(jobs->workers);
     /* Drop the queue's references of jobs that never ran. */
@@ -1069,6 +1098,7 @@ void fm_jobs_close(fm_jobs *jobs)
     }
     free(jobs->table);
     pthread_mutex_destroy(&jobs->lock);
+    pthread_mutex_destroy(&jobs->live_lock);
     pthread_cond_destroy(&jobs->queue_cond);
     free(jobs);
 }

@@ -23,6 +23,12 @@ typedef struct fm_jobs_config {
     double publish_interval_s;
     int max_jobs;
     size_t job_memory_bytes;
+    /* Live mode: stock SPEC string and tool table file (NULL or "": the
+     * selected job's), voxel (mm) and the feed that times each move. */
+    const char *live_stock;
+    const char *live_tools;
+    double live_voxel;
+    double live_feed;
 } fm_jobs_config;
 
 typedef enum fm_job_state {
@@ -80,5 +86,19 @@ int fm_jobs_count(fm_jobs *jobs);
 int fm_jobs_pause(fm_jobs *jobs, const char *id, int pause);
 int fm_jobs_cancel(fm_jobs *jobs, const char *id);
 void fm_jobs_pause_all(fm_jobs *jobs);
+
+/* Live mode (Modbus registers 110-117): a live job whose stock is cut along
+ * the positions the controller writes, each a straight feed move from the
+ * previous one (the first position only places the tool). Its stock and
+ * tools come from the config (live_stock, live_tools) or from the job in
+ * from_slot. The job is in the table (HTTP, viewer, Modbus read it) while
+ * it lives; it is not stored (the machine's part is the record). All calls
+ * return at once: a live thread cuts. Codes: 0 accepted, -1 refused (no
+ * live session, no stock or tools, the session failed), -2 busy (the queue
+ * is full or out of resources). */
+int fm_jobs_live_start(fm_jobs *jobs, int from_slot);
+int fm_jobs_live_position(fm_jobs *jobs, const double xyz[3], int tool);
+int fm_jobs_live_stop(fm_jobs *jobs);
+int fm_jobs_live_active(fm_jobs *jobs);
 
 #endif

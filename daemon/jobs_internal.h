@@ -11,6 +11,7 @@
 
 #include "jobs.h"
 #include "mesh/mesh.h"
+#include "stock/stock.h"
 
 #define JOB_EVENT_RING 256
 /* Folder name buffers: small enough that a file name appended still fits
@@ -77,6 +78,9 @@ struct fm_jobs {
     pthread_t *workers;
     int worker_count;
     atomic_uint id_counter;
+    struct jobs_live *live; /* jobs_live.c: the session taking positions, or NULL */
+    struct jobs_live *live_ending; /* a stopped session whose thread is still to be joined */
+    pthread_mutex_t live_lock; /* guards live and live_ending */
 };
 
 /* Find a job and take a reference (NULL if unknown or deleted). */
@@ -88,5 +92,17 @@ json_t *fm_jobs_status_json(job *j);
  * snapshot once after a restart). */
 int fm_jobs_ensure_meshes(fm_jobs *jobs, job *j, fm_http_error *err);
 int fm_jobs_remove(fm_jobs *jobs, const char *id, fm_http_error *err);
+
+/* For jobs_live.c: a job record in the table that no worker runs and that is
+ * not stored (its folder has no spec.json, so a restart drops it); returned
+ * with a reference for the caller. */
+job *fm_jobs_add_unstored(fm_jobs *jobs, json_t *spec);
+/* Emit an event (caller holds j->lock); data is stolen. */
+void fm_jobs_emit(job *j, const char *type, json_t *data);
+/* Remesh and publish the chunks of stock that changed (the caller owns the
+ * stock exclusively). */
+void fm_jobs_publish_chunks(job *j, fm_stock *stock);
+/* Stop the live job's thread and free the session (fm_jobs_close). */
+void fm_jobs_live_close(fm_jobs *jobs);
 
 #endif

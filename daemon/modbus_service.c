@@ -1,8 +1,9 @@
 /* modbus_service.c: the daemon's implementation of the Modbus server's
  * service interface (protocols/modbus/modbus_server.h) over the job
  * manager: the status registers show the selected job (by default the
- * newest), commands start (resume), pause, cancel and select it. Live mode
- * is refused in this version (docs/daemon.md). */
+ * newest), commands start (resume), pause, cancel and select it, and live
+ * mode cuts a live job's stock along the controller's positions
+ * (jobs_live.c). */
 #include "modbus_service.h"
 
 #include <stdatomic.h>
@@ -24,9 +25,10 @@ static void read_status(void *ctx, fm_modbus_status *out)
     memset(out, 0, sizeof *out);
     int slot = current_slot(jobs);
     out->selected_slot = (uint16_t)slot;
+    if (fm_jobs_live_active(jobs)) out->bits |= FM_MODBUS_BIT_LIVE;
     fm_job_view v;
     if (fm_jobs_view_slot(jobs, slot, &v) != 0) return;
-    out->bits = FM_MODBUS_BIT_JOB_LOADED;
+    out->bits |= FM_MODBUS_BIT_JOB_LOADED;
     if (v.state == FM_JOB_RUNNING && !v.paused) out->bits |= FM_MODBUS_BIT_RUNNING;
     if (v.paused) out->bits |= FM_MODBUS_BIT_PAUSED;
     if (v.state == FM_JOB_DONE) out->bits |= FM_MODBUS_BIT_DONE;
@@ -69,16 +71,25 @@ static int command(void *ctx, int cmd, uint32_t argument)
     return rc == 0 ? FM_MODBUS_ERR_NONE : rc == -1 ? FM_MODBUS_ERR_NO_JOB : FM_MODBUS_ERR_BAD_STATE;
 }
 
-static int live_position(void *ctx, const double xyz[3], int tool)
+static int live_code(int rc)
 {
-    (void)ctx, (void)xyz, (void)tool;
-    return FM_MODBUS_ERR_LIVE_REFUSED;
+    return rc == 0 ? FM_MODBUS_ERR_NONE : rc == -2 ? FM_MODBUS_ERR_BUSY : FM_MODBUS_ERR_LIVE_REFUSED;
 }
 
+static int live_position(void *ctx, const double xyz[3], int tool)
+{
+    return live_code(fm_jobs_live_position(ctx, xyz, tool));
+}
+
+/* On: a live job from the config's live_stock/live_tools, or from the
+ * selected job's stock and tools; it becomes the newest job, so the status
+ * registers follow it unless a slot is selected. Off: it ends once the
+ * positions already written are cut. */
 static int live_mode(void *ctx, int on)
 {
-    (void)ctx;
-    return on ? FM_MODBUS_ERR_LIVE_REFUSED : FM_MODBUS_ERR_NONE;
+    fm_jobs *jobs = ctx;
+    if (!on) return live_code(fm_jobs_live_stop(jobs));
+    return live_code(fm_jobs_live_start(jobs, current_slot(jobs)));
 }
 
 static void watchdog_expired(void *ctx)

@@ -134,3 +134,17 @@ def check(cond, message):
     if not cond:
         raise AssertionError(message)
     print("ok:", message)
+
+
+def modbus_port(daemon, timeout=30):
+    """The Modbus port the daemon bound (it writes STATE_DIR/modbus.addr
+    after http.addr, once the Modbus server listens)."""
+    path = os.path.join(daemon.state_dir, "modbus.addr")
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        if os.path.exists(path):
+            text = open(path).read().strip()
+            if text:
+                return int(text.rsplit(":", 1)[1])
+        time.sleep(0.05)
+    raise RuntimeError("no %s within %d s" % (path, timeout))

@@ -15,7 +15,7 @@ import sys
 import tempfile
 import time
 
-from daemon_util import ROOT, Daemon, check, curl_json, submit, wait_state
+from daemon_util import ROOT, Daemon, check, curl_json, modbus_port, submit, wait_state
 
 CHECK_DIR = os.path.join(ROOT, "tests", "check")
 STOCK = "box:0,0,-10,50,50,0"
@@ -144,8 +144,7 @@ def main():
             status = wait_state(d.url, job_id, ("done", "failed"), 300)
             check(status["state"] == "done" and same_findings(status["findings"], ref_fix),
                   "a job's status carries the CLI's findings")
-            with open(os.path.join(d.state_dir, "modbus.addr")) as f:
-                port = int(f.read().strip().rsplit(":", 1)[1])
+            port = modbus_port(d)
             regs = modbus_read(port, 0, 29)
             errors = sum(f["severity"] == "error" for f in ref_fix)
             check(regs[23] == len(ref_fix), "register 23 = %d findings" % len(ref_fix))

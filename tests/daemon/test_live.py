@@ -1,0 +1,149 @@
+"""test_live.py: Modbus live mode of frepmilld. A Node client from the npm
+registry (modbus-serial) switches live mode on and writes a short sequence
+of tool positions down into the stock, along it and back up; the daemon
+cuts a live job's stock. The removed volume it reports (HTTP status and
+Modbus registers 17-18) must match `frepmill simulate` of the same moves
+written as G-code, within voxel tolerance, and the closed form of the slot.
+Usage: test_live.py FREPMILLD FREPMILL"""
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+from daemon_util import ROOT, Daemon, check, curl_json, modbus_port
+
+MODBUS_DIR = os.path.join(ROOT, "tests", "modbus")
+STOCK = "box:0,0,-10,60,60,0"
+VOXEL = 0.25
+TOOLS = {"units": "mm", "tools": [{"number": 1, "shape": "flat", "diameter": 6,
+                                   "flute_length": 20, "length": 40}]}
+# Above the stock, down 2 mm, along X for 40 mm, then along Y for 10 mm, up.
+MOVES = [(10, 30, 5), (10, 30, -2), (50, 30, -2), (50, 40, -2), (50, 40, 5)]
+DEPTH, RADIUS = 2.0, 3.0
+
+
+def node_ready():
+    if not shutil.which("node") or not shutil.which("npm"):
+        return False
+    if not os.path.exists(os.path.join(MODBUS_DIR, "node_modules", "modbus-serial", "package.json")):
+        rc = subprocess.run(["npm", "ci", "--omit=optional", "--ignore-scripts", "--no-audit",
+                             "--no-fund"], cwd=MODBUS_DIR, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, timeout=300).returncode
+        if rc != 0:
+            return False
+    return True
+
+
+def client(port, *steps):
+    env = dict(os.environ, NODE_PATH=os.path.join(MODBUS_DIR, "node_modules"))
+    out = subprocess.run(["node", os.path.join(os.path.dirname(__file__), "live_client.js"),
+                          str(port), *steps], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         env=env, timeout=60)
+    if out.returncode != 0:
+        raise RuntimeError("live_client: %s" % out.stderr.decode())
+    return out.stdout.decode().splitlines()
+
+
+def gcode_of(moves):
+    lines = ["G21 G90 G94", "T1 M6", "G0 X%g Y%g Z%g" % moves[0]]
+    lines += ["G1 X%g Y%g Z%g F1000" % m for m in moves[1:]]
+    return "\n".join(lines + ["M2", ""])
+
+
+def main():
+    frepmilld, frepmill = sys.argv[1], sys.argv[2]
+    if not node_ready():
+        print("node, npm or modbus-serial not available: skipped")
+        sys.exit(77)
+    with tempfile.TemporaryDirectory(prefix="fm-live-") as tmp:
+        t0 = time.time()
+        tools = os.path.join(tmp, "tools.json")
+        with open(tools, "w") as f:
+            json.dump(TOOLS, f)
+        program = os.path.join(tmp, "moves.ngc")
+        with open(program, "w") as f:
+            f.write(gcode_of(MOVES))
+        report = os.path.join(tmp, "report.json")
+        subprocess.run([frepmill, "simulate", program, "--stock", STOCK, "--tools", tools,
+                        "--voxel", str(VOXEL), "--report", report], check=True, timeout=300,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        with open(report) as f:
+            cli_removed = json.load(f)["removed_volume_mm3"]
+        # The slot by hand: two stadiums of width 2R (40 and 10 mm between
+        # their cap centres), each 2R L + pi R^2, meeting at a right-angled
+        # corner where they overlap in the corner disc plus the R x R square
+        # inside the corner less its quarter disc; depth DEPTH.
+        r2 = RADIUS ** 2
+        closed = DEPTH * (2 * RADIUS * (40 + 10) + 2 * math.pi * r2 -
+                          (math.pi * r2 + r2 - math.pi * r2 / 4))
+
+        d = Daemon(frepmilld, os.path.join(tmp, "state"), "--workers", "1",
+                   "--modbus-listen", "127.0.0.1:0", "--modbus-live", "yes",
+                   "--live-stock", STOCK, "--live-tools", tools, "--live-voxel", str(VOXEL),
+                   "--publish-interval-s", "0.1")
+        try:
+            port = modbus_port(d)
+            out = client(port, "on", *["%g,%g,%g,1" % m for m in MOVES])
+            check(out[0] == "live on" and len(out) == 1 + len(MOVES),
+                  "the client switched live mode on and wrote %d positions" % len(MOVES))
+            code, listing = curl_json(d.url + "/v1/jobs")
+            live = [j for j in listing["jobs"] if j.get("name") == "live"]
+            check(code == 200 and len(live) == 1, "a live job is listed")
+            job_id = live[0]["id"]
+            deadline = time.time() + 60
+            while time.time() < deadline:
+                code, status = curl_json(d.url + "/v1/jobs/" + job_id)
+                if status["motions_done"] == len(MOVES) - 1:
+                    break
+                time.sleep(0.1)
+            check(status["motions_done"] == len(MOVES) - 1 and status["state"] == "running",
+                  "the live job cut %d moves and keeps running" % (len(MOVES) - 1))
+            removed = status["removed_volume_mm3"]
+            tol = 0.01 * closed
+            check(abs(removed - cli_removed) <= tol,
+                  "live removed %.2f mm3 = frepmill simulate's %.2f within %.1f" %
+                  (removed, cli_removed, tol))
+            check(abs(removed - closed) <= tol,
+                  "live removed %.2f mm3 = closed form %.2f within %.1f" % (removed, closed, tol))
+            check(status["position"] == list(map(float, MOVES[-1])) and status["tool"] == 1,
+                  "the status shows the last position and the tool")
+            regs = client(port, "read")
+            words = list(map(int, regs[0].split()[1:]))
+            floats = list(map(float, regs[1].split()[1:]))
+            check(words[1] & 0x40 and words[1] & 0x02, "status bits: live mode and running")
+            check(abs(floats[4] - removed) <= 1e-3 * removed + 0.01,
+                  "registers 17-18 show the removed volume (%.2f)" % floats[4])
+            check(all(abs(floats[i] - MOVES[-1][i]) < 1e-4 for i in range(3)),
+                  "registers 9-14 show the last position")
+            code, chunks = curl_json(d.url + "/v1/jobs/%s/chunks" % job_id)
+            check(code == 200 and chunks["chunks"], "the live job's mesh chunks are published")
+
+            out = client(port, "off")
+            deadline = time.time() + 30
+            while time.time() < deadline:
+                code, status = curl_json(d.url + "/v1/jobs/" + job_id)
+                if status["state"] == "done":
+                    break
+                time.sleep(0.1)
+            check(status["state"] == "done", "live mode off ends the live job")
+            # With live mode off a position only stages registers: nothing
+            # is cut.
+            regs = client(port, "1,2,3,1", "read")
+            words = list(map(int, regs[1].split()[1:]))
+            code, after = curl_json(d.url + "/v1/jobs/" + job_id)
+            check(after["motions_done"] == len(MOVES) - 1 and
+                  after["removed_volume_mm3"] == removed,
+                  "a position written with live mode off cuts nothing")
+        finally:
+            rc = d.stop()
+        check(not words[1] & 0x40, "live bit clear after live mode off")
+        check(rc == 0, "the daemon stopped cleanly")
+        print("test_live: %.1f s" % (time.time() - t0))
+
+
+if __name__ == "__main__":
+    main()
