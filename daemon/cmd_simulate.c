@@ -12,6 +12,10 @@
 #include "commands.h"
 #include "job.h"
 #include "outputs.h"
+#ifdef FM_HAVE_CHECK
+#include "check_pass.h"
+#include "findings_json.h"
+#endif
 
 #define SIMULATE_MAX_OUTPUTS 8
 
@@ -22,6 +26,7 @@ static void usage(FILE *out)
             "                         [--out FILE]... [--report FILE.json] [--progress]\n"
             "                         [--band VOXELS] [--memory-budget MB] [--threads N]\n"
             "                         [--rapid-rate MM_PER_MIN] [--batch DIAMETERS]\n"
+            "                         [--check [--fixture FILE]... [--machine FILE.json]]\n"
             "                         [--png FILE] [--png-size WxH] [--color depth|tool|none]\n"
             "\n"
             "PROGRAM   G-code, or a parametric trajectory (.json)\n"
@@ -30,6 +35,8 @@ static void usage(FILE *out)
             "--voxel   voxel edge in mm (default 0.1)\n"
             "--out     final stock; format by extension: %s (may be given several times)\n"
             "--report  JSON report (default: none; `-` for standard output)\n"
+            "--check   also run the collision check (the pass of `frepmill check`, at its own\n"
+            "          0.5 mm voxel, before the simulation); the report gets its \"findings\"\n"
             "--png     a shaded isometric picture with the toolpath (same as --out FILE.png)\n"
             "--color   mesh and picture colours: depth below the stock top (default), the tool\n"
             "          that cut last, or none\n"
@@ -136,6 +143,10 @@ int fm_cmd_simulate(int argc, char **argv)
     int output_count = 0;
     const char *report_path = NULL;
     int force_progress = 0;
+    int want_check = 0;
+    const char *fixtures[32];
+    int fixture_count = 0;
+    const char *machine_path = NULL;
     fm_output_options out_opt;
     fm_output_options_default(&out_opt);
     int want_png = 0;
@@ -149,6 +160,9 @@ int fm_cmd_simulate(int argc, char **argv)
             return 0;
         } else if (!strcmp(a, "--progress")) {
             force_progress = 1;
+            continue;
+        } else if (!strcmp(a, "--check")) {
+            want_check = 1;
             continue;
         } else if (a[0] != '-' || !a[1]) {
             if (spec.program_path) {
@@ -202,6 +216,14 @@ int fm_cmd_simulate(int argc, char **argv)
             spec.tools_path = v;
         } else if (!strcmp(a, "--report")) {
             report_path = v;
+        } else if (!strcmp(a, "--fixture")) {
+            if (fixture_count == 32) {
+                fprintf(stderr, "frepmill simulate: at most 32 fixtures\n");
+                return 2;
+            }
+            fixtures[fixture_count++] = v;
+        } else if (!strcmp(a, "--machine")) {
+            machine_path = v;
         } else if (!strcmp(a, "--voxel") && parse_double(v, &d) && d > 0) {
             spec.stock.voxel_mm = d;
         } else if (!strcmp(a, "--band") && parse_double(v, &d) && d >= 2 && d <= 32) {
@@ -233,6 +255,49 @@ int fm_cmd_simulate(int argc, char **argv)
         return 2;
     }
 
+    if ((fixture_count || machine_path) && !want_check) {
+        fprintf(stderr, "frepmill simulate: --fixture and --machine need --check\n");
+        return 2;
+    }
+    /* The check is its own coarse pass (check_pass.h) rather than work in
+     * this run's before_motion hook: relating every motion to the fine
+     * stock would cost more than cutting it, and the coarse pass gives
+     * exactly the findings of `frepmill check` (docs/check.md). */
+    json_t *findings = NULL;
+    if (want_check) {
+#ifdef FM_HAVE_CHECK
+        fm_check_pass_input in;
+        fm_check_pass_input_default(&in);
+        in.spec = spec;
+        for (int i = 0; i < fixture_count; i++) in.fixtures[i] = fixtures[i];
+        in.fixture_count = fixture_count;
+        fm_error cerr;
+        fm_error_clear(&cerr);
+        fm_status cst = FM_OK;
+        if (machine_path) {
+            cst = fm_check_machine_load(machine_path, &in.options.machine, &cerr);
+            if (cst == FM_OK && in.options.machine.rapid_rate > 0 && spec.rapid_rate <= 0)
+                in.spec.rapid_rate = in.options.machine.rapid_rate;
+        }
+        fm_check *check = NULL;
+        if (cst == FM_OK) cst = fm_check_pass_run(&in, &check, NULL, &cerr);
+        if (cst != FM_OK) {
+            char buf[1024];
+            fprintf(stderr, "frepmill simulate: check: %s\n",
+                    fm_error_format(&cerr, buf, sizeof buf));
+            return exit_status(cst);
+        }
+        findings = fm_findings_json_array(check);
+        fprintf(stderr, "frepmill simulate: check: %zu errors, %zu warnings\n",
+                fm_check_count_severity(check, FM_CHECK_ERROR),
+                fm_check_count_severity(check, FM_CHECK_WARNING));
+        fm_check_free(check);
+#else
+        fprintf(stderr, "frepmill simulate: --check: lib/check is not built\n");
+        return 2;
+#endif
+    }
+
     progress_bar bar = {0};
     bar.is_tty = isatty(STDERR_FILENO);
     bar.enabled = bar.is_tty || force_progress;
@@ -253,6 +318,7 @@ int fm_cmd_simulate(int argc, char **argv)
         char buf[1024];
         fprintf(stderr, "frepmill simulate: %s\n", fm_error_format(&err, buf, sizeof buf));
         fm_toolpath_free(bar.toolpath);
+        json_decref(findings);
         return exit_status(st);
     }
 
@@ -281,6 +347,7 @@ int fm_cmd_simulate(int argc, char **argv)
 
     if (report_path && status == 0) {
         json_t *report = report_json(&result);
+        if (findings) json_object_set(report, "findings", findings);
         int rc = !strcmp(report_path, "-")
                      ? json_dumpf(report, stdout, JSON_INDENT(2) | JSON_REAL_PRECISION(10))
                      : json_dump_file(report, report_path, JSON_INDENT(2) | JSON_REAL_PRECISION(10));
@@ -292,6 +359,7 @@ int fm_cmd_simulate(int argc, char **argv)
             status = 4;
         }
     }
+    json_decref(findings);
     fm_stock_free(result.stock);
     fm_toolpath_free(bar.toolpath);
     return status;

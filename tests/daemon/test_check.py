@@ -1,5 +1,6 @@
-"""test_check.py: the collision check in frepmilld. POST /v1/check and a
-job's status carry the findings `frepmill check` prints for the same inputs
+"""test_check.py: the collision check in frepmilld (and `frepmill simulate
+--check`). POST /v1/check and a job's status carry the findings `frepmill
+check` prints for the same inputs
 (a rapid through the stock at line 6 of tests/check/rapid_through.ngc, and
 an STL clamp, sent base64, in its path); the Modbus status registers show
 the finding count (23), the first finding's line (24-25) and the collision
@@ -94,6 +95,15 @@ def main():
               "the CLI finds the rapid into the stock at line %d" % RAPID_LINE)
         check(any(f["kind"] == "fixture_contact" for f in ref_fix),
               "the CLI finds the clamp in the rapid's path")
+        report = os.path.join(tmp, "simulate.json")
+        subprocess.run([frepmill, "simulate", os.path.join(CHECK_DIR, "rapid_through.ngc"),
+                        "--stock", STOCK, "--tools", os.path.join(CHECK_DIR, "tools.json"),
+                        "--voxel", "0.5", "--check", "--fixture", clamp, "--report", report],
+                       check=True, timeout=300, stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL)
+        with open(report) as f:
+            check(same_findings(json.load(f)["findings"], ref_fix),
+                  "frepmill simulate --check reports the findings of frepmill check")
 
         d = Daemon(frepmilld, os.path.join(tmp, "state"), "--workers", "1",
                    "--modbus-listen", "127.0.0.1:0")
