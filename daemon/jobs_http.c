@@ -4,6 +4,8 @@
  * it out; the full mesh is assembled from the published chunk meshes, so a
  * download never touches the grid being cut. */
 #include <limits.h>
+#include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -14,6 +16,9 @@
 #include "jobs_check.h"
 #endif
 #include "jobs_internal.h"
+#include "toolpaths/gcode/gcode.h"
+#include "toolpaths/tooltable/tooltable.h"
+#include "toolpaths/traj/traj.h"
 
 static int not_found(const char *id, fm_http_error *err)
 {
@@ -267,6 +272,205 @@ static int svc_events(void *ctx, const char *id, uint64_t after, int timeout_ms,
     return n;
 }
 
+/* ------------------------------------------------------------- toolpath -- */
+
+/* GET /v1/jobs/{id}/toolpath: the job's program interpreted again (the same
+ * front end, tool table and rapid rate as the run, without touching any
+ * stock) into a compact polyline of tool tip positions for the viewer:
+ *   {"id", "kind": "gcode" | "trajectory", "program": TEXT, "motions":
+ *    [[kind, line, t0, t1, tool, first, count], ...], "points": [x, y, z, ...],
+ *    "truncated": bool, "error": null | TEXT}
+ * kind 0 rapid, 1 feed line, 2 arc, 3 parametric, 4 dwell; a motion's points
+ * are points[first .. first + count - 1] (start included). Arcs are split
+ * every 5 degrees, parametric segments into 32 pieces. */
+
+#define TOOLPATH_MAX_POINTS 500000
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+typedef struct tp_buf {
+    char *text;
+    size_t len, cap;
+    int failed;
+} tp_buf;
+
+static void tp_printf(tp_buf *b, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+static void tp_printf(tp_buf *b, const char *fmt, ...)
+{
+    if (b->failed) return;
+    for (;;) {
+        va_list ap;
+        va_start(ap, fmt);
+        int n = vsnprintf(b->text + b->len, b->cap - b->len, fmt, ap);
+        va_end(ap);
+        if (n < 0) {
+            b->failed = 1;
+            return;
+        }
+        if ((size_t)n < b->cap - b->len) {
+            b->len += (size_t)n;
+            return;
+        }
+        size_t cap = b->cap * 2 + (size_t)n + 1;
+        char *t = realloc(b->text, cap);
+        if (!t) {
+            b->failed = 1;
+            return;
+        }
+        b->text = t;
+        b->cap = cap;
+    }
+}
+
+typedef struct tp_ctx {
+    tp_buf motions, points;
+    long point_count, motion_count;
+    int truncated;
+} tp_ctx;
+
+static void tp_point(tp_ctx *c, const double p[3])
+{
+    tp_printf(&c->points, "%s%.3f,%.3f,%.3f", c->point_count ? "," : "", p[0], p[1], p[2]);
+    c->point_count++;
+}
+
+static int tp_sink(void *user, const fm_motion *m)
+{
+    tp_ctx *c = user;
+    if (c->point_count > TOOLPATH_MAX_POINTS) {
+        c->truncated = 1;
+        return 1;
+    }
+    long first = c->point_count;
+    double p[3];
+    int kind = m->kind == FM_MOTION_RAPID ? 0
+               : m->kind == FM_MOTION_LINE ? 1
+               : m->kind == FM_MOTION_ARC  ? 2
+               : m->kind == FM_MOTION_PARAM ? 3
+                                           : 4;
+    if (kind == 3 && m->path && m->path->pose) {
+        for (int i = 0; i <= 32; i++) {
+            double axis[3];
+            m->path->pose(m->path->ctx, m->t0 + (m->t1 - m->t0) * i / 32.0, p, axis);
+            tp_point(c, p);
+        }
+    } else if (kind == 2) {
+        /* The plane (u, v) with u x v = +plane_axis. */
+        int a = m->plane_axis, u = (a + 1) % 3, v = (a + 2) % 3;
+        double su = m->start[u] - m->center[u], sv = m->start[v] - m->center[v];
+        double eu = m->end[u] - m->center[u], ev = m->end[v] - m->center[v];
+        double a0 = atan2(sv, su), a1 = atan2(ev, eu);
+        double r0 = hypot(su, sv), r1 = hypot(eu, ev);
+        double d = a1 - a0, two_pi = 2.0 * M_PI;
+        int turns = m->turns ? m->turns : 1;
+        if (turns > 0) {
+            while (d <= 1e-12) d += two_pi;
+            d += (turns - 1) * two_pi;
+        } else {
+            while (d >= -1e-12) d -= two_pi;
+            d += (turns + 1) * two_pi;
+        }
+        int n = (int)ceil(fabs(d) / (5.0 * M_PI / 180.0));
+        if (n < 2) n = 2;
+        if (n > 20000) n = 20000;
+        for (int i = 0; i <= n; i++) {
+            double f = (double)i / n, ang = a0 + d * f, r = r0 + (r1 - r0) * f;
+            p[u] = m->center[u] + r * cos(ang);
+            p[v] = m->center[v] + r * sin(ang);
+            p[a] = m->start[a] + (m->end[a] - m->start[a]) * f;
+            for (int k = 0; k < 3; k++) p[k] += m->tip_offset[k];
+            tp_point(c, p);
+        }
+    } else {
+        for (int k = 0; k < 3; k++) p[k] = m->start[k] + m->tip_offset[k];
+        tp_point(c, p);
+        if (kind != 4) {
+            for (int k = 0; k < 3; k++) p[k] = m->end[k] + m->tip_offset[k];
+            tp_point(c, p);
+        }
+    }
+    tp_printf(&c->motions, "%s[%d,%d,%.4f,%.4f,%d,%ld,%ld]", c->motion_count ? "," : "", kind,
+              m->line, m->t0, m->t1, m->tool, first, c->point_count - first);
+    c->motion_count++;
+    return c->motions.failed || c->points.failed;
+}
+
+static int svc_toolpath(void *ctx, const char *id, fm_http_blob *out, fm_http_error *err)
+{
+    job *j = fm_jobs_get(ctx, id);
+    if (!j) return not_found(id, err);
+    /* j->spec is immutable: no lock needed while we hold a reference. */
+    json_t *options = json_object_get(j->spec, "options");
+    json_t *program = json_object_get(j->spec, "program");
+    json_t *gcode = json_object_get(program, "gcode");
+    double rapid_rate = json_number_value(json_object_get(options, "rapid_rate"));
+    char *tools_text = json_dumps(json_object_get(j->spec, "tools"), JSON_INDENT(1));
+    char *traj_text = gcode ? NULL
+                            : json_dumps(json_object_get(program, "trajectory"), JSON_INDENT(1));
+    fm_tool_table table;
+    memset(&table, 0, sizeof table);
+    fm_error ferr;
+    fm_error_clear(&ferr);
+    fm_status st = tools_text ? fm_tooltable_parse_json(tools_text, strlen(tools_text), "tools",
+                                                        &table, &ferr)
+                              : fm_error_set(&ferr, FM_ERR_INPUT, "no tool table");
+    tp_ctx c;
+    memset(&c, 0, sizeof c);
+    if (st == FM_OK) {
+        if (gcode) {
+            fm_gcode_options opt;
+            fm_gcode_options_default(&opt);
+            if (rapid_rate > 0) opt.rapid_rate = rapid_rate;
+            opt.tools = &table;
+            st = fm_gcode_run_string(json_string_value(gcode), json_string_length(gcode),
+                                     "program", &opt, tp_sink, &c, NULL, &ferr);
+        } else if (traj_text) {
+            fm_traj_options topt;
+            fm_traj_options_default(&topt);
+            if (rapid_rate > 0) topt.rapid_rate = rapid_rate;
+            st = fm_traj_run_string(traj_text, strlen(traj_text), "trajectory", &topt, tp_sink,
+                                    &c, NULL, &ferr);
+        }
+    }
+    fm_jobs_put(ctx, j);
+    fm_tool_table_free(&table);
+    free(tools_text);
+
+    json_t *prog = gcode ? json_incref(gcode) : json_string(traj_text ? traj_text : "");
+    char *prog_json = json_dumps(prog, JSON_ENCODE_ANY);
+    json_decref(prog);
+    free(traj_text);
+    char msg[1024] = "";
+    json_t *emsg = st == FM_OK ? json_null() : json_string(fm_error_format(&ferr, msg, sizeof msg));
+    char *err_json = json_dumps(emsg, JSON_ENCODE_ANY);
+    json_decref(emsg);
+
+    tp_buf b = {0};
+    tp_printf(&b, "{\"id\":\"%s\",\"kind\":\"%s\",\"program\":%s,\"motions\":[%s],\"points\":[%s],"
+                  "\"truncated\":%s,\"error\":%s}\n",
+              id, gcode ? "gcode" : "trajectory", prog_json ? prog_json : "\"\"",
+              c.motions.text ? c.motions.text : "", c.points.text ? c.points.text : "",
+              c.truncated ? "true" : "false", err_json ? err_json : "null");
+    free(prog_json);
+    free(err_json);
+    int failed = b.failed || c.motions.failed || c.points.failed;
+    free(c.motions.text);
+    free(c.points.text);
+    if (failed) {
+        free(b.text);
+        return fm_http_error_set(err, 503, "out_of_memory", "out of memory");
+    }
+    out->data = (uint8_t *)b.text;
+    out->size = b.len;
+    out->content_type = "application/json";
+    return 0;
+}
+
 #ifdef FM_HAVE_CHECK
 /* Runs on the request's own connection thread (libmicrohttpd's thread per
  * connection), so a check blocks only its caller; size and concurrency are
@@ -299,4 +503,5 @@ void fm_jobs_http_service(fm_jobs *jobs, fm_http_service *out)
 #else
     out->check = NULL; /* lib/check is not built: 501 */
 #endif
+    out->toolpath = svc_toolpath;
 }

@@ -619,6 +619,11 @@ static enum MHD_Result route_job(fm_http_server *s, struct MHD_Connection *con, 
             return reply_blob(con, rc_, &blob, &err);
         }
     }
+    if (!strcmp(rest, "/toolpath") && s->svc.toolpath) {
+        fm_http_blob blob = {0};
+        int rc_ = s->svc.toolpath(s->svc.ctx, id, &blob, &err);
+        return reply_blob(con, rc_, &blob, &err);
+    }
     if (!strcmp(rest, "/stock.vdb")) {
         char path[PATH_MAX];
         int rc = s->svc.stock_path(s->svc.ctx, id, path, sizeof path, &err);

@@ -127,6 +127,9 @@ typedef struct fm_http_service {
                   int cap, int *finished);
     /* POST /v1/check: the synchronous collision check. NULL: 501. */
     int (*check)(void *ctx, json_t *request, json_t **out, fm_http_error *err);
+    /* GET /v1/jobs/{id}/toolpath: the job's program and its motions as a
+     * compact JSON polyline for the viewer (docs/api.md). NULL: 404. */
+    int (*toolpath)(void *ctx, const char *id, fm_http_blob *out, fm_http_error *err);
 } fm_http_service;
 
 enum { FM_HTTP_LOG_ERROR = 0, FM_HTTP_LOG_WARN = 1, FM_HTTP_LOG_INFO = 2, FM_HTTP_LOG_DEBUG = 3 };
