@@ -1,6 +1,7 @@
-// live_client.js: drives frepmilld's Modbus live mode with a client from the
-// npm registry (modbus-serial, installed in tests/modbus/node_modules) for
-// test_live.py. Steps from the command line, in order:
+// live_client.js: drives frepmilld over Modbus with a client from the npm
+// registry (modbus-serial, installed in tests/modbus/node_modules) for
+// test_live.py and test_modbus.py. Steps from the command line, in order:
+//   cmd:C,SEQ,ARG       one FC16 write of 100-102 (command, sequence, argument)
 //   on | off            write register 117 (live mode)
 //   X,Y,Z,T             one FC16 write of 110-116: a position and a tool
 //   read                print "regs v0 v1 ... v28" (FC04 0-28) and
@@ -16,7 +17,10 @@ async function main() {
   c.setID(1);
   c.setTimeout(5000);
   for (const step of steps) {
-    if (step === "on" || step === "off") {
+    if (step.startsWith("cmd:")) {
+      await c.writeRegisters(100, step.slice(4).split(",").map(Number));
+      console.log("command " + step.slice(4));
+    } else if (step === "on" || step === "off") {
       await c.writeRegister(117, step === "on" ? 1 : 0);
       console.log("live " + step);
     } else if (step === "read") {

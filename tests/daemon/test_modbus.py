@@ -1,0 +1,109 @@
+"""test_modbus.py: the Modbus "done when" of issue 10 against the real
+daemon and a real job. Debian's mbpoll reads the status and float registers
+while the job runs and sees the block number (N words of the program) advance
+and the heartbeat tick; the Node client from npm (modbus-serial) writes the
+pause and resume commands and the job pauses and resumes, as its HTTP status
+shows. Usage: test_modbus.py FREPMILLD FREPMILL"""
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+from daemon_util import DEMO, Daemon, check, curl_json, demo_job, modbus_port, submit, wait_state
+from test_live import client, node_ready
+
+
+def numbered_demo():
+    """The demo program with an N word on every line that moves: N10, N20..."""
+    out, n = [], 0
+    with open(os.path.join(DEMO, "pocket.ngc")) as f:
+        for line in f:
+            if re.match(r"\s*G[0-3]\b", line):
+                n += 10
+                line = "N%d %s" % (n, line)
+            out.append(line)
+    return "".join(out), n
+
+
+def mbpoll(port, *args):
+    out = subprocess.run(["mbpoll", "-m", "tcp", "-a", "1", "-0", "-1", "-p", str(port), *args,
+                          "127.0.0.1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=20)
+    if out.returncode != 0:
+        raise RuntimeError("mbpoll %s: %s" % (args, out.stderr.decode() + out.stdout.decode()))
+    return {int(a): float(b) for a, b in re.findall(r"^\[(\d+)\]:\s+(\S+)", out.stdout.decode(), re.M)}
+
+
+def main():
+    frepmilld, frepmill = sys.argv[1], sys.argv[2]
+    if not shutil.which("mbpoll") or not node_ready():
+        print("mbpoll, node or modbus-serial not available: skipped")
+        sys.exit(77)
+    with tempfile.TemporaryDirectory(prefix="fm-modbus-") as tmp:
+        t0 = time.time()
+        d = Daemon(frepmilld, os.path.join(tmp, "state"), "--workers", "1",
+                   "--modbus-listen", "127.0.0.1:0", "--modbus-commands", "yes",
+                   "--publish-interval-s", "0.2")
+        try:
+            port = modbus_port(d)
+            program, last_n = numbered_demo()
+            job = demo_job(0.2, name="numbered")
+            job["program"] = {"gcode": program}
+            job["options"]["check"] = False
+            job_id = submit(d.url, job, tmp)
+            wait_state(d.url, job_id, ("running",), 60)
+            blocks, beats, floats_ok = [], [], False
+            deadline = time.time() + 60
+            last_f = None
+            while time.time() < deadline and (len(set(blocks)) < 3 or not floats_ok):
+                regs = mbpoll(port, "-t", "3", "-r", "0", "-c", "3")
+                beats.append(regs[2])
+                blocks.append(mbpoll(port, "-t", "3:int", "-B", "-r", "3", "-c", "1")[3])
+                f = mbpoll(port, "-t", "3:float", "-B", "-r", "9", "-c", "6")
+                last_f = f
+                floats_ok = floats_ok or (0 <= f[9] <= 100 and 0 <= f[11] <= 60 and f[17] > 0)
+                time.sleep(0.3)
+            check(len(set(blocks)) >= 3 and all(b2 >= b1 for b1, b2 in zip(blocks, blocks[1:])),
+                  "mbpoll sees the block number advance (%s)" % sorted(set(blocks))[:6])
+            check(all(0 < b <= last_n and b % 10 == 0 for b in set(blocks) if b),
+                  "block numbers are the program's N words")
+            check(len(set(beats)) >= 3, "mbpoll sees the heartbeat tick (%d values)" % len(set(beats)))
+            check(abs(last_f[17] + last_f[19] - 100 * 60 * 30) <= 1.0,
+                  "removed + remaining volume = the 100 x 60 x 30 mm box")
+            check(floats_ok, "float registers: tool tip inside the stock's XY, removed volume > 0 (%s)" % last_f)
+
+            out = client(port, "cmd:2,1,0")
+            check(out == ["command 2,1,0"], "the Node client wrote pause")
+            deadline = time.time() + 20
+            while time.time() < deadline:
+                code, status = curl_json(d.url + "/v1/jobs/" + job_id)
+                if status["paused"] or status["state"] != "running":
+                    break
+                time.sleep(0.1)
+            check(status["paused"] and status["state"] == "running", "HTTP shows the job paused")
+            time.sleep(0.5)
+            code, s1 = curl_json(d.url + "/v1/jobs/" + job_id)
+            time.sleep(1.0)
+            code, s2 = curl_json(d.url + "/v1/jobs/" + job_id)
+            check(s1["motions_done"] == s2["motions_done"] and s2["paused"],
+                  "a paused job does not advance (motion %d)" % s2["motions_done"])
+            regs = mbpoll(port, "-t", "3", "-r", "0", "-c", "29")
+            check(int(regs[1]) & 0x04 and int(regs[28]) == 1 and int(regs[26]) == 0,
+                  "registers: paused bit, sequence 1 acknowledged, no error")
+            out = client(port, "cmd:1,2,0")
+            status = wait_state(d.url, job_id, ("done", "failed", "cancelled"), 300)
+            check(status["state"] == "done" and not status["paused"],
+                  "after the resume command the job finished")
+            regs = mbpoll(port, "-t", "3", "-r", "0", "-c", "29")
+            check(int(regs[1]) & 0x08 and int(regs[28]) == 2 and int(regs[7]) == 1000,
+                  "registers: done bit, sequence 2 acknowledged, progress 1000 per mille")
+        finally:
+            rc = d.stop()
+        check(rc == 0, "the daemon stopped cleanly")
+        print("test_modbus: %.1f s" % (time.time() - t0))
+
+
+if __name__ == "__main__":
+    main()
