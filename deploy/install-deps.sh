@@ -3,7 +3,8 @@
 # idempotently (packages already present are not touched; apt-get update
 # runs only when something is missing). Usage:
 #   deploy/install-deps.sh build   compilers and libraries to build frepmill
-#   deploy/install-deps.sh test    build + what the tests use (valgrind, rs274, mbpoll, python3)
+#   deploy/install-deps.sh test    build + what the tests use (valgrind, rs274, mbpoll, python3,
+#                                  chromium; and the viewer's npm packages, deploy/install-viewer.sh)
 #   deploy/install-deps.sh dev     test + clang with libFuzzer for the fuzz targets
 set -eu
 
@@ -11,7 +12,7 @@ group=${1:-build}
 
 build_pkgs="build-essential cmake pkg-config libopenvdb-dev libboost-iostreams-dev libtbb-dev \
 libblosc-dev libdraco-dev libmodbus-dev libmicrohttpd-dev libjansson-dev libstb-dev curl"
-test_pkgs="valgrind python3 linuxcnc-uspace mbpoll draco curl"
+test_pkgs="valgrind python3 linuxcnc-uspace mbpoll draco curl chromium"
 dev_pkgs="clang libclang-rt-14-dev"
 
 case "$group" in
@@ -28,7 +29,19 @@ for p in $pkgs; do
     fi
 done
 
+# The viewer's three.js and the browser test's playwright-core, from npm
+# (idempotent); without npm the browser test skips.
+viewer_deps() {
+    case "$group" in
+    test | dev)
+        "$(dirname "$0")/install-viewer.sh" --dev ||
+            echo "install-deps.sh: viewer/node_modules not installed; tests/viewer will skip" >&2
+        ;;
+    esac
+}
+
 if [ -z "$missing" ]; then
+    viewer_deps
     exit 0
 fi
 
@@ -46,3 +59,4 @@ export DEBIAN_FRONTEND=noninteractive
 $sudo apt-get update -q
 # shellcheck disable=SC2086
 $sudo apt-get install -y -q --no-install-recommends $missing
+viewer_deps

@@ -1,0 +1,269 @@
+// test_viewer.mjs: the browser test of the viewer (docs/viewer.md).
+//   node tests/viewer/test_viewer.mjs FREPMILLD [ARTIFACT_DIR]
+// Starts frepmilld on a free loopback port with a state folder in /tmp,
+// submits the demo job, opens the viewer in Debian's chromium (headless,
+// driven by playwright-core from viewer/node_modules), watches the job run to
+// its end, then asserts from the page that the mesh shown has the triangle
+// count the daemon reports and that the picture is not blank. The canvas
+// screenshot is saved as ARTIFACT_DIR/viewer_screenshot.png (default /tmp).
+// Exit 0 pass, 1 fail, 77 skipped (no chromium or no viewer/node_modules).
+import { spawn } from 'node:child_process';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import { createRequire } from 'node:module';
+import { fileURLToPath } from 'node:url';
+import zlib from 'node:zlib';
+
+const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
+const VIEWER = path.join(ROOT, 'viewer');
+const CHROMIUM = process.env.FM_CHROMIUM || '/usr/bin/chromium';
+const VOXEL = Number(process.env.FM_VIEWER_VOXEL || 0.3);
+const daemonBin = process.argv[2];
+const artifactDir = process.argv[3] || os.tmpdir();
+
+function skip(why) {
+  console.log(`skipped: ${why}`);
+  process.exit(77);
+}
+function ok(cond, message) {
+  if (!cond) throw new Error(`FAILED: ${message}`);
+  console.log(`ok: ${message}`);
+}
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+
+if (!daemonBin) {
+  console.error('usage: test_viewer.mjs FREPMILLD [ARTIFACT_DIR]');
+  process.exit(2);
+}
+if (!fs.existsSync(CHROMIUM)) skip(`${CHROMIUM} is not installed (apt-get install chromium)`);
+for (const p of ['three/build/three.module.js', 'three/examples/jsm/libs/draco/draco_decoder.wasm',
+  'playwright-core/package.json']) {
+  if (!fs.existsSync(path.join(VIEWER, 'node_modules', p))) {
+    skip(`viewer/node_modules/${p} is missing (deploy/install-viewer.sh --dev)`);
+  }
+}
+const require = createRequire(path.join(VIEWER, 'package.json'));
+const { chromium } = require('playwright-core');
+
+// A minimal PNG reader (8-bit RGB or RGBA, not interlaced: what Chromium
+// writes) so the test needs nothing beyond playwright-core.
+function readPng(buf) {
+  if (buf.readUInt32BE(0) !== 0x89504e47) throw new Error('not a PNG');
+  let off = 8, width = 0, height = 0, type = 0;
+  const idat = [];
+  while (off < buf.length) {
+    const len = buf.readUInt32BE(off);
+    const kind = buf.toString('ascii', off + 4, off + 8);
+    const data = buf.subarray(off + 8, off + 8 + len);
+    if (kind === 'IHDR') {
+      width = data.readUInt32BE(0);
+      height = data.readUInt32BE(4);
+      if (data[8] !== 8 || data[12] !== 0) throw new Error('unsupported PNG (bit depth / interlace)');
+      type = data[9];
+    } else if (kind === 'IDAT') idat.push(data);
+    off += 12 + len;
+  }
+  const bpp = type === 6 ? 4 : type === 2 ? 3 : 0;
+  if (!bpp) throw new Error(`unsupported PNG colour type ${type}`);
+  const raw = zlib.inflateSync(Buffer.concat(idat));
+  const stride = width * bpp;
+  const px = Buffer.alloc(stride * height);
+  for (let y = 0; y < height; y++) {
+    const f = raw[y * (stride + 1)];
+    const src = raw.subarray(y * (stride + 1) + 1, (y + 1) * (stride + 1));
+    for (let x = 0; x < stride; x++) {
+      const a = x >= bpp ? px[y * stride + x - bpp] : 0;
+      const b = y > 0 ? px[(y - 1) * stride + x] : 0;
+      const c = x >= bpp && y > 0 ? px[(y - 1) * stride + x - bpp] : 0;
+      let v = src[x];
+      if (f === 1) v += a;
+      else if (f === 2) v += b;
+      else if (f === 3) v += (a + b) >> 1;
+      else if (f === 4) {
+        const p = a + b - c, pa = Math.abs(p - a), pb = Math.abs(p - b), pc = Math.abs(p - c);
+        v += pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
+      }
+      px[y * stride + x] = v & 255;
+    }
+  }
+  return { width, height, bpp, px };
+}
+
+// Pixels differing from the background colour #1b1f24 by more than a little.
+function nonBackground(img) {
+  const bg = [0x1b, 0x1f, 0x24];
+  let n = 0;
+  for (let i = 0; i < img.width * img.height; i++) {
+    const o = i * img.bpp;
+    if (Math.abs(img.px[o] - bg[0]) + Math.abs(img.px[o + 1] - bg[1]) + Math.abs(img.px[o + 2] - bg[2]) > 24) n++;
+  }
+  return n;
+}
+
+async function startDaemon(stateDir, logPath) {
+  const log = fs.openSync(logPath, 'a');
+  const proc = spawn(daemonBin, ['--listen', '127.0.0.1:0', '--state-dir', stateDir,
+    '--modbus-listen', 'off', '--viewer-dir', VIEWER, '--publish-interval-s', '0.25'],
+  { stdio: ['ignore', log, log] });
+  let exited = null;
+  proc.on('exit', (code) => { exited = code; });
+  const addrFile = path.join(stateDir, 'http.addr');
+  for (let i = 0; i < 600; i++) {
+    if (exited !== null) throw new Error(`frepmilld exited with ${exited}; see ${logPath}`);
+    if (fs.existsSync(addrFile)) {
+      const url = fs.readFileSync(addrFile, 'utf8').trim();
+      if (url) return { proc, url };
+    }
+    await sleep(50);
+  }
+  throw new Error('frepmilld did not start within 30 s');
+}
+
+async function main() {
+  const t0 = Date.now();
+  const stateDir = fs.mkdtempSync(path.join(os.tmpdir(), 'frepmill-viewer-state-'));
+  const profile = fs.mkdtempSync(path.join(os.tmpdir(), 'frepmill-viewer-chromium-'));
+  const logPath = path.join(stateDir, 'daemon.log');
+  const { proc, url } = await startDaemon(stateDir, logPath);
+  console.log(`frepmilld at ${url}, state ${stateDir}`);
+  let context = null;
+  let passed = false;
+  try {
+    const job = {
+      stock: 'box:0,0,-30,100,60,0',
+      voxel: VOXEL,
+      tools: JSON.parse(fs.readFileSync(path.join(ROOT, 'deploy/demo/tools.json'), 'utf8')),
+      program: { gcode: fs.readFileSync(path.join(ROOT, 'deploy/demo/pocket.ngc'), 'utf8') },
+      options: { name: 'viewer-test' },
+    };
+
+    context = await chromium.launchPersistentContext(profile, {
+      executablePath: CHROMIUM,
+      headless: true,
+      viewport: { width: 1280, height: 800 },
+      args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+        '--disable-background-networking', '--disable-component-update', '--disable-sync',
+        '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
+    });
+    const page = context.pages()[0] || await context.newPage();
+    const problems = [];
+    const foreign = [];
+    page.on('pageerror', (e) => problems.push(`page error: ${e.message}`));
+    page.on('console', (m) => { if (m.type() === 'error') problems.push(`console: ${m.text()}`); });
+    page.on('request', (r) => { if (!r.url().startsWith(url) && !r.url().startsWith('blob:') && !r.url().startsWith('data:')) foreign.push(r.url()); });
+    page.on('requestfailed', (r) => {
+      // The event stream is closed by the page at the job's end.
+      if (!r.url().includes('/events')) problems.push(`request failed: ${r.url()} ${r.failure()?.errorText}`);
+    });
+
+    // The page first, then the job: the viewer sees it from the start.
+    await page.goto(`${url}/`);
+    await page.waitForFunction(() => window.frepmillViewer !== undefined, null, { timeout: 15000 });
+    const r = await fetch(`${url}/v1/jobs`, {
+      method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(job),
+    });
+    ok(r.status === 202, `demo job accepted (HTTP ${r.status})`);
+    const { id } = await r.json();
+    await page.evaluate((jid) => window.frepmillViewer.open(jid), id);
+
+    // Watch it run: sample what the page shows while the job is running.
+    let sawRunning = false, liveTriangles = 0, liveVersions = new Set();
+    const deadline = Date.now() + 90000;
+    for (;;) {
+      const s = await page.evaluate(() => ({
+        state: window.frepmillViewer.state.jobState,
+        version: window.frepmillViewer.state.version,
+        tris: window.frepmillViewer.triangleCount(),
+        idle: window.frepmillViewer.idle(),
+        syncing: window.frepmillViewer.state.syncing,
+        errors: window.frepmillViewer.state.errors,
+      }));
+      if (s.state === 'running') {
+        sawRunning = true;
+        if (s.tris) { liveTriangles = s.tris; liveVersions.add(s.version); }
+      }
+      if (s.idle) break;
+      if (s.state === 'failed' || s.state === 'cancelled') throw new Error(`the job ${s.state}`);
+      if (Date.now() > deadline) throw new Error(`the page did not see the job end within 90 s (${JSON.stringify(s)}; ${problems.join('; ')})`);
+      await sleep(100);
+    }
+    console.log(`job ran and the page caught up in ${((Date.now() - t0) / 1000).toFixed(1)} s`);
+    ok(sawRunning, 'the page showed the job running');
+    ok(liveTriangles > 0 && liveVersions.size >= 1,
+      `the page showed the stock during the run (${liveVersions.size} mesh versions, last ${liveTriangles} triangles)`);
+
+    const status = await (await fetch(`${url}/v1/jobs/${id}`)).json();
+    ok(status.state === 'done', `job ${id} done (removed ${status.removed_volume_mm3.toFixed(2)} mm3)`);
+    const chunks = await (await fetch(`${url}/v1/jobs/${id}/chunks?since=0`)).json();
+    const daemonTris = chunks.chunks.reduce((n, c) => n + c.triangles, 0);
+    const daemonChunks = chunks.chunks.filter((c) => c.triangles > 0).length;
+    const stl = Buffer.from(await (await fetch(`${url}/v1/jobs/${id}/mesh?format=stl`)).arrayBuffer());
+    const stlTris = stl.readUInt32LE(80);
+    const shown = await page.evaluate(() => ({
+      tris: window.frepmillViewer.triangleCount(),
+      chunks: window.frepmillViewer.chunkCount(),
+      version: window.frepmillViewer.state.version,
+    }));
+    console.log(`daemon: ${daemonTris} triangles in ${daemonChunks} chunks (version ${chunks.version}), ` +
+      `full STL ${stlTris}; page: ${shown.tris} triangles in ${shown.chunks} chunks (version ${shown.version})`);
+    ok(shown.tris === daemonTris, `the page shows the daemon's triangle count (${shown.tris} = ${daemonTris})`);
+    ok(shown.tris === stlTris, `... which is the full mesh's count (${stlTris})`);
+    ok(shown.chunks === daemonChunks, `the page shows every non-empty chunk (${shown.chunks})`);
+
+    // Toolpath, program line and position readout.
+    const ui = await page.evaluate(() => ({
+      motions: window.frepmillViewer.state.toolpath ? window.frepmillViewer.state.toolpath.motions.length : 0,
+      current: document.querySelector('#program .current .ln')?.textContent,
+      x: document.getElementById('pos-x').textContent,
+      y: document.getElementById('pos-y').textContent,
+      z: document.getElementById('pos-z').textContent,
+    }));
+    ok(ui.motions === status.motions_total, `toolpath overlay of ${ui.motions} motions`);
+    ok(Number(ui.current) === status.line, `program line ${status.line} highlighted`);
+    ok([ui.x, ui.y, ui.z].map(Number).every((v, k) => Math.abs(v - status.position[k]) < 1e-3),
+      `position readout ${ui.x} ${ui.y} ${ui.z}`);
+
+    // The picture is not blank.
+    // The canvas alone: the legend floating over it is hidden meanwhile.
+    await page.evaluate(() => { document.getElementById('legend').style.visibility = 'hidden'; window.frepmillViewer.render(); });
+    const shot = path.join(artifactDir, 'viewer_screenshot.png');
+    const png = await page.locator('#view canvas').screenshot({ path: shot });
+    await page.evaluate(() => { document.getElementById('legend').style.visibility = ''; });
+    const img = readPng(png);
+    const lit = nonBackground(img);
+    const frac = lit / (img.width * img.height);
+    console.log(`screenshot ${shot}: ${img.width}x${img.height}, ${lit} non-background pixels (${(100 * frac).toFixed(1)}%)`);
+    ok(frac > 0.05, 'the picture is not blank');
+    await page.screenshot({ path: path.join(artifactDir, 'viewer_page.png') });
+    console.log(`page screenshot ${path.join(artifactDir, 'viewer_page.png')}`);
+
+    // Replay: scrub to the middle; the marker, line and readout follow.
+    const mid = await page.evaluate(() => {
+      const s = document.getElementById('scrub');
+      s.value = 500;
+      s.dispatchEvent(new Event('input'));
+      return { line: window.frepmillViewer.state.line, x: document.getElementById('pos-x').textContent,
+        live: window.frepmillViewer.state.live, t: window.frepmillViewer.state.replayT };
+    });
+    ok(!mid.live && mid.line > 0 && mid.line !== status.line,
+      `replay at t=${mid.t.toFixed(1)} s shows line ${mid.line}, x ${mid.x}`);
+
+    ok(problems.length === 0, `no page errors${problems.length ? ': ' + problems.join('; ') : ''}`);
+    ok(foreign.length === 0, `every request went to the daemon${foreign.length ? ': ' + foreign.join(' ') : ''}`);
+    passed = true;
+  } finally {
+    if (context) await context.close().catch(() => {});
+    proc.kill('SIGTERM');
+    await new Promise((r) => { if (proc.exitCode !== null) r(); else proc.on('exit', r); });
+    fs.rmSync(profile, { recursive: true, force: true });
+    if (passed) fs.rmSync(stateDir, { recursive: true, force: true });
+    else console.log(`kept ${stateDir} (daemon.log)`);
+  }
+  console.log(`viewer test passed in ${((Date.now() - t0) / 1000).toFixed(1)} s`);
+}
+
+main().catch((e) => {
+  console.error(e.stack || String(e));
+  process.exit(1);
+});
