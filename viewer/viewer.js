@@ -267,7 +267,13 @@ async function syncChunks(full = false) {
     await Promise.all([worker(), worker(), worker(), worker()]);
     if (gen !== S.generation) return;
     S.version = Math.max(S.version, list.version);
-    if (!bounds && stockGroup.children.length) frame(new THREE.Box3().setFromObject(stockGroup));
+    // Frame once on the stock and the toolpath together, when the stock first arrives.
+    if (!S.framed && stockGroup.children.length) {
+      const box = new THREE.Box3().setFromObject(stockGroup);
+      if (pathGroup.children.length) box.union(new THREE.Box3().setFromObject(pathGroup));
+      frame(box);
+      S.framed = true;
+    }
     updateMeshReadout();
   } catch (e) {
     S.errors.push(String(e));
@@ -547,6 +553,7 @@ function closeJob() {
   Object.assign(S, {
     job: null, jobState: null, version: 0, syncing: false, syncAgain: false, synced: false,
     toolpath: null, programLines: [], line: 0, live: true, playing: false, replayT: 0, totalT: 0,
+    framed: false,
   });
 }
 
