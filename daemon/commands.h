@@ -13,6 +13,7 @@ typedef struct fm_command {
 /* Defined in the cmd_*.c files; listed in frepmill.c. */
 int fm_cmd_check(int argc, char **argv);
 int fm_cmd_eval(int argc, char **argv);
+int fm_cmd_mesh(int argc, char **argv);
 int fm_cmd_motions(int argc, char **argv);
 int fm_cmd_simulate(int argc, char **argv);
 

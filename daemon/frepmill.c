@@ -12,6 +12,9 @@ static const fm_command commands[] = {
 #ifdef FM_HAVE_CMD_EVAL
     {"eval", "evaluate a HyperFun model at a point", fm_cmd_eval},
 #endif
+#ifdef FM_HAVE_CMD_MESH
+    {"mesh", "mesh a HyperFun model (and draw it)", fm_cmd_mesh},
+#endif
 #ifdef FM_HAVE_CMD_SIMULATE
     {"simulate", "cut a program out of a stock and report what was removed", fm_cmd_simulate},
 #endif
