@@ -29,6 +29,12 @@ for p in $pkgs; do
     fi
 done
 
+# The viewer's JavaScript comes from the npm registry: Node.js and npm from
+# Debian when the machine has no npm of its own.
+if ! command -v npm >/dev/null 2>&1; then
+    missing="$missing nodejs npm"
+fi
+
 # The viewer's three.js and the browser test's playwright-core, from npm
 # (idempotent); without npm the browser test skips.
 viewer_deps() {
