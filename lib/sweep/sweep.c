@@ -608,6 +608,16 @@ void fm_sweep_eval_ex(const fm_sweep *s, fm_sweep_worker *worker, const double p
          * its top decides there; then the concave search (docs/sweep.md). */
         double R = s->part.ball_radius, uu;
         double bound = R - sqrt(strip_dist2(s, p, &uu));
+        /* Below z_hi - R at the nearest time the top is not the nearest
+         * boundary and the part equals the bound there (docs/sweep.md). */
+        double zeta = 0;
+        for (int i = 0; i < 3; i++) zeta += s->a0[i] * (p[i] - s->c0[i] - uu * s->d[i]);
+        if (zeta <= s->part.z_hi - R) {
+            out->value = out->upper = bound;
+            out->t = s->t0 + uu * (s->t1 - s->t0);
+            out->evaluations = 0;
+            return;
+        }
         double v = eval_F(s, pw, p, uu, NULL);
         double up = bound + 1e-12 * (1 + fabs(bound));
         if (up - v <= 0.5 * s->tol) {

@@ -138,6 +138,25 @@ double fm_tool_profile_eval(const fm_tool_part *part, void *worker, double r, do
         }
         return f;
     }
+    if (part->ball_radius > 0) {
+        /* Ball under a cylinder of the same radius: below z_hi - R the flat
+         * top is farther than any other boundary (depth <= R), so the exact
+         * distance is that of the ball swept up the axis for ever:
+         * R - |(r, min(0, z - centre))|. The 3-element search below gives
+         * the same value; this is the hot path of ball end mill sweeps. */
+        double R = part->ball_radius, dz = z - (part->z_lo + R);
+        if (z <= part->z_hi - R) {
+            if (dz >= 0) {
+                if (grad) grad[0] = -1, grad[1] = 0;
+                return R - r;
+            }
+            double h = sqrt(r * r + dz * dz);
+            if (h > 1e-300) {
+                if (grad) grad[0] = -r / h, grad[1] = -dz / h;
+                return R - h;
+            }
+        }
+    }
     return profile_eval(part, r, z, grad);
 }
 

@@ -256,7 +256,7 @@ static void check_ball_strip(void)
             CHECK(v.upper - v.value <= FM_SWEEP_TOL);
             if (p[2] < zmin + H - R - 1e-6) {
                 below++;
-                if (v.evaluations == 1) decided++;
+                if (v.evaluations <= 1) decided++;
                 CHECK_NEAR(v.value, R - strip_dist_2d(p, c0, d), 1e-9);
             }
         }
