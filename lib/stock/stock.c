@@ -462,7 +462,8 @@ fm_status fm_stock_subtract(fm_stock *s, const fm_field *swept, const fm_stock_c
     if (!tool_known(s, c.tool) && s->ntools >= FM_STOCK_MAX_TOOLS)
         return fm_error_set(err, FM_ERR_LIMIT, "more than %d distinct tool numbers",
                             FM_STOCK_MAX_TOOLS);
-    fm_stock_cut_stats st;
+    /* zeroed: a field that misses the stock returns before any figure is set */
+    fm_stock_cut_stats st = {0};
     touch_ctx t = {s, s->version + 1, 0, 0};
     fm_status rc = fm_vdb_subtract(s->vdb, swept, s->opt.memory_budget, touch_box, &t, &st, err);
     if (rc) return rc;
