@@ -414,6 +414,8 @@ typedef struct cutter {
     unsigned char *lines_cut; /* bitmap of source lines that cut */
     size_t lines_cap;
     long blocks;
+    fm_stock_cut_stats stats; /* summed over cuts */
+    long cuts;
 } cutter;
 
 static double motion_path_length(const fm_motion *m)
@@ -465,8 +467,18 @@ static fm_status flush_batch(cutter *c)
                             .block = first->line,
                             .t0 = first->t0,
                             .t1 = last->t1};
-        st = fm_stock_subtract(c->stock, &field, &cut, NULL, c->err);
+        fm_stock_cut_stats cs;
+        st = fm_stock_subtract(c->stock, &field, &cut, &cs, c->err);
         fm_field_release(&field);
+        if (st == FM_OK) {
+            c->stats.removed_mm3 += cs.removed_mm3;
+            c->stats.intervals += cs.intervals;
+            c->stats.leaves_evaluated += cs.leaves_evaluated;
+            c->stats.voxels_evaluated += cs.voxels_evaluated;
+            c->stats.interior_boxes += cs.interior_boxes;
+            c->stats.leaves_changed += cs.leaves_changed;
+            c->cuts++;
+        }
     }
     if (st != FM_OK) {
         if (c->err && c->err->line == 0) {
@@ -625,6 +637,8 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     result->tool_count = n < 64 ? n : 64;
     result->top_block_count = fm_stock_blocks(stock, result->top_blocks, FM_JOB_TOP_BLOCKS);
     if (result->top_block_count > FM_JOB_TOP_BLOCKS) result->top_block_count = FM_JOB_TOP_BLOCKS;
+    result->cut_stats = c->stats;
+    result->cuts = c->cuts;
     result->wall_time_s = now_s() - started;
     result->peak_memory_bytes = fm_job_peak_rss();
 

@@ -113,6 +113,10 @@ typedef struct fm_job_result {
     fm_stock_tool_volume tools[64];
     size_t top_block_count;
     fm_stock_block top_blocks[FM_JOB_TOP_BLOCKS];
+    /* Work of all cuts summed (fm_stock_cut_stats), and how many cuts (a
+     * batch of motions is one cut): for benchmarks and profiling. */
+    fm_stock_cut_stats cut_stats;
+    long cuts;
 } fm_job_result;
 
 /* Run the whole job. On success result->stock holds the final stock. On
