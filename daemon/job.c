@@ -124,7 +124,7 @@ static fm_stock *stock_from_model(const char *path, const fm_stock_options *opt,
         return NULL;
     }
     fm_stock *stock = NULL;
-    fm_tape *tape = NULL;
+    fm_tape *tape = NULL, *raw_tape = NULL;
     fm_evaluator *ev = NULL;
     fm_field field;
     memset(&field, 0, sizeof field);
@@ -146,7 +146,11 @@ static fm_stock *stock_from_model(const char *path, const fm_stock_options *opt,
     }
     tape = fm_tape_compile(g, root, err);
     if (!tape) goto done;
-    ev = fm_evaluator_new(tape, err);
+    /* The bounds are searched on the model itself: it has the same sign as
+     * its normalization, whose interval bounds are much looser. */
+    raw_tape = fm_tape_compile(g, model.root, err);
+    if (!raw_tape) goto done;
+    ev = fm_evaluator_new(raw_tape, err);
     if (!ev) goto done;
     double voxel = opt && opt->voxel_mm > 0 ? opt->voxel_mm : 0.1;
     bounds_search s = {.ev = ev};
@@ -181,6 +185,7 @@ static fm_stock *stock_from_model(const char *path, const fm_stock_options *opt,
     fm_field_release(&field);
 done:
     fm_evaluator_free(ev);
+    fm_tape_free(raw_tape);
     fm_tape_free(tape);
     fm_graph_free(g);
     return stock;
