@@ -275,6 +275,9 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
              JobResult &res)
 {
     const float bg = v->background;
+    /* the stock's values read from the buffer once, not by getValue per
+     * voxel (each call checks for out-of-core data) */
+    const float *stock = mode == Mode::subtract && job.leaf ? job.leaf->buffer().data() : nullptr;
     double x[LEAF_SIZE], y[LEAF_SIZE], z[LEAF_SIZE], f[LEAF_SIZE];
     int todo[LEAF_SIZE];
     int n = 0;
@@ -295,7 +298,7 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
             int nc = 0;
             for (int k = 0; k < 64; k++) {
                 const int i = ((ox + (k >> 4)) << 6) | ((oy + ((k >> 2) & 3)) << 3) | (oz + (k & 3));
-                const double a = job.leaf ? job.leaf->getValue(i) : -bg;
+                const double a = stock ? stock[i] : -bg;
                 f[i] = -bg;
                 if (a < cap) cand[nc++] = i;
             }
@@ -311,7 +314,7 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
             const double octcap = std::min<double>(cap, r.hi);
             for (int k = 0; k < nc; k++) {
                 const int i = cand[k];
-                const double a = job.leaf ? job.leaf->getValue(i) : -bg;
+                const double a = stock ? stock[i] : -bg;
                 if (a >= octcap) continue;
                 if (r.lo >= bg) {
                     f[i] = bg; /* deep inside the cut: clamped to the band anyway */
@@ -348,7 +351,7 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
             a = bg;
             phi = -fc;
         } else {
-            a = job.leaf ? job.leaf->getValue(i) : -bg;
+            a = stock ? stock[i] : -bg;
             phi = std::max(a, fc);
         }
         out[i] = phi;
@@ -370,8 +373,9 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
             res.action = n_neg ? ACT_TILE_IN : ACT_TILE_OUT;
             return;
         }
+        float *vals = job.leaf->buffer().data();
         for (int i = 0; i < LEAF_SIZE; i++) {
-            job.leaf->setValueOnly(i, out[i]);
+            vals[i] = out[i];
             job.leaf->setActiveState(i, active[i]);
         }
         res.action = ACT_CHANGED;

@@ -157,6 +157,24 @@ double fm_tool_profile_eval(const fm_tool_part *part, void *worker, double r, do
             }
         }
     }
+    if (part->cylinder_radius > 0) {
+        /* A plain cylinder: inside, the nearest of side, bottom and top
+         * (the same order of preference as the element search); outside,
+         * the distance to the rectangle. */
+        double R = part->cylinder_radius;
+        double ds = R - r, db = z - part->z_lo, dt = part->z_hi - z;
+        if (ds >= 0 && db >= 0 && dt >= 0) {
+            double d = db, g0 = 0, g1 = 1;
+            if (ds < d) d = ds, g0 = -1, g1 = 0;
+            if (dt < d) d = dt, g0 = 0, g1 = -1;
+            if (grad) grad[0] = g0, grad[1] = g1;
+            return d;
+        }
+        double er = ds < 0 ? -ds : 0, ez = db < 0 ? db : dt < 0 ? -dt : 0;
+        double d = sqrt(er * er + ez * ez);
+        if (grad) grad[0] = -er / d, grad[1] = -ez / d;
+        return -d;
+    }
     return profile_eval(part, r, z, grad);
 }
 
@@ -316,6 +334,15 @@ fm_status fm_tool_part_from_profile(const fm_profile_elem *elems, size_t n, fm_t
     /* The chain must turn left overall; the joints at the axis are convex
      * whenever z is monotone (see docs/tools.md). */
     part->convex = convex;
+    /* A plain cylinder: bottom disc, side, top disc. */
+    if (n == 3 && part->elem[0].kind == FM_PROFILE_SEGMENT && part->elem[1].kind == FM_PROFILE_SEGMENT &&
+        part->elem[2].kind == FM_PROFILE_SEGMENT) {
+        const fm_profile_elem *b = &part->elem[0], *sd = &part->elem[1], *t = &part->elem[2];
+        double R = sd->a[0];
+        if (R > 0 && b->a[1] == b->b[1] && b->b[0] == R && sd->b[0] == R && sd->a[1] == b->a[1] &&
+            sd->b[1] == t->a[1] && t->a[0] == R && t->b[1] == t->a[1] && t->b[0] == 0)
+            part->cylinder_radius = R;
+    }
     /* Ball tip under a cylinder of the same radius, at least 2 radii tall. */
     if (n == 3 && part->elem[0].kind == FM_PROFILE_ARC && part->elem[1].kind == FM_PROFILE_SEGMENT) {
         const fm_profile_elem *a = &part->elem[0], *s = &part->elem[1];

@@ -115,6 +115,8 @@ typedef struct fm_tool_part {
     int convex;                          /* the solid is convex */
     double ball_radius;                  /* > 0: the profile is a ball tip under a cylinder of the
                                             same radius, at least 2 radii tall (capsule fast path) */
+    double cylinder_radius;              /* > 0: the profile is a plain cylinder (flat end mill): its
+                                            distance has a direct formula */
     fm_tool_custom custom;               /* FM_TOOL_PART_CUSTOM */
 } fm_tool_part;
 

@@ -455,9 +455,57 @@ static void check_custom(void)
     fm_graph_free(g);
 }
 
+/* The direct formulas for a flat end mill (plain cylinder) and a ball end
+ * mill (below z_hi - R) against the element search they stand in for (the
+ * same part with the flag cleared), values and gradients, including points
+ * on faces, edges and the axis. */
+static void check_direct_formulas(void)
+{
+    fm_tool_shape shapes[2] = {FM_TOOL_FLAT, FM_TOOL_BALL};
+    for (int k = 0; k < 2; k++) {
+        fm_tool_spec spec;
+        memset(&spec, 0, sizeof spec);
+        spec.number = 1;
+        spec.shape = shapes[k];
+        spec.diameter = 6;
+        spec.flute_length = 12;
+        spec.length = 30;
+        fm_tool t;
+        CHECK(fm_tool_build(&spec, &t, NULL) == FM_OK);
+        fm_tool_part fast = t.flutes, slow = t.flutes;
+        if (k == 0) {
+            CHECK_NEAR(fast.cylinder_radius, 3, 0);
+            slow.cylinder_radius = 0;
+        } else {
+            CHECK_NEAR(fast.ball_radius, 3, 0);
+            CHECK(fast.cylinder_radius == 0);
+            slow.ball_radius = 0;
+        }
+        for (int i = 0; i < 20000; i++) {
+            double r = test_uniform(0, 6), z = test_uniform(-3, 15);
+            if (i % 5 == 0) r = (i / 5) % 3 == 0 ? 0 : 3;            /* axis, side */
+            if (i % 7 == 0) z = (i / 7) % 2 ? 0 : 12;                /* bottom, top */
+            double gf[2], gs[2];
+            double vf = fm_tool_profile_eval(&fast, NULL, r, z, gf);
+            double vs = fm_tool_profile_eval(&slow, NULL, r, z, gs);
+            CHECK_NEAR(vf, vs, 1e-12);
+            CHECK_NEAR(fm_tool_profile_eval(&fast, NULL, r, z, NULL), vf, 0);
+            /* Away from ties between faces the gradient is unique. */
+            double ds = fabs(3 - r), db = fabs(z), dt = fabs(12 - z);
+            int tie = fabs(ds - db) < 1e-6 || fabs(ds - dt) < 1e-6 || fabs(db - dt) < 1e-6 || vf == 0 ||
+                      (k == 1 && fabs(z - 3) < 1e-6);
+            if (!tie) {
+                CHECK_NEAR(gf[0], gs[0], 1e-9);
+                CHECK_NEAR(gf[1], gs[1], 1e-9);
+            }
+        }
+    }
+}
+
 int main(void)
 {
     check_shapes();
+    check_direct_formulas();
     check_validation();
     check_dag_interval_grad();
     check_custom();
