@@ -238,6 +238,7 @@ static void run_case(const char *name, const char *path, const char *textp, size
 
 int main(int argc, char **argv)
 {
+    setvbuf(stdout, NULL, _IOLBF, 0); /* figures appear as each run ends */
     const char *which = argc > 1 ? argv[1] : "all";
     int with_floor = !(argc > 2 && strcmp(argv[2], "--no-floor") == 0);
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
