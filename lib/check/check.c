@@ -106,6 +106,7 @@ void fm_check_free(fm_check *c)
     free(c->fixtures);
     free(c->open_fixture);
     free(c->findings);
+    free(c->hit_now);
     free(c->pick);
     free(c->stack);
     free(c);
