@@ -23,6 +23,7 @@
 
 #include "gcode/gcode.h"
 #include "job.h"
+#include "mesh/mesh.h"
 #include "stock/stock.h"
 #include "sweep/sweep.h"
 
@@ -195,8 +196,53 @@ static double run_floor(const char *path, const char *textp, size_t len, const f
 
 /* -------------------------------------------------------------- run -- */
 
+/* The final stock as binary STL and as Draco with the default settings
+ * (issue 7: Draco at least 15 times smaller with a position error under
+ * 5 um). The error is Draco's quantization bound over the mesh's bounding
+ * cube, which no decoded vertex exceeds; the decoded volume is printed as
+ * a check that the file holds the same solid. */
+static void mesh_figures(const char *name, fm_stock *stock)
+{
+    fm_error err;
+    double t0 = now();
+    fm_mesh *mesh = fm_mesh_from_stock(stock, NULL, &err);
+    if (!mesh) {
+        fprintf(stderr, "bench_simulate %s: meshing: %s\n", name, err.message);
+        return;
+    }
+    double t_mesh = now() - t0;
+    uint8_t *stl = NULL, *drc = NULL;
+    size_t stl_size = 0, drc_size = 0;
+    fm_mesh_draco_options opt;
+    fm_mesh_draco_default(&opt);
+    t0 = now();
+    fm_status st = fm_mesh_encode_stl(mesh, &stl, &stl_size, &err);
+    double t_stl = now() - t0;
+    t0 = now();
+    if (st == FM_OK) st = fm_mesh_encode_draco(mesh, &opt, &drc, &drc_size, &err);
+    double t_drc = now() - t0;
+    fm_mesh *back = st == FM_OK ? fm_mesh_decode_draco(drc, drc_size, NULL, &err) : NULL;
+    if (!back) {
+        fprintf(stderr, "bench_simulate %s: encoding: %s\n", name, err.message);
+    } else {
+        float lo[3], hi[3];
+        fm_mesh_bounds(mesh, lo, hi);
+        double bound = fm_mesh_draco_error_bound(lo, hi, opt.position_bits);
+        printf("  mesh: %zu triangles (%.2f s); binary STL %.1f MB (%.2f s), Draco %.2f MB (%.2f s, %d bits, "
+               "speed %d): %.1fx smaller; position error bound %.2f um; volume %.1f mm3, decoded %.1f mm3\n",
+               mesh->triangle_count, t_mesh, stl_size / 1e6, t_stl, drc_size / 1e6, t_drc, opt.position_bits,
+               opt.speed, (double)stl_size / (double)drc_size, bound * 1000, fm_mesh_volume(mesh),
+               fm_mesh_volume(back));
+    }
+    fm_mesh_free(back);
+    free(stl);
+    free(drc);
+    fm_mesh_free(mesh);
+}
+
 static void run_case(const char *name, const char *path, const char *textp, size_t len, const fm_tool_spec *ts,
-                     const char *stock_spec, const double slo[3], const double shi[3], int with_floor)
+                     const char *stock_spec, const double slo[3], const double shi[3], int with_floor,
+                     int want_mesh)
 {
     fm_tool_table table = {1, (fm_tool_spec *)ts};
     fm_job_spec spec;
@@ -223,6 +269,7 @@ static void run_case(const char *name, const char *path, const char *textp, size
     printf("  %.0f motions/s, %.3g band voxels/s (%zu voxels evaluated in %zu leaves, %zu interval boxes)\n",
            r.motions / wall, r.cut_stats.voxels_evaluated / wall, r.cut_stats.voxels_evaluated,
            r.cut_stats.leaves_evaluated, r.cut_stats.intervals);
+    if (want_mesh) mesh_figures(name, r.stock);
     fm_stock_free(r.stock);
     if (!with_floor) return;
     fm_tool tool;
@@ -265,7 +312,8 @@ int main(int argc, char **argv)
             ball.holder[0].length = 40;
             ball.center_cutting = 1;
             double lo[3] = {-50, -50, -50}, hi[3] = {50, 50, 0};
-            run_case("3D_Chips.ngc", CHIPS_PATH, NULL, 0, &ball, "box:-50,-50,-50,50,50,0", lo, hi, with_floor);
+            run_case("3D_Chips.ngc", CHIPS_PATH, NULL, 0, &ball, "box:-50,-50,-50,50,50,0", lo, hi, with_floor,
+                     1);
         }
     }
     if (strcmp(which, "all") == 0 || strcmp(which, "pocket") == 0) {
@@ -280,7 +328,7 @@ int main(int argc, char **argv)
         flat.length = 40;
         flat.center_cutting = 1;
         double lo[3] = {0, 0, -30}, hi[3] = {100, 60, 0};
-        run_case("pocket-50k", NULL, prog, len, &flat, "box:0,0,-30,100,60,0", lo, hi, with_floor);
+        run_case("pocket-50k", NULL, prog, len, &flat, "box:0,0,-30,100,60,0", lo, hi, with_floor, 0);
         free(prog);
     }
     return 0;
