@@ -11,6 +11,7 @@
 
 #include "commands.h"
 #include "job.h"
+#include "report_json.h"
 #include "outputs.h"
 #ifdef FM_HAVE_CHECK
 #include "check_pass.h"
@@ -97,31 +98,6 @@ static int parse_double(const char *s, double *out)
     errno = 0;
     *out = strtod(s, &end);
     return end != s && *end == '\0' && errno != ERANGE && isfinite(*out);
-}
-
-static json_t *report_json(const fm_job_result *r)
-{
-    json_t *tools = json_array();
-    for (size_t i = 0; i < r->tool_count; i++)
-        json_array_append_new(tools, json_pack("{s:i, s:f}", "tool", r->tools[i].tool,
-                                               "removed_volume_mm3", r->tools[i].removed_mm3));
-    json_t *blocks = json_array();
-    for (size_t i = 0; i < r->top_block_count; i++) {
-        const fm_stock_block *b = &r->top_blocks[i];
-        double span = b->t1 - b->t0;
-        json_array_append_new(
-            blocks, json_pack("{s:I, s:f, s:f, s:f, s:f}", "line", (json_int_t)b->block,
-                              "removed_volume_mm3", b->removed_mm3, "t0", b->t0, "t1", b->t1,
-                              "removal_rate_mm3_per_s", span > 0 ? b->removed_mm3 / span : 0.0));
-    }
-    return json_pack("{s:f, s:f, s:f, s:f, s:I, s:I, s:f, s:f, s:I, s:f, s:o, s:o, s:b}",
-                     "initial_volume_mm3", r->initial_volume_mm3, "final_volume_mm3",
-                     r->final_volume_mm3, "removed_volume_mm3", r->removed_volume_mm3,
-                     "surface_area_mm2", r->surface_area_mm2, "motions", (json_int_t)r->motions,
-                     "blocks", (json_int_t)r->blocks, "program_time_s", r->program_time_s,
-                     "wall_time_s", r->wall_time_s, "peak_memory_bytes",
-                     (json_int_t)r->peak_memory_bytes, "voxel_mm", r->voxel_mm, "tools", tools,
-                     "top_blocks", blocks, "stopped", r->stopped);
 }
 
 static int exit_status(fm_status st)
@@ -346,7 +322,7 @@ int fm_cmd_simulate(int argc, char **argv)
             (double)result.peak_memory_bytes / (1024.0 * 1024.0));
 
     if (report_path && status == 0) {
-        json_t *report = report_json(&result);
+        json_t *report = fm_job_report_json(&result);
         if (findings) json_object_set(report, "findings", findings);
         int rc = !strcmp(report_path, "-")
                      ? json_dumpf(report, stdout, JSON_INDENT(2) | JSON_REAL_PRECISION(10))

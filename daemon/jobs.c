@@ -23,6 +23,7 @@
 #include <unistd.h>
 
 #include "job.h"
+#include "report_json.h"
 #ifdef FM_HAVE_CHECK
 #include "jobs_check.h"
 #endif
@@ -738,31 +739,6 @@ static int on_progress(void *user, const fm_job_progress *p)
     return 0;
 }
 
-static json_t *report_json(const fm_job_result *r)
-{
-    json_t *tools = json_array();
-    for (size_t i = 0; i < r->tool_count; i++)
-        json_array_append_new(tools, json_pack("{s:i, s:f}", "tool", r->tools[i].tool,
-                                               "removed_volume_mm3", r->tools[i].removed_mm3));
-    json_t *blocks = json_array();
-    for (size_t i = 0; i < r->top_block_count; i++) {
-        const fm_stock_block *b = &r->top_blocks[i];
-        double span = b->t1 - b->t0;
-        json_array_append_new(
-            blocks, json_pack("{s:I, s:f, s:f, s:f, s:f}", "line", (json_int_t)b->block,
-                              "removed_volume_mm3", b->removed_mm3, "t0", b->t0, "t1", b->t1,
-                              "removal_rate_mm3_per_s", span > 0 ? b->removed_mm3 / span : 0.0));
-    }
-    return json_pack("{s:f, s:f, s:f, s:f, s:I, s:I, s:f, s:f, s:I, s:f, s:o, s:o, s:b}",
-                     "initial_volume_mm3", r->initial_volume_mm3, "final_volume_mm3",
-                     r->final_volume_mm3, "removed_volume_mm3", r->removed_volume_mm3,
-                     "surface_area_mm2", r->surface_area_mm2, "motions", (json_int_t)r->motions,
-                     "blocks", (json_int_t)r->blocks, "program_time_s", r->program_time_s,
-                     "wall_time_s", r->wall_time_s, "peak_memory_bytes",
-                     (json_int_t)r->peak_memory_bytes, "voxel_mm", r->voxel_mm, "tools", tools,
-                     "top_blocks", blocks, "stopped", r->stopped);
-}
-
 /* Inline stock models are written into the job's folder once, so that the
  * runner (and a resumed run) reads them like the CLI reads files. */
 static fm_status materialize_stock(job *j, char *path, size_t size, const char **spec_out,
@@ -965,7 +941,7 @@ static void run_job(fm_jobs *jobs, job *j)
     pthread_mutex_lock(&j->lock);
     j->view.removed_mm3 = result.initial_volume_mm3 - result.final_volume_mm3;
     j->view.stock_mm3 = result.final_volume_mm3;
-    j->report = report_json(&result);
+    j->report = fm_job_report_json(&result);
     pthread_mutex_unlock(&j->lock);
     save_snapshot(&rc, result.stock, result.stopped ? rc.resume_from : result.motions);
     fm_stock_free(result.stock);
