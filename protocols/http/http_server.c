@@ -166,7 +166,9 @@ static json_t *error_json(const fm_http_error *err)
 static enum MHD_Result respond_error(struct MHD_Connection *con, const fm_http_error *err,
                                      int close_after)
 {
-    char *text = json_dumps(error_json(err), JSON_COMPACT);
+    json_t *body = error_json(err);
+    char *text = body ? json_dumps(body, JSON_COMPACT) : NULL;
+    json_decref(body); /* every error answer leaked it (LeakSanitizer, daemon_check) */
     /* json_dumps of a fresh json_pack never fails short of memory. */
     if (!text) return MHD_NO;
     size_t n = strlen(text);
@@ -353,7 +355,9 @@ static void sse_append(sse_stream *st, const char *text, size_t n)
     size_t live = st->pending_size - st->pending_off;
     char *buf = malloc(live + n);
     if (!buf) return;
-    memcpy(buf, st->pending + st->pending_off, live);
+    /* The first append finds no pending buffer: memcpy from NULL, even of
+     * 0 bytes, is undefined (UBSan, daemon_e2e). */
+    if (live) memcpy(buf, st->pending + st->pending_off, live);
     memcpy(buf + live, text, n);
     free(st->pending);
     st->pending = buf;
@@ -477,7 +481,9 @@ static enum MHD_Result method_not_allowed(struct MHD_Connection *con, const char
     fm_http_error err;
     fm_http_error_set(&err, 405, "method_not_allowed", "%s %s: allowed methods are %s", method,
                       url, allow);
-    char *text = json_dumps(error_json(&err), JSON_COMPACT);
+    json_t *body = error_json(&err);
+    char *text = body ? json_dumps(body, JSON_COMPACT) : NULL;
+    json_decref(body);
     if (!text) return MHD_NO;
     struct MHD_Response *r =
         MHD_create_response_from_buffer(strlen(text), text, MHD_RESPMEM_MUST_FREE);

@@ -172,6 +172,8 @@ def main():
                   "a job with options.check false has no findings and no alarm")
         finally:
             rc = d.stop()
+            if rc != 0:
+                print(d.read_log()[-6000:])
         check(rc == 0, "the daemon stopped cleanly")
         print("test_check: %.1f s" % (time.time() - t0))
 

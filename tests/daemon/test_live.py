@@ -140,6 +140,8 @@ def main():
                   "a position written with live mode off cuts nothing")
         finally:
             rc = d.stop()
+            if rc != 0:
+                print(d.read_log()[-6000:])
         check(not words[1] & 0x40, "live bit clear after live mode off")
         check(rc == 0, "the daemon stopped cleanly")
         print("test_live: %.1f s" % (time.time() - t0))

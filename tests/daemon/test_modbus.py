@@ -101,6 +101,8 @@ def main():
                   "registers: done bit, sequence 2 acknowledged, progress 1000 per mille")
         finally:
             rc = d.stop()
+            if rc != 0:
+                print(d.read_log()[-6000:])
         check(rc == 0, "the daemon stopped cleanly")
         print("test_modbus: %.1f s" % (time.time() - t0))
 
