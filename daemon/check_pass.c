@@ -10,11 +10,17 @@ typedef struct check_run {
     fm_check *check;
     fm_status status;
     fm_error err;
+    const fm_check_pass_input *in;
+    int stopped;
 } check_run;
 
 static int before_motion(void *user, const fm_motion *m, const fm_tool *tool, fm_stock *stock)
 {
     check_run *r = user;
+    if (r->in->keep_going && !r->in->keep_going(r->in->keep_going_user)) {
+        r->stopped = 1;
+        return 1;
+    }
     r->status = fm_check_motion(r->check, m, tool, stock, &r->err);
     return r->status != FM_OK;
 }
@@ -63,6 +69,7 @@ fm_status fm_check_pass_run(const fm_check_pass_input *in, fm_check **out, fm_jo
     spec.skip_motions = 0;
 
     check_run run = {0};
+    run.in = in;
     run.check = fm_check_new(&in->options, err);
     if (!run.check) return err ? err->code : FM_ERR_INPUT;
     double lo[3], hi[3];
@@ -98,6 +105,11 @@ fm_status fm_check_pass_run(const fm_check_pass_input *in, fm_check **out, fm_jo
         return st;
     }
     fm_check_finish(run.check);
+    if (run.stopped) {
+        /* Partial findings are not a check's answer. */
+        fm_check_free(run.check);
+        return fm_error_set(err, FM_ERR_INTERNAL, "the check was stopped");
+    }
     if (result) *result = res;
     *out = run.check;
     return FM_OK;

@@ -25,6 +25,11 @@ typedef struct fm_check_pass_input {
     /* Fixture files: a HyperFun model (.hf) or a closed STL mesh (.stl). */
     const char *fixtures[FM_CHECK_PASS_MAX_FIXTURES];
     int fixture_count;
+    /* Optional: asked before each motion; 0 stops the pass early (the
+     * daemon's cancel and shutdown): fm_check_pass_run then fails with
+     * FM_ERR_INTERNAL "the check was stopped" and no findings. */
+    int (*keep_going)(void *user);
+    void *keep_going_user;
 } fm_check_pass_input;
 
 void fm_check_pass_input_default(fm_check_pass_input *in);
@@ -34,5 +39,6 @@ void fm_check_pass_input_default(fm_check_pass_input *in);
  * freed here). On error nothing is left allocated. */
 fm_status fm_check_pass_run(const fm_check_pass_input *in, fm_check **out, fm_job_result *result,
                             fm_error *err);
+
 
 #endif

@@ -792,6 +792,20 @@ static void finish(fm_jobs *jobs, job *j, fm_job_state state, const char *what)
     fm_log(state == FM_JOB_FAILED ? FM_LOG_WARN : FM_LOG_INFO, "job %s: %s", j->id, what);
 }
 
+#ifdef FM_HAVE_CHECK
+/* The check pass of a job stops for cancel, delete and shutdown like the
+ * simulation does. */
+static int check_keep_going(void *user)
+{
+    run_ctx *rc = user;
+    if (atomic_load(&rc->j->cancel_requested)) return 0;
+    pthread_mutex_lock(&rc->jobs->lock);
+    int stopping = rc->jobs->stopping;
+    pthread_mutex_unlock(&rc->jobs->lock);
+    return !stopping;
+}
+#endif
+
 static void run_job(fm_jobs *jobs, job *j)
 {
     fm_job_spec spec;
@@ -869,8 +883,12 @@ static void run_job(fm_jobs *jobs, job *j)
     if (st == FM_OK && fm_jobs_check_enabled(j->spec)) {
         fm_jobs_check_result cr;
         double t0 = mono_s();
-        st = fm_jobs_check_run(j->spec, j->dir, spec.stock.memory_budget, &cr, &err);
-        if (st == FM_OK) {
+        int stopped = 0;
+        st = fm_jobs_check_run_until(j->spec, j->dir, spec.stock.memory_budget, check_keep_going,
+                                     &rc, &cr, &stopped, &err);
+        /* Stopped (cancel, shutdown): the runner below stops at its first
+         * cut and takes the usual path (cancelled, or resumed next start). */
+        if (st == FM_OK && !stopped) {
             pthread_mutex_lock(&j->lock);
             set_findings(j, cr.findings);
             size_t i;

@@ -106,7 +106,16 @@ static fm_status write_model(json_t *model, const char *dir, const char *stem, c
 fm_status fm_jobs_check_run(json_t *spec, const char *dir, size_t memory_budget,
                             fm_jobs_check_result *out, fm_error *err)
 {
+    int stopped;
+    return fm_jobs_check_run_until(spec, dir, memory_budget, NULL, NULL, out, &stopped, err);
+}
+
+fm_status fm_jobs_check_run_until(json_t *spec, const char *dir, size_t memory_budget,
+                                  int (*keep_going)(void *user), void *user,
+                                  fm_jobs_check_result *out, int *stopped, fm_error *err)
+{
     memset(out, 0, sizeof *out);
+    *stopped = 0;
     fm_check_pass_input *in = calloc(1, sizeof *in);
     char (*paths)[PATH_MAX] = calloc(FM_CHECK_PASS_MAX_FIXTURES + 1, sizeof *paths);
     fm_tool_table table;
@@ -118,6 +127,8 @@ fm_status fm_jobs_check_run(json_t *spec, const char *dir, size_t memory_budget,
         goto done;
     }
     fm_check_pass_input_default(in);
+    in->keep_going = keep_going;
+    in->keep_going_user = user;
     fm_http_error herr;
     if (parse_options(check_options_of(spec), in, &herr)) {
         st = fm_error_set(err, FM_ERR_INPUT, "%s", herr.message);
@@ -181,6 +192,11 @@ fm_status fm_jobs_check_run(json_t *spec, const char *dir, size_t memory_budget,
 
     fm_check *check = NULL;
     st = fm_check_pass_run(in, &check, NULL, err);
+    if (st != FM_OK && keep_going && !keep_going(user)) {
+        *stopped = 1;
+        st = FM_OK;
+        goto done;
+    }
     if (st != FM_OK) goto done;
     out->findings = fm_findings_json_array(check);
     out->count = (int)fm_check_count(check);

@@ -35,6 +35,11 @@ typedef struct fm_jobs_check_result {
  * coarse grid. On failure err has the fm_status code and where. */
 fm_status fm_jobs_check_run(json_t *spec, const char *dir, size_t memory_budget,
                             fm_jobs_check_result *out, fm_error *err);
+/* The same, stopped early (*stopped = 1, FM_OK, no findings) when
+ * keep_going(user) returns 0 before a motion. */
+fm_status fm_jobs_check_run_until(json_t *spec, const char *dir, size_t memory_budget,
+                                  int (*keep_going)(void *user), void *user,
+                                  fm_jobs_check_result *out, int *stopped, fm_error *err);
 
 /* POST /v1/check: the same inputs as a job; {"findings": [...], "errors",
  * "warnings"} or an error status. state_dir holds the private temporary
