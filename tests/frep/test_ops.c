@@ -8,51 +8,7 @@
 
 #include <stdlib.h>
 
-#define PI 3.14159265358979323846
-
-/* Every value the tests read is also computed by the compiled tape
- * (fm_tape_compile + fm_eval_point) and must equal the reference
- * evaluator's. One tape is cached: tests evaluate one node many times. */
-static struct {
-    const fm_graph *g;
-    fm_node node;
-    fm_tape *tape;
-    fm_evaluator *ev;
-} tape_cache;
-
-static void tape_cache_clear(void)
-{
-    fm_evaluator_free(tape_cache.ev);
-    fm_tape_free(tape_cache.tape);
-    memset(&tape_cache, 0, sizeof tape_cache);
-}
-
-static void free_graph(fm_graph *g)
-{
-    tape_cache_clear();
-    fm_graph_free(g);
-}
-
-static double reference_and_tape(const fm_graph *g, fm_node n, const double p[4])
-{
-    double ref = fm_graph_eval_reference(g, n, p);
-    if (tape_cache.g != g || tape_cache.node != n) {
-        tape_cache_clear();
-        fm_error err;
-        fm_error_clear(&err);
-        tape_cache.g = g;
-        tape_cache.node = n;
-        tape_cache.tape = fm_tape_compile(g, n, &err);
-        tape_cache.ev = tape_cache.tape ? fm_evaluator_new(tape_cache.tape, &err) : NULL;
-        CHECK(tape_cache.ev != NULL);
-    }
-    if (tape_cache.ev) {
-        double v = fm_eval_point(tape_cache.ev, p);
-        if (isnan(ref)) CHECK(isnan(v));
-        else CHECK_NEAR(v, ref, 1e-12 * (1.0 + fabs(ref)));
-    }
-    return ref;
-}
+#include "reference_tape.h"
 
 static double ev4(const fm_graph *g, fm_node n, double x, double y, double z, double t)
 {
