@@ -25,15 +25,6 @@ static int before_motion(void *user, const fm_motion *m, const fm_tool *tool, fm
     return r->status != FM_OK;
 }
 
-static int has_extension(const char *path, const char *ext)
-{
-    size_t n = strlen(path), e = strlen(ext);
-    if (n <= e) return 0;
-    for (size_t i = 0; i < e; i++)
-        if (tolower((unsigned char)path[n - e + i]) != tolower((unsigned char)ext[i])) return 0;
-    return 1;
-}
-
 /* "box:X0,Y0,Z0,X1,Y1,Z1" gives the check the exact initial stock. */
 static int parse_box(const char *spec, double lo[3], double hi[3])
 {
@@ -76,8 +67,8 @@ fm_status fm_check_pass_run(const fm_check_pass_input *in, fm_check **out, fm_jo
     if (parse_box(spec.stock_spec, lo, hi)) fm_check_set_initial_box(run.check, lo, hi);
     for (int i = 0; i < in->fixture_count; i++) {
         const char *f = in->fixtures[i];
-        fm_status st = has_extension(f, ".hf")    ? fm_check_add_fixture_hf(run.check, f, NULL, err)
-                       : has_extension(f, ".stl") ? fm_check_add_fixture_stl(run.check, f,
+        fm_status st = fm_path_has_extension(f, ".hf")    ? fm_check_add_fixture_hf(run.check, f, NULL, err)
+                       : fm_path_has_extension(f, ".stl") ? fm_check_add_fixture_stl(run.check, f,
                                                                              spec.stock.voxel_mm, err)
                                                   : fm_error_set(err, FM_ERR_INPUT,
                                                                  "fixture %s: give a .hf model or "

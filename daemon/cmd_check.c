@@ -53,15 +53,6 @@ static int parse_double(const char *s, double *out)
     return end != s && *end == '\0' && errno != ERANGE && isfinite(*out);
 }
 
-static int has_extension(const char *path, const char *ext)
-{
-    size_t n = strlen(path), e = strlen(ext);
-    if (n <= e) return 0;
-    for (size_t i = 0; i < e; i++)
-        if (tolower((unsigned char)path[n - e + i]) != tolower((unsigned char)ext[i])) return 0;
-    return 1;
-}
-
 typedef struct check_run {
     fm_check *check;
 } check_run;
@@ -141,7 +132,7 @@ int fm_cmd_check(int argc, char **argv)
                 fprintf(stderr, "frepmill check: at most %d fixtures\n", CHECK_MAX_FIXTURES);
                 return 2;
             }
-            if (!has_extension(v, ".hf") && !has_extension(v, ".stl")) {
+            if (!fm_path_has_extension(v, ".hf") && !fm_path_has_extension(v, ".stl")) {
                 fprintf(stderr, "frepmill check: --fixture %s: give a .hf model or an .stl mesh\n", v);
                 return 2;
             }

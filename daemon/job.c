@@ -72,7 +72,7 @@ static int parse_numbers(const char *s, double *out, int n)
     return *s == '\0';
 }
 
-static int has_extension(const char *path, const char *ext)
+int fm_path_has_extension(const char *path, const char *ext)
 {
     size_t n = strlen(path), e = strlen(ext);
     if (n <= e) return 0;
@@ -228,9 +228,9 @@ fm_stock *fm_job_make_stock(const char *spec, const fm_stock_options *opt, fm_er
         }
         return fm_stock_new_cylinder(v[0], v[1], v[2], v[3], v[4], opt, err);
     }
-    if (has_extension(spec, ".hf")) return stock_from_model(spec, opt, err);
-    if (has_extension(spec, ".stl")) return fm_stock_new_from_stl(spec, opt, err);
-    if (has_extension(spec, ".vdb")) return fm_stock_load_vdb(spec, opt, err);
+    if (fm_path_has_extension(spec, ".hf")) return stock_from_model(spec, opt, err);
+    if (fm_path_has_extension(spec, ".stl")) return fm_stock_new_from_stl(spec, opt, err);
+    if (fm_path_has_extension(spec, ".vdb")) return fm_stock_load_vdb(spec, opt, err);
     fm_error_set(err, FM_ERR_INPUT,
                  "stock '%s' is not box:X0,Y0,Z0,X1,Y1,Z1, cylinder:X,Y,Z0,Z1,R, or a .hf, "
                  ".stl or .vdb file",
@@ -348,7 +348,7 @@ static fm_program_kind program_kind(const fm_job_spec *spec)
 {
     if (spec->program_kind != FM_PROGRAM_AUTO) return spec->program_kind;
     const char *name = spec->program_path ? spec->program_path : spec->program_name;
-    if (name && has_extension(name, ".json")) return FM_PROGRAM_TRAJECTORY;
+    if (name && fm_path_has_extension(name, ".json")) return FM_PROGRAM_TRAJECTORY;
     return FM_PROGRAM_GCODE;
 }
 
@@ -423,7 +423,7 @@ typedef struct cutter {
     long cuts;
 } cutter;
 
-static double motion_path_length(const fm_motion *m)
+double fm_job_motion_length(const fm_motion *m)
 {
     double d2 = 0;
     for (int a = 0; a < 3; a++) d2 += (m->end[a] - m->start[a]) * (m->end[a] - m->start[a]);
@@ -531,7 +531,7 @@ static int cut_sink(void *user, const fm_motion *m)
     if (m->kind == FM_MOTION_DWELL) return 0;
     const fm_tool *tool = tool_for(c->tools, m->tool);
     if (!tool) return 0; /* no tool in the spindle: nothing cuts */
-    double length = motion_path_length(m);
+    double length = fm_job_motion_length(m);
     double limit = c->spec->batch_diameters * tool->spec.diameter;
     int fits = c->spec->batch_diameters >= 0 && c->batch_count > 0 && c->batch_tool == tool &&
                c->batch_count < JOB_MAX_BATCH && c->batch_length + length <= limit;

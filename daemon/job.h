@@ -130,6 +130,14 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
  * check`). */
 fm_stock *fm_job_make_stock(const char *spec, const fm_stock_options *opt, fm_error *err);
 
+/* The path length the runner batches motions by: the chord, plus for arcs a
+ * full circumference per turn (an upper bound). Benchmarks that replay the
+ * runner's batching use it too. */
+double fm_job_motion_length(const fm_motion *motion);
+
+/* Does path end in ext (".hf", ...), case-insensitively? */
+int fm_path_has_extension(const char *path, const char *ext);
+
 /* Peak resident set size of this process in bytes (0 if unknown). */
 size_t fm_job_peak_rss(void);
 

@@ -3,6 +3,8 @@
  * polylines drawn over pictures. */
 #include "outputs.h"
 
+#include "job.h"
+
 #include <ctype.h>
 #include <math.h>
 #include <stdlib.h>
@@ -182,15 +184,6 @@ void fm_output_options_default(fm_output_options *opt)
     opt->png_height = 768;
 }
 
-static int ends_with(const char *path, const char *ext)
-{
-    size_t n = strlen(path), e = strlen(ext);
-    if (n <= e) return 0;
-    for (size_t i = 0; i < e; i++)
-        if (tolower((unsigned char)path[n - e + i]) != ext[i]) return 0;
-    return 1;
-}
-
 const char *fm_output_formats(void)
 {
     return ".vdb, .drc, .stl, .ply, .obj, .png";
@@ -198,7 +191,7 @@ const char *fm_output_formats(void)
 
 int fm_output_format_known(const char *path)
 {
-    return ends_with(path, ".vdb") || ends_with(path, ".png") ||
+    return fm_path_has_extension(path, ".vdb") || fm_path_has_extension(path, ".png") ||
            fm_mesh_format_from_path(path) != FM_MESH_FORMAT_UNKNOWN;
 }
 
@@ -257,11 +250,11 @@ fm_status fm_outputs_write(const char *const *paths, size_t count, fm_stock *sto
     fm_status st = FM_OK;
     for (size_t i = 0; i < count && st == FM_OK; i++) {
         const char *path = paths[i];
-        if (ends_with(path, ".vdb")) {
+        if (fm_path_has_extension(path, ".vdb")) {
             st = fm_stock_save(stock, path, NULL, err);
             continue;
         }
-        int png = ends_with(path, ".png");
+        int png = fm_path_has_extension(path, ".png");
         if (!png && fm_mesh_format_from_path(path) == FM_MESH_FORMAT_UNKNOWN) {
             st = fm_error_set(err, FM_ERR_INPUT, "%s: unknown output format (use %s)", path,
                               fm_output_formats());

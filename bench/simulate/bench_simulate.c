@@ -112,21 +112,6 @@ static int collect_sink(void *user, const fm_motion *m)
     return 0;
 }
 
-static double path_length(const fm_motion *m)
-{
-    double d2 = 0;
-    for (int a = 0; a < 3; a++) d2 += (m->end[a] - m->start[a]) * (m->end[a] - m->start[a]);
-    double chord = sqrt(d2);
-    if (m->kind == FM_MOTION_ARC) {
-        double r2 = 0;
-        for (int a = 0; a < 3; a++)
-            if (a != m->plane_axis) r2 += (m->start[a] - m->center[a]) * (m->start[a] - m->center[a]);
-        int turns = m->turns < 0 ? -m->turns : m->turns;
-        return chord + 2 * 3.14159265358979323846 * sqrt(r2) * (turns > 0 ? turns : 1);
-    }
-    return chord;
-}
-
 /* Rasterize one batch's field alone, clipped to the stock box. */
 static int floor_batch(const fm_motion *m, size_t n, const fm_tool_part *part, const double slo[3],
                        const double shi[3])
@@ -176,7 +161,7 @@ static double run_floor(const char *path, const char *textp, size_t len, const f
         double l = 0;
         if (!flush) {
             if (c.m[i].kind == FM_MOTION_DWELL) continue;
-            l = path_length(&c.m[i]);
+            l = fm_job_motion_length(&c.m[i]);
             flush = count > 0 && (length + l > limit || count >= 256);
         }
         if (flush && count > 0) {
