@@ -32,7 +32,7 @@
 #define SNAP_VERSION 1u
 #define SNAP_HEADER 32u
 #define SNAP_TRAILER 8u
-#define META_VERSION 1u
+#define META_VERSION 2u /* 2 added the tool marks; 1 is still read */
 #define TMP_MARK ".fmtmp."
 
 /* ------------------------------------------------------------ hashing -- */
@@ -148,8 +148,10 @@ static double take_f64(rbuf *r)
 /* ---------------------------------------------------------- metadata -- */
 
 /* voxel, band, version, initial and removed volume, the per-tool and
- * per-block tables, and the caller's resume string. */
-static void put_meta(wbuf *b, const fm_stock *s, const char *resume)
+ * per-block tables, the caller's resume string, and (version 2) the tool
+ * marks as u64 length + tool_marks.c's bytes. */
+static void put_meta(wbuf *b, const fm_stock *s, const char *resume, const unsigned char *marks,
+                     size_t marks_len)
 {
     put_u32(b, META_VERSION);
     put_f64(b, fm_vdb_voxel(s->vdb));
@@ -172,6 +174,8 @@ static void put_meta(wbuf *b, const fm_stock *s, const char *resume)
     const size_t n = resume ? strlen(resume) : 0;
     put_u32(b, (uint32_t)n);
     put_bytes(b, resume ? resume : "", n);
+    put_u64(b, marks_len);
+    put_bytes(b, marks, marks_len);
 }
 
 typedef struct meta {
@@ -185,6 +189,8 @@ typedef struct meta {
     const unsigned char *blocks; /* 32 bytes each */
     uint32_t resume_len;
     const unsigned char *resume;
+    uint64_t marks_len;
+    const unsigned char *marks;
 } meta;
 
 static fm_status parse_meta(const unsigned char *p, size_t len, meta *m, const char *path,
@@ -192,9 +198,10 @@ static fm_status parse_meta(const unsigned char *p, size_t len, meta *m, const c
 {
     rbuf r = {p, len, 0, 0};
     const uint32_t v = take_u32(&r);
-    if (!r.failed && v != META_VERSION)
-        return fm_error_set(err, FM_ERR_INPUT, "%s: snapshot metadata version %u is not %u",
-                            path, v, META_VERSION);
+    if (!r.failed && v != META_VERSION && v != 1)
+        return fm_error_set(err, FM_ERR_INPUT,
+                            "%s: snapshot metadata version %u is not 1 or %u", path, v,
+                            META_VERSION);
     m->voxel = take_f64(&r);
     m->band = take_u32(&r);
     m->version = take_u64(&r);
@@ -206,6 +213,11 @@ static fm_status parse_meta(const unsigned char *p, size_t len, meta *m, const c
     m->blocks = take(&r, (size_t)m->nblocks * 32);
     m->resume_len = take_u32(&r);
     m->resume = take(&r, m->resume_len);
+    if (v >= 2) {
+        m->marks_len = take_u64(&r);
+        m->marks = m->marks_len <= len ? take(&r, (size_t)m->marks_len) : NULL;
+        if (!m->marks) r.failed = 1;
+    }
     if (r.failed || r.pos != len)
         return fm_error_set(err, FM_ERR_INPUT, "%s: snapshot metadata is malformed", path);
     if (!(m->voxel > 0) || m->band < 2 || m->band > 32 || m->ntools > FM_STOCK_MAX_TOOLS)
@@ -273,8 +285,12 @@ fm_status fm_stock_save(const fm_stock *s, const char *path, const char *resume,
              (long)getpid(), seq);
     snprintf(prev, sizeof prev, "%s.prev", path);
 
+    size_t marks_len = 0;
+    unsigned char *marks = fm_tool_marks_encode(&s->marks, &marks_len);
+    if (!marks) return fm_error_set(err, FM_ERR_LIMIT, "snapshot not saved: out of memory");
     wbuf m = {0};
-    put_meta(&m, s, resume);
+    put_meta(&m, s, resume, marks, marks_len);
+    free(marks);
     unsigned char *vdb = NULL;
     size_t vdb_len = 0;
     if (m.failed) {
@@ -491,6 +507,11 @@ fm_stock *fm_stock_load_vdb(const char *path, const fm_stock_options *opt_in, fm
             memcpy(&d[k], &u, 8);
         }
         fm_stock_add_block(s, (int64_t)get_u64(b), d[0], d[1], d[2]);
+    }
+    if (m.marks && fm_tool_marks_decode(&s->marks, m.marks, (size_t)m.marks_len, path, err)) {
+        fm_stock_free(s);
+        s = NULL;
+        goto out;
     }
     char *resume = malloc((size_t)m.resume_len + 1);
     if (!resume) {

@@ -215,22 +215,7 @@ fm_stock *fm_stock_new_from_field(const fm_field *field, const fm_stock_options 
 
 /* ------------------------------------------------------------ tables -- */
 
-static uint64_t hash_mix(uint64_t x)
-{
-    x ^= x >> 33;
-    x *= 0xff51afd7ed558ccdULL;
-    x ^= x >> 33;
-    x *= 0xc4ceb9fe1a85ec53ULL;
-    x ^= x >> 33;
-    return x;
-}
-
-static uint64_t chunk_hash(const int32_t k[3])
-{
-    return hash_mix(((uint64_t)(uint32_t)k[0] * 0x9E3779B97F4A7C15ULL) ^
-                    ((uint64_t)(uint32_t)k[1] << 21) ^ ((uint64_t)(uint32_t)k[2] << 42) ^
-                    (uint64_t)(uint32_t)k[2]);
-}
+static uint64_t chunk_hash(const int32_t k[3]) { return fm_stock_hash3(k); }
 
 static fm_status chunk_grow(fm_stock *s)
 {
@@ -324,7 +309,7 @@ static int tool_known(const fm_stock *s, int tool)
 
 static size_t block_slot_of(const fm_stock *s, int64_t block)
 {
-    return hash_mix((uint64_t)block) & (s->block_index_size - 1);
+    return fm_stock_hash_mix((uint64_t)block) & (s->block_index_size - 1);
 }
 
 /* Index slot holding block, or the empty slot where it would go. */
@@ -433,6 +418,7 @@ void fm_stock_free(fm_stock *s)
     free(s->blocks);
     free(s->block_index);
     free(s->chunks);
+    fm_tool_marks_free(&s->marks);
     free(s->resume);
     free(s);
 }
@@ -442,8 +428,10 @@ void fm_stock_free(fm_stock *s)
 typedef struct touch_ctx {
     fm_stock *stock;
     uint64_t version;
+    int slot; /* the cutting tool's mark slot */
     int touched;
-    int failed;
+    int failed;       /* the dirty-chunk table ran out of memory */
+    int marks_failed; /* the tool marks did */
 } touch_ctx;
 
 static void touch_box(void *user, const int32_t lo[3], const int32_t hi[3])
@@ -451,6 +439,19 @@ static void touch_box(void *user, const int32_t lo[3], const int32_t hi[3])
     touch_ctx *t = user;
     t->touched = 1;
     if (fm_stock_mark_box(t->stock, lo, hi, t->version)) t->failed = 1;
+}
+
+static void leaf_set(void *user, const int32_t lo[3], const uint64_t set[8])
+{
+    touch_ctx *t = user;
+    if (t->slot < 0 || fm_tool_marks_set(&t->stock->marks, lo, set, t->slot))
+        t->marks_failed = 1;
+}
+
+static void cleared(void *user, const int32_t lo[3], const int32_t hi[3])
+{
+    touch_ctx *t = user;
+    fm_tool_marks_clear(&t->stock->marks, lo, hi);
 }
 
 fm_status fm_stock_subtract(fm_stock *s, const fm_field *swept, const fm_stock_cut *cut,
@@ -464,18 +465,43 @@ fm_status fm_stock_subtract(fm_stock *s, const fm_field *swept, const fm_stock_c
                             FM_STOCK_MAX_TOOLS);
     /* zeroed: a field that misses the stock returns before any figure is set */
     fm_stock_cut_stats st = {0};
-    touch_ctx t = {s, s->version + 1, 0, 0};
-    fm_status rc = fm_vdb_subtract(s->vdb, swept, s->opt.memory_budget, touch_box, &t, &st, err);
+    touch_ctx t = {s, s->version + 1, fm_tool_marks_slot(&s->marks, c.tool), 0, 0, 0};
+    const fm_vdb_cut_events ev = {&t, touch_box, leaf_set, cleared};
+    /* the tool marks live beside the grid and share its budget */
+    const size_t marks = fm_tool_marks_bytes(&s->marks);
+    const size_t budget = s->opt.memory_budget > marks ? s->opt.memory_budget - marks : 0;
+    fm_status rc = fm_vdb_subtract(s->vdb, swept, budget, &ev, &st, err);
     if (rc) return rc;
     if (t.touched) s->version = t.version;
     s->removed_total += st.removed_mm3;
     fm_stock_add_tool(s, c.tool, st.removed_mm3); /* room checked above */
     fm_stock_add_block(s, c.block, st.removed_mm3, c.t0, c.t1);
     if (stats) *stats = st;
-    if (t.failed)
+    if (t.failed || t.marks_failed)
         return fm_error_set(err, FM_ERR_LIMIT,
-                            "the cut was made but the dirty-chunk table ran out of memory");
+                            "the cut was made but the %s table ran out of memory",
+                            t.failed ? "dirty-chunk" : "tool-mark");
     return FM_OK;
+}
+
+int fm_stock_voxel_tool(const fm_stock *s, const int32_t ijk[3], int *tool)
+{
+    return fm_tool_marks_get(&s->marks, ijk, tool);
+}
+
+int fm_stock_point_tool(const fm_stock *s, const double p[3], int *tool)
+{
+    double origin[3];
+    const double zero[3] = {0, 0, 0};
+    fm_stock_index_to_world(s, zero, origin);
+    const double voxel = fm_vdb_voxel(s->vdb);
+    int32_t ijk[3];
+    for (int k = 0; k < 3; k++) {
+        const double i = floor((p[k] - origin[k]) / voxel + 0.5);
+        if (!(i > -2147483648.0 && i < 2147483647.0)) return 0;
+        ijk[k] = (int32_t)i;
+    }
+    return fm_tool_marks_get(&s->marks, ijk, tool);
 }
 
 /* ----------------------------------------------------------- measures -- */
@@ -535,7 +561,10 @@ fm_status fm_stock_surface_area(const fm_stock *s, double *area, fm_error *err)
     return fm_vdb_area(s->vdb, area, err);
 }
 
-size_t fm_stock_memory_bytes(const fm_stock *s) { return fm_vdb_memory(s->vdb); }
+size_t fm_stock_memory_bytes(const fm_stock *s)
+{
+    return fm_vdb_memory(s->vdb) + fm_tool_marks_bytes(&s->marks);
+}
 
 void fm_stock_set_memory_budget(fm_stock *s, size_t bytes)
 {

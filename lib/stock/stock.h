@@ -115,11 +115,22 @@ size_t fm_stock_blocks(const fm_stock *stock, fm_stock_block *out, size_t cap);
 /* 1 and *out if the block is in the table, else 0. */
 int fm_stock_block_removed(const fm_stock *stock, int64_t block, fm_stock_block *out);
 
+/* The tool that last cut a voxel: 1 and *tool (may be NULL) when a cut
+ * set voxel ijk's value, 0 where no cut did (uncut stock, or away from
+ * the surface). Every cut records its tool on the voxels near the new
+ * surface whose values it set (what colours meshes by tool); the records
+ * take about 90 bytes per 8^3 leaf, 1 KB more where two tools share one,
+ * within the memory budget, and are kept in snapshots. */
+int fm_stock_voxel_tool(const fm_stock *stock, const int32_t ijk[3], int *tool);
+/* The same at the voxel nearest a world point (mm). */
+int fm_stock_point_tool(const fm_stock *stock, const double p[3], int *tool);
+
 /* Surface area (mm^2), OpenVDB's levelSetArea; costs O(grid). */
 fm_status fm_stock_surface_area(const fm_stock *stock, double *area_mm2, fm_error *err);
 /* Change the memory budget later cuts are held to (bytes, > 0). */
 void fm_stock_set_memory_budget(fm_stock *stock, size_t bytes);
-/* Memory the grid uses now (bytes, OpenVDB's own count). */
+/* Memory the grid uses now (bytes, OpenVDB's own count plus the tool
+ * marks). */
 size_t fm_stock_memory_bytes(const fm_stock *stock);
 
 /* ------------------------------------------------------------- chunks -- */

@@ -15,6 +15,63 @@ typedef struct fm_stock_chunk_slot {
     uint64_t version;
 } fm_stock_chunk_slot;
 
+/* Which tool last set the voxels of one 8^3 leaf (tool_marks.c). */
+typedef struct fm_tool_leaf {
+    int32_t origin[3];
+    uint16_t uniform; /* tool slot + 1 of every set voxel while ids is NULL */
+    uint64_t set[8];  /* voxel i = 64 x + 8 y + z: bit (i & 63) of set[i >> 6] */
+    uint16_t *ids;    /* per voxel slot + 1 (0: never set), once two tools share the leaf */
+} fm_tool_leaf;
+
+typedef struct fm_tool_marks {
+    int *slot_tool; /* slot -> tool number */
+    size_t nslots;
+    fm_tool_leaf *leaves; /* dense */
+    size_t nleaves, cap_leaves;
+    uint32_t *index; /* open addressing over leaf origins: record + 1, 0 = empty */
+    size_t index_size; /* power of two, >= 2 * nleaves */
+    size_t mixed;      /* records with ids */
+} fm_tool_marks;
+
+void fm_tool_marks_free(fm_tool_marks *m);
+/* Slot of a tool number (added when new); -1 when out of memory or over
+ * FM_STOCK_MAX_TOOLS slots. */
+int fm_tool_marks_slot(fm_tool_marks *m, int tool);
+/* The voxels in set of the leaf at origin were set by slot's tool.
+ * FM_ERR_LIMIT when out of memory (the marks stay consistent). */
+fm_status fm_tool_marks_set(fm_tool_marks *m, const int32_t origin[3], const uint64_t set[8],
+                            int slot);
+/* Forget the leaves inside the index box (no surface there any more). */
+void fm_tool_marks_clear(fm_tool_marks *m, const int32_t lo[3], const int32_t hi[3]);
+/* 1 and *tool when a cut set voxel ijk, else 0. */
+int fm_tool_marks_get(const fm_tool_marks *m, const int32_t ijk[3], int *tool);
+size_t fm_tool_marks_bytes(const fm_tool_marks *m);
+/* Snapshot bytes (malloc'd; NULL when out of memory) and back. decode
+ * checks every count against the bytes present before allocating and
+ * leaves m empty on failure; path names the file in errors. */
+unsigned char *fm_tool_marks_encode(const fm_tool_marks *m, size_t *len);
+fm_status fm_tool_marks_decode(fm_tool_marks *m, const unsigned char *p, size_t len,
+                               const char *path, fm_error *err);
+
+/* The hashes of the stock's open-addressing tables: a 64-bit mixer
+ * (MurmurHash3's finalizer) and index triples through it. */
+static inline uint64_t fm_stock_hash_mix(uint64_t x)
+{
+    x ^= x >> 33;
+    x *= 0xff51afd7ed558ccdULL;
+    x ^= x >> 33;
+    x *= 0xc4ceb9fe1a85ec53ULL;
+    x ^= x >> 33;
+    return x;
+}
+
+static inline uint64_t fm_stock_hash3(const int32_t k[3])
+{
+    return fm_stock_hash_mix(((uint64_t)(uint32_t)k[0] * 0x9E3779B97F4A7C15ULL) ^
+                             ((uint64_t)(uint32_t)k[1] << 21) ^
+                             ((uint64_t)(uint32_t)k[2] << 42) ^ (uint64_t)(uint32_t)k[2]);
+}
+
 struct fm_stock {
     fm_vdb *vdb;
     fm_stock_options opt;
@@ -32,6 +89,8 @@ struct fm_stock {
 
     fm_stock_chunk_slot *chunks; /* open addressing, power-of-two size */
     size_t nchunks, cap_chunks;
+
+    fm_tool_marks marks;
 
     char *resume;
 };

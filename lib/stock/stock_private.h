@@ -27,12 +27,26 @@ void fm_vdb_free(fm_vdb *v);
  * the interval pass would exceed budget bytes. */
 fm_status fm_vdb_rasterize(fm_vdb *v, const fm_field *field, size_t budget, fm_error *err);
 
-/* grid = grid \ field, restricted to the region that can change. touch is
- * called (on the calling thread) for every index box whose values changed.
- * Refuses with FM_ERR_LIMIT, grid unchanged, when the new leaves would take
- * the grid over budget. */
-fm_status fm_vdb_subtract(fm_vdb *v, const fm_field *field, size_t budget, fm_vdb_touch_fn touch,
-                          void *user, fm_stock_cut_stats *stats, fm_error *err);
+/* What a subtraction reports, on the calling thread, after the parallel
+ * work. Any callback may be NULL. */
+typedef struct fm_vdb_cut_events {
+    void *user;
+    /* an index box whose values changed */
+    void (*touch)(void *user, const int32_t lo[3], const int32_t hi[3]);
+    /* the leaf at index box [lo, hi] (8^3 voxels) keeps a surface; bit
+     * (i & 63) of set[i >> 6] says voxel i = 64 x + 8 y + z (offsets in
+     * the leaf) got its value from this cut */
+    void (*leaf_set)(void *user, const int32_t lo[3], const uint64_t set[8]);
+    /* the index box holds no surface any more (a tile now) */
+    void (*cleared)(void *user, const int32_t lo[3], const int32_t hi[3]);
+} fm_vdb_cut_events;
+
+/* grid = grid \ field, restricted to the region that can change; events
+ * (may be NULL) hears what changed. Refuses with FM_ERR_LIMIT, grid
+ * unchanged, when the new leaves would take the grid over budget. */
+fm_status fm_vdb_subtract(fm_vdb *v, const fm_field *field, size_t budget,
+                          const fm_vdb_cut_events *events, fm_stock_cut_stats *stats,
+                          fm_error *err);
 
 /* Closed triangle soup (world mm) to a level set; grid must be empty. */
 fm_status fm_vdb_from_mesh(fm_vdb *v, const float *points, size_t npoints, const uint32_t *tris,

@@ -262,6 +262,7 @@ enum : uint8_t { ACT_NONE = 0, ACT_CHANGED, ACT_NEW_LEAF, ACT_TILE_OUT, ACT_TILE
 
 struct JobResult {
     Leaf *created = nullptr;
+    uint64_t set[LEAF_SIZE / 64] = {}; /* subtract: voxels whose value the cut set */
     size_t evaluated = 0; /* voxels the field was evaluated at */
     size_t intervals = 0; /* interval evaluations over octants of the leaf */
     double before = 0, after = 0; /* volume in voxels */
@@ -358,7 +359,10 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
         active[i] = std::fabs(phi) < bg;
         n_active += active[i];
         n_neg += phi < 0;
-        if (phi != a) changed = true;
+        if (phi != a) {
+            changed = true;
+            res.set[i >> 6] |= uint64_t(1) << (i & 63);
+        }
         before += inside_fraction(a, inv);
         after += inside_fraction(phi, inv);
     }
@@ -437,8 +441,7 @@ void prune_node1(Tree &tree, const Coord &ijk)
 }
 
 fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budget,
-                        fm_vdb_touch_fn touch, void *user, fm_stock_cut_stats *stats,
-                        fm_error *err)
+                        const fm_vdb_cut_events *ev, fm_stock_cut_stats *stats, fm_error *err)
 {
     if (!field || !field->batch || !field->interval)
         return fm_error_set(err, FM_ERR_INPUT, "field has no batch or interval callback");
@@ -566,12 +569,14 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
             break;
         }
         changed++;
-        if (touch) {
-            const int32_t tlo[3] = {o.x(), o.y(), o.z()};
-            const int32_t thi[3] = {o.x() + LEAF_DIM - 1, o.y() + LEAF_DIM - 1,
-                                    o.z() + LEAF_DIM - 1};
-            touch(user, tlo, thi);
-        }
+        const int32_t tlo[3] = {o.x(), o.y(), o.z()};
+        const int32_t thi[3] = {o.x() + LEAF_DIM - 1, o.y() + LEAF_DIM - 1,
+                                o.z() + LEAF_DIM - 1};
+        if (ev && ev->touch) ev->touch(ev->user, tlo, thi);
+        if (ev && r.action != ACT_CHANGED && r.action != ACT_NEW_LEAF && ev->cleared)
+            ev->cleared(ev->user, tlo, thi);
+        else if (ev && ev->leaf_set)
+            ev->leaf_set(ev->user, tlo, r.set);
     }
     for (size_t i = 0; i < cls.inside.size(); i++) {
         const Box &b = cls.inside[i];
@@ -585,11 +590,10 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
         tree.fill(bb, bg, false);
         v->leaves -= std::min(v->leaves, inside_leaves[i]);
         node1s.push_back(b.origin);
-        if (touch) {
-            const int32_t tlo[3] = {bb.min().x(), bb.min().y(), bb.min().z()};
-            const int32_t thi[3] = {bb.max().x(), bb.max().y(), bb.max().z()};
-            touch(user, tlo, thi);
-        }
+        const int32_t tlo[3] = {bb.min().x(), bb.min().y(), bb.min().z()};
+        const int32_t thi[3] = {bb.max().x(), bb.max().y(), bb.max().z()};
+        if (ev && ev->touch) ev->touch(ev->user, tlo, thi);
+        if (ev && ev->cleared) ev->cleared(ev->user, tlo, thi);
     }
     if (mode == Mode::subtract) {
         for (const Coord &c : node1s) prune_node1(tree, c);
@@ -712,16 +716,17 @@ void fm_vdb_free(fm_vdb *v)
 fm_status fm_vdb_rasterize(fm_vdb *v, const fm_field *field, size_t budget, fm_error *err)
 {
     return guarded(err, "rasterizing the stock", [&] {
-        return run_rasterize(v, field, Mode::build, budget, nullptr, nullptr, nullptr, err);
+        return run_rasterize(v, field, Mode::build, budget, nullptr, nullptr, err);
     });
 }
 
-fm_status fm_vdb_subtract(fm_vdb *v, const fm_field *field, size_t budget, fm_vdb_touch_fn touch,
-                          void *user, fm_stock_cut_stats *stats, fm_error *err)
+fm_status fm_vdb_subtract(fm_vdb *v, const fm_field *field, size_t budget,
+                          const fm_vdb_cut_events *events, fm_stock_cut_stats *stats,
+                          fm_error *err)
 {
     if (stats) std::memset(stats, 0, sizeof *stats);
     return guarded(err, "subtracting a swept volume", [&] {
-        return run_rasterize(v, field, Mode::subtract, budget, touch, user, stats, err);
+        return run_rasterize(v, field, Mode::subtract, budget, events, stats, err);
     });
 }
 
