@@ -192,7 +192,7 @@ fm_status fm_render_png(const fm_mesh *mesh, const fm_render_options *opt, const
 typedef enum fm_mesh_coloring {
     FM_MESH_COLOR_NONE = 0,
     FM_MESH_COLOR_DEPTH, /* by depth below options.top_z: a ramp over [0, depth_range] */
-    FM_MESH_COLOR_TOOL   /* by the tool that last cut there (needs lib/stock's tool ids) */
+    FM_MESH_COLOR_TOOL   /* by the tool that last cut there (lib/stock's tool marks) */
 } fm_mesh_coloring;
 
 typedef struct fm_mesh_extract_options {
@@ -201,12 +201,15 @@ typedef struct fm_mesh_extract_options {
     fm_mesh_coloring coloring; /* default FM_MESH_COLOR_NONE */
     double top_z;         /* original stock top for FM_MESH_COLOR_DEPTH, mm */
     double depth_range;   /* mm of depth the ramp spans; default 10 */
+    int uncut_grey;       /* FM_MESH_COLOR_DEPTH: where no cut reached, the uncut grey
+                             (fm_mesh_tool_color(-1)) instead of the ramp; default 0 */
     fm_mesh_budget budget;
 } fm_mesh_extract_options;
 void fm_mesh_extract_default(fm_mesh_extract_options *opt);
 
 /* Colour of a depth (mm below top) on the ramp FM_MESH_COLOR_DEPTH uses;
- * and of a tool number for FM_MESH_COLOR_TOOL. */
+ * and of a tool number for FM_MESH_COLOR_TOOL: twelve distinct hues by
+ * tool number modulo 12, and a neutral grey for tool < 0 (never cut). */
 void fm_mesh_depth_color(double depth, double range, uint8_t rgb[3]);
 void fm_mesh_tool_color(int tool, uint8_t rgb[3]);
 

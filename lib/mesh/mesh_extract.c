@@ -47,16 +47,17 @@ void fm_mesh_depth_color(double depth, double range, uint8_t rgb[3])
 
 void fm_mesh_tool_color(int tool, uint8_t rgb[3])
 {
-    /* Twelve distinct hues; tool 0 (never cut) is the stock's grey. */
+    /* Twelve distinct hues (tool 0, "no tool" in many controls, still cuts
+     * in a simulation and gets one); negative: never cut, the stock's grey. */
     static const uint8_t palette[12][3] = {
         {230, 25, 75},  {60, 180, 75},  {0, 130, 200},  {245, 130, 48},
         {145, 30, 180}, {70, 240, 240}, {240, 50, 230}, {210, 245, 60},
         {250, 190, 190}, {0, 128, 128}, {170, 110, 40}, {128, 0, 0}};
-    if (tool <= 0) {
+    if (tool < 0) {
         rgb[0] = rgb[1] = rgb[2] = 200;
         return;
     }
-    memcpy(rgb, palette[(tool - 1) % 12], 3);
+    memcpy(rgb, palette[(tool + 11) % 12], 3);
 }
 
 fm_mesh *fm_mesh_from_field(const struct fm_field *field, double voxel_mm,

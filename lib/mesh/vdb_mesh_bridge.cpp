@@ -1,6 +1,6 @@
 // vdb_mesh_bridge.cpp: meshes from the stock's OpenVDB level set, whole grid
 // or one 64^3-voxel chunk at a time, with normals from the level-set gradient
-// and colours by depth. The only lib/mesh file that sees OpenVDB; it reaches
+// and colours by depth or by the tool that last cut (lib/stock's tool marks). The only lib/mesh file that sees OpenVDB; it reaches
 // the grid through lib/stock's private door (fm_stock_vdb_grid) and never
 // changes it. Every exception stops at the extern "C" functions.
 #include "mesh/mesh.h"
@@ -63,8 +63,8 @@ bool less(const openvdb::Vec3s &a, const openvdb::Vec3s &b)
 // split a face alike), faces reversed to fm_mesh's outward counter-clockwise
 // order (OpenVDB's polygons wind the other way for phi < 0 inside), then
 // normals and colours per vertex.
-fm_mesh *to_mesh(const Grid &grid, const Polygons &pg, const fm_mesh_extract_options &o,
-                 fm_error *err)
+fm_mesh *to_mesh(const fm_stock *stock, const Grid &grid, const Polygons &pg,
+                 const fm_mesh_extract_options &o, fm_error *err)
 {
     size_t nt = pg.triangles.size() + 2 * pg.quads.size();
     unsigned attrs = (o.normals ? FM_MESH_NORMALS : 0u) |
@@ -130,10 +130,21 @@ fm_mesh *to_mesh(const Grid &grid, const Polygons &pg, const fm_mesh_extract_opt
                 m->normals[3 * i + k] = len > 0 ? float(g[k] / len) : 0.0f;
         }
     }
-    if (o.coloring == FM_MESH_COLOR_DEPTH)
-        for (size_t i = 0; i < m->vertex_count; i++)
-            fm_mesh_depth_color(o.top_z - m->positions[3 * i + 2], o.depth_range,
-                                m->colors + 3 * i);
+    // Colours too depend only on the vertex position: the tool recorded at
+    // the voxel nearest the vertex (one of its cell's corners, whose value
+    // that tool's surface set).
+    for (size_t i = 0; o.coloring != FM_MESH_COLOR_NONE && i < m->vertex_count; i++) {
+        const float *pf = m->positions + 3 * i;
+        const double p[3] = {pf[0], pf[1], pf[2]};
+        int tool = -1;
+        const int cut = fm_stock_point_tool(stock, p, &tool);
+        if (o.coloring == FM_MESH_COLOR_TOOL)
+            fm_mesh_tool_color(cut ? tool : -1, m->colors + 3 * i);
+        else if (o.uncut_grey && !cut)
+            fm_mesh_tool_color(-1, m->colors + 3 * i);
+        else
+            fm_mesh_depth_color(o.top_z - p[2], o.depth_range, m->colors + 3 * i);
+    }
     return guard.release();
 }
 
@@ -141,11 +152,9 @@ fm_status check_options(const fm_mesh_extract_options &o, fm_error *err)
 {
     if (!(o.adaptivity >= 0 && o.adaptivity <= 1))
         return fm_error_set(err, FM_ERR_INPUT, "mesh adaptivity must be in 0..1");
-    if (o.coloring == FM_MESH_COLOR_TOOL)
-        // lib/stock keeps no per-voxel record of the cutting tool yet.
-        return fm_error_set(err, FM_ERR_INPUT,
-                            "colouring by tool needs per-voxel tool ids, which the stock does "
-                            "not record; use depth colouring");
+    if (o.coloring != FM_MESH_COLOR_NONE && o.coloring != FM_MESH_COLOR_DEPTH &&
+        o.coloring != FM_MESH_COLOR_TOOL)
+        return fm_error_set(err, FM_ERR_INPUT, "unknown mesh colouring %d", int(o.coloring));
     if (o.coloring == FM_MESH_COLOR_DEPTH && !(o.depth_range > 0))
         return fm_error_set(err, FM_ERR_INPUT, "depth colour range must be positive");
     return FM_OK;
@@ -176,7 +185,7 @@ fm_mesh *whole(fm_stock *stock, const fm_mesh_extract_options &o, fm_error *err)
     Polygons pg;
     openvdb::tools::volumeToMesh(grid, pg.points, pg.triangles, pg.quads, 0.0, o.adaptivity,
                                  true);
-    return to_mesh(grid, pg, o, err);
+    return to_mesh(stock, grid, pg, o, err);
 }
 
 constexpr int CHUNK = FM_STOCK_CHUNK_VOXELS;
@@ -246,7 +255,7 @@ fm_mesh *chunk(fm_stock *stock, const int32_t index[3], const fm_mesh_extract_op
         for (size_t i = 0; i < pool.numTriangles(); i++)
             pg.triangles.push_back(pool.triangle(i));
     }
-    fm_mesh *m = to_mesh(grid, pg, oc, err);
+    fm_mesh *m = to_mesh(stock, grid, pg, oc, err);
     return m;
 }
 
