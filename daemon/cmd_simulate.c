@@ -300,9 +300,6 @@ int fm_cmd_simulate(int argc, char **argv)
 
     int status = 0;
     out_opt.top_z = result.initial_hi[2];
-    out_opt.have_stock_box = 1;
-    memcpy(out_opt.stock_lo, result.initial_lo, sizeof out_opt.stock_lo);
-    memcpy(out_opt.stock_hi, result.initial_hi, sizeof out_opt.stock_hi);
     out_opt.toolpath = bar.toolpath;
     st = fm_outputs_write(outputs, (size_t)output_count, result.stock, &out_opt, &err);
     if (st != FM_OK) {

@@ -195,24 +195,6 @@ int fm_output_format_known(const char *path)
            fm_mesh_format_from_path(path) != FM_MESH_FORMAT_UNKNOWN;
 }
 
-/* Vertices on the original stock's bounding box are uncut surface: give
- * them a neutral grey instead of a depth colour. The box is known to about
- * a voxel (job.h), hence the tolerance the caller passes. */
-static void grey_uncut(fm_mesh *mesh, const fm_output_options *opt, double tol)
-{
-    static const uint8_t grey[3] = {196, 196, 202};
-    if (!mesh->colors || !opt->have_stock_box) return;
-    for (size_t v = 0; v < mesh->vertex_count; v++) {
-        const float *p = mesh->positions + 3 * v;
-        for (int k = 0; k < 3; k++) {
-            if (fabs(p[k] - opt->stock_lo[k]) <= tol || fabs(p[k] - opt->stock_hi[k]) <= tol) {
-                memcpy(mesh->colors + 3 * v, grey, 3);
-                break;
-            }
-        }
-    }
-}
-
 static fm_status write_png(const fm_mesh *mesh, const char *path, const fm_output_options *opt,
                            fm_error *err)
 {
@@ -265,13 +247,13 @@ fm_status fm_outputs_write(const char *const *paths, size_t count, fm_stock *sto
             fm_mesh_extract_default(&eo);
             eo.coloring = opt->coloring;
             eo.top_z = opt->top_z;
+            /* faces no cut reached keep a neutral grey, so that cuts stand out */
+            eo.uncut_grey = 1;
             mesh = fm_mesh_from_stock(stock, &eo, err);
             if (!mesh) {
                 st = err ? err->code : FM_ERR_INTERNAL;
                 break;
             }
-            if (opt->coloring == FM_MESH_COLOR_DEPTH)
-                grey_uncut(mesh, opt, 1.5 * fm_stock_voxel_size(stock));
         }
         st = png ? write_png(mesh, path, opt, err) : fm_mesh_write_file(mesh, path, NULL, err);
     }

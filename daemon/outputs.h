@@ -23,11 +23,8 @@ int fm_toolpath_truncated(const fm_toolpath *path);
 
 typedef struct fm_output_options {
     fm_mesh_coloring coloring; /* default FM_MESH_COLOR_DEPTH */
-    double top_z;              /* original stock top for depth colours */
-    /* The original stock's bounding box: with depth colours, surface still
-     * on it (uncut) keeps a neutral colour, so that cuts stand out. */
-    int have_stock_box;
-    double stock_lo[3], stock_hi[3];
+    double top_z;              /* original stock top for depth colours; surface no cut
+                                  reached is grey with either colouring */
     int png_width, png_height; /* default 1024 x 768 */
     const fm_toolpath *toolpath; /* overlay for pictures; may be NULL */
 } fm_output_options;
