@@ -145,6 +145,31 @@ static void emit(job *j, const char *type, json_t *data)
     pthread_cond_broadcast(&j->cond);
 }
 
+/* The colour of each tool of the job's table in its meshes (options.color
+ * "tool", the default), for a legend: [{"tool": N, "color": "#rrggbb"}];
+ * an empty array when the meshes have no colours. */
+static json_t *tool_colors_json(const job *j)
+{
+    json_t *out = json_array();
+    const char *color =
+        json_string_value(json_object_get(json_object_get(j->spec, "options"), "color"));
+    if (color && !strcmp(color, "none")) return out;
+    json_t *tools = json_object_get(json_object_get(j->spec, "tools"), "tools");
+    size_t i;
+    json_t *t;
+    json_array_foreach(tools, i, t) {
+        json_t *number = json_object_get(t, "number");
+        if (!json_is_integer(number)) continue;
+        uint8_t rgb[3];
+        fm_mesh_tool_color((int)json_integer_value(number), rgb);
+        char hex[8];
+        snprintf(hex, sizeof hex, "#%02x%02x%02x", rgb[0], rgb[1], rgb[2]);
+        json_array_append_new(out, json_pack("{s:I, s:s}", "tool", json_integer_value(number),
+                                             "color", hex));
+    }
+    return out;
+}
+
 json_t *fm_jobs_status_json(job *j)
 {
     pthread_mutex_lock(&j->lock);
@@ -161,6 +186,7 @@ json_t *fm_jobs_status_json(job *j)
         "motions_total", (json_int_t)j->motions_total, "findings",
         j->findings ? json_incref(j->findings) : json_array(), "error", j->error,
         "mesh_version", (json_int_t)j->mesh_version, "created", j->created, "name", name);
+    if (out) json_object_set_new(out, "tool_colors", tool_colors_json(j));
     pthread_mutex_unlock(&j->lock);
     return out;
 }
@@ -565,6 +591,10 @@ static void publish_chunks(job *j, fm_stock *stock)
     }
     fm_mesh_extract_options opt;
     fm_mesh_extract_default(&opt);
+    /* options.color (validated on submission): "tool" unless "none" */
+    const char *color =
+        json_string_value(json_object_get(json_object_get(j->spec, "options"), "color"));
+    opt.coloring = color && !strcmp(color, "none") ? FM_MESH_COLOR_NONE : FM_MESH_COLOR_TOOL;
     job_chunk *fresh = calloc(n ? n : 1, sizeof *fresh);
     if (!fresh) {
         free(changed);

@@ -180,9 +180,13 @@ static int svc_mesh(void *ctx, const char *id, const char *format, fm_http_blob 
         return rc;
     }
     fm_error ferr;
-    fm_mesh *mesh = fm_mesh_new(0, 0, FM_MESH_NORMALS, NULL, &ferr);
-    fm_status st = mesh ? FM_OK : FM_ERR_LIMIT;
     pthread_mutex_lock(&j->lock);
+    /* the chunks' colours (options.color) go into the whole mesh too */
+    unsigned attrs = FM_MESH_NORMALS;
+    for (size_t i = 0; i < j->chunk_count; i++)
+        if (j->chunks[i].mesh && j->chunks[i].mesh->colors) attrs |= FM_MESH_COLORS;
+    fm_mesh *mesh = fm_mesh_new(0, 0, attrs, NULL, &ferr);
+    fm_status st = mesh ? FM_OK : FM_ERR_LIMIT;
     for (size_t i = 0; st == FM_OK && i < j->chunk_count; i++)
         if (j->chunks[i].mesh) st = fm_mesh_append(mesh, j->chunks[i].mesh, &ferr);
     pthread_mutex_unlock(&j->lock);

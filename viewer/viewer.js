@@ -446,6 +446,18 @@ function setFindings(list) {
 
 // ---------------------------------------------------------------- status --
 
+// The legend's swatches: the stock's colour for each tool of the job.
+function showToolKeys(list) {
+  const box = $('tool-keys');
+  box.replaceChildren(...list.map(({ tool, color }) => {
+    const k = document.createElement('span');
+    k.className = 'tool-key';
+    k.style.setProperty('--swatch', color);
+    k.textContent = `T${tool}`;
+    return k;
+  }));
+}
+
 function showStatus(st) {
   S.job = { ...(S.job || {}), ...st };
   const j = S.job;
@@ -457,6 +469,7 @@ function showStatus(st) {
   $('job-percent').textContent = `${Math.round(p * 100)}%`;
   $('removed').textContent = j.removed_volume_mm3 != null ? `${fmt(j.removed_volume_mm3, 1)} mm³` : '-';
   $('stock').textContent = j.stock_volume_mm3 != null ? `${fmt(j.stock_volume_mm3, 1)} mm³` : '-';
+  if (Array.isArray(st.tool_colors)) showToolKeys(st.tool_colors);
   const err = $('error');
   if (j.error) {
     err.hidden = false;
@@ -639,10 +652,24 @@ function listen(id, gen) {
 
 // ------------------------------------------------------------- test hook --
 
+// Distinct vertex colours of the stock meshes as sRGB hex ("none" for a
+// mesh without colours); the Draco loader turned them into linear values.
+function vertexColors() {
+  const seen = new Set();
+  const c = new THREE.Color();
+  for (const { mesh } of S.chunks.values()) {
+    const a = mesh.geometry.getAttribute('color');
+    if (!a) { seen.add('none'); continue; }
+    for (let i = 0; i < a.count; i++) seen.add(c.setRGB(a.getX(i), a.getY(i), a.getZ(i)).getHexString());
+  }
+  return [...seen].sort();
+}
+
 const api = {
   jobId: null,
   state: S,
   triangleCount,
+  vertexColors,
   chunkCount: () => S.chunks.size,
   open: (id) => { location.hash = `job=${id}`; },
   // Ended and the chunks shown match the daemon's list.

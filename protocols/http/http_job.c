@@ -248,8 +248,8 @@ static int options_ok(json_t *options, fm_http_error *err)
         fm_http_error_set(err, 400, "bad_type", "options must be an object");
         return 0;
     }
-    static const char *const keys[] = {"name", "band", "batch", "rapid_rate", "memory_budget_mb",
-                                       "threads", "check", NULL};
+    static const char *const keys[] = {"name",    "band",  "batch", "rapid_rate", "memory_budget_mb",
+                                       "threads", "check", "color", NULL};
     if (!only_keys(options, keys, "options", err)) return 0;
     json_t *v;
     /* The members of a check object are the daemon's to validate (they
@@ -260,6 +260,14 @@ static int options_ok(json_t *options, fm_http_error *err)
         return 0;
     }
     if ((v = json_object_get(options, "name")) && !text_ok(v, "options.name", 128, err)) return 0;
+    if ((v = json_object_get(options, "color")) &&
+        (!json_is_string(v) ||
+         (strcmp(json_string_value(v), "tool") && strcmp(json_string_value(v), "none")))) {
+        fm_http_error_set(err, 400, "bad_value",
+                          "options.color must be \"tool\" (colour the meshes by the tool that "
+                          "cut last) or \"none\"");
+        return 0;
+    }
     if ((v = json_object_get(options, "band")) &&
         (!number_in(v, "options.band", 2, 32, NULL, err))) return 0;
     if (v && !json_is_integer(v)) {

@@ -41,6 +41,17 @@ static void test_job_ok(void)
     free(again);
     json_decref(job2);
     json_decref(job);
+    /* options.color: "tool" and "none" are the two mesh colourings */
+    const char *colors[2] = {"tool", "none"};
+    for (int i = 0; i < 2; i++) {
+        snprintf(text, sizeof text,
+                 "{\"stock\": \"box:0,0,-30,100,60,0\", \"tools\": %s, \"program\": {\"gcode\": "
+                 "\"G0 X1\"}, \"options\": {\"color\": \"%s\"}}",
+                 TOOLS, colors[i]);
+        job = parse(text, &err);
+        CHECK(job != NULL);
+        json_decref(job);
+    }
 }
 
 static void expect_error(const char *text, int status, const char *code)
@@ -76,6 +87,10 @@ static void test_job_errors(void)
     snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"basic\": \"10 PRINT\"}}", TOOLS);
     expect_error(text, 400, "unknown_key");
     snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"options\": {\"band\": 1}}", TOOLS);
+    expect_error(text, 400, "bad_value");
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"options\": {\"color\": \"depth\"}}", TOOLS);
+    expect_error(text, 400, "bad_value");
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"options\": {\"color\": 1}}", TOOLS);
     expect_error(text, 400, "bad_value");
     snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"fixtures\": [{\"stl\": \"x\"}]}", TOOLS);
     expect_error(text, 400, "bad_fixture");

@@ -101,6 +101,22 @@ function nonBackground(img) {
   return n;
 }
 
+// Distinct vertex colours of a binary PLY written by frepmilld (x y z nx ny
+// nz as floats, then red green blue as bytes), as sorted hex strings.
+function plyVertexColors(buf) {
+  const end = buf.indexOf('end_header\n');
+  const header = buf.subarray(0, end).toString('latin1');
+  const n = Number(/element vertex (\d+)/.exec(header)[1]);
+  if (!header.includes('property float nx') || !header.includes('property uchar red')) return [];
+  const seen = new Set();
+  const base = end + 'end_header\n'.length;
+  for (let i = 0; i < n; i++) {
+    const o = base + 27 * i + 24;
+    seen.add(buf.subarray(o, o + 3).toString('hex'));
+  }
+  return [...seen].sort();
+}
+
 async function startDaemon(stateDir, logPath) {
   const log = fs.openSync(logPath, 'a');
   const proc = spawn(daemonBin, ['--listen', '127.0.0.1:0', '--state-dir', stateDir,
@@ -210,6 +226,20 @@ async function main() {
     ok(shown.tris === daemonTris, `the page shows the daemon's triangle count (${shown.tris} = ${daemonTris})`);
     ok(shown.tris === stlTris, `... which is the full mesh's count (${stlTris})`);
     ok(shown.chunks === daemonChunks, `the page shows every non-empty chunk (${shown.chunks})`);
+
+    // Colours by tool: the page's vertex colours are the daemon's (its PLY
+    // of the same chunks): the uncut grey and one hue per tool that cut.
+    const ply = Buffer.from(await (await fetch(`${url}/v1/jobs/${id}/mesh?format=ply`)).arrayBuffer());
+    const plyColors = plyVertexColors(ply);
+    const pageColors = await page.evaluate(() => window.frepmillViewer.vertexColors());
+    console.log(`vertex colours: page ${pageColors.join(' ')}; daemon PLY ${plyColors.join(' ')}`);
+    ok(plyColors.length === 4, 'the daemon\'s mesh has 4 colours: uncut grey and the demo\'s 3 tools');
+    ok(JSON.stringify(pageColors) === JSON.stringify(plyColors), 'the page shows the same vertex colours');
+    const keys = await page.evaluate(() => [...document.querySelectorAll('#tool-keys .tool-key')]
+      .map((k) => `${k.textContent}=${k.style.getPropertyValue('--swatch').replace('#', '')}`));
+    console.log(`legend: ${keys.join(' ')}`);
+    ok(keys.length === 3 && keys.every((k) => plyColors.includes(k.split('=')[1])),
+      'the legend has a swatch for each of the 3 tools, in the colours of the mesh');
 
     // Toolpath, program line and position readout.
     const ui = await page.evaluate(() => ({
