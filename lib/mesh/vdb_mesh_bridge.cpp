@@ -137,7 +137,8 @@ fm_mesh *to_mesh(const fm_stock *stock, const Grid &grid, const Polygons &pg,
         const float *pf = m->positions + 3 * i;
         const double p[3] = {pf[0], pf[1], pf[2]};
         int tool = -1;
-        const int cut = fm_stock_point_tool(stock, p, &tool);
+        const bool need = o.coloring == FM_MESH_COLOR_TOOL || o.uncut_grey;
+        const int cut = need ? fm_stock_point_tool(stock, p, &tool) : 0;
         if (o.coloring == FM_MESH_COLOR_TOOL)
             fm_mesh_tool_color(cut ? tool : -1, m->colors + 3 * i);
         else if (o.uncut_grey && !cut)

@@ -435,7 +435,7 @@ static void test_pocket(void)
     fm_mesh_depth_color(12 - c.z0, 5, floor_rgb);
     CHECK(memcmp(top_rgb, floor_rgb, 3) != 0);
     fm_mesh_free(mc);
-    oc.coloring = (fm_mesh_coloring)9;
+    oc.depth_range = 0; /* the ramp needs a positive range */
     CHECK(fm_mesh_from_stock(s, &oc, &err) == NULL && err.code == FM_ERR_INPUT);
 
     /* Chunks: only the dirty ones are remeshed, and the union of the kept
