@@ -185,7 +185,9 @@ int main(int argc, char **argv)
     cuts[nc++] = (cut){1, {45, 3, 20}, {45, 42, 17}, 3.0};
     for (int i = 0; i < nc; i++) {
         fm_field f = cut_field(&cuts[i]);
-        if (fm_stock_subtract(s, &f, NULL, NULL, &err) != FM_OK) {
+        /* the plunges as tool 1, the grooves as tool 2 (for tool colours) */
+        const fm_stock_cut tc = {cuts[i].ball ? 2 : 1, i, 0, 0};
+        if (fm_stock_subtract(s, &f, &tc, NULL, &err) != FM_OK) {
             fprintf(stderr, "cut %d: %s\n", i, err.message);
             return 1;
         }
@@ -264,6 +266,28 @@ int main(int argc, char **argv)
                (double)stl_size / dsize);
         free(d);
     }
+    /* Tool colours as the daemon sends them: what the tool-mark lookup
+     * costs next to the same mesh with normals only. */
+    fm_mesh_extract_options en = ec, et = ec;
+    en.coloring = FM_MESH_COLOR_NONE;
+    et.coloring = FM_MESH_COLOR_TOOL;
+    t0 = now();
+    fm_mesh *mn = fm_mesh_from_stock(s, &en, &err);
+    const double t_plain = now() - t0;
+    t0 = now();
+    fm_mesh *mt = fm_mesh_from_stock(s, &et, &err);
+    const double t_tool = now() - t0;
+    if (mn && mt) {
+        uint8_t *d = NULL;
+        size_t dsize = 0;
+        fm_mesh_encode_draco(mt, NULL, &d, &dsize, NULL);
+        printf("tool colours: remesh %.3f s vs %.3f s without colours (%zu vertices); Draco %zu "
+               "bytes (STL %.1fx larger)\n",
+               t_tool, t_plain, mt->vertex_count, dsize, (double)stl_size / dsize);
+        free(d);
+    }
+    fm_mesh_free(mn);
+    fm_mesh_free(mt);
 
     /* One more motion: a short ball-end groove, then only its dirty chunks. */
     uint64_t v = fm_stock_version(s);
