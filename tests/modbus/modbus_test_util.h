@@ -292,7 +292,7 @@ static inline int mt_attack_load(const char *path, const char *name, mt_attack *
     if (!f)
         return -1;
     memset(a, 0, sizeof *a);
-    snprintf(a->name, sizeof a->name, "%s", name);
+    snprintf(a->name, sizeof a->name, "%.*s", (int)sizeof a->name - 1, name); /* names are short; longer ones are cut */
     a->expect = -1;
     char line[512];
     int bad = 0;
