@@ -139,6 +139,178 @@ static fm_status parse_ascii(const char *path, const char *text, size_t size, si
     return FM_OK;
 }
 
+/* ------------------------------------------- the grid the mesh needs -- */
+/* The projected-area estimate (fm_stock_estimate_bytes) holds for a surface:
+ * (2w + 7) / 8 leaves per leaf column it crosses. Slivers, zero-area
+ * triangles and triangles scattered far apart make bands that are tubes
+ * and blobs, far larger than their area says, with internal nodes of their
+ * own (fuzz_stl: 684 bytes of STL made a 200 MB grid against a 64 MB
+ * budget). So the leaves are also counted: every 8^3 leaf whose box,
+ * widened by the band, meets a triangle, found by bisecting each
+ * triangle's box of leaves with a separating-axis test, deduplicated in a
+ * hash set, and the internal nodes above them. */
+
+/* Voxel indices stay within +-2^30 (OpenVDB's are int32). */
+#define MAX_INDEX 1073741824.0
+
+typedef struct leaf_set {
+    int32_t (*keys)[3]; /* INT32_MIN in [0]: empty */
+    size_t n, size;     /* size: a power of two */
+} leaf_set;
+
+static int leaf_set_add(leaf_set *s, const int32_t k[3])
+{
+    if ((s->n + 1) * 2 > s->size) {
+        const size_t size = s->size ? s->size * 2 : 1024;
+        int32_t(*keys)[3] = malloc(size * sizeof *keys);
+        if (!keys) return -1;
+        for (size_t i = 0; i < size; i++) keys[i][0] = INT32_MIN;
+        for (size_t i = 0; i < s->size; i++) {
+            if (s->keys[i][0] == INT32_MIN) continue;
+            size_t j = (size_t)fm_stock_hash3(s->keys[i]) & (size - 1);
+            while (keys[j][0] != INT32_MIN) j = (j + 1) & (size - 1);
+            memcpy(keys[j], s->keys[i], sizeof keys[j]);
+        }
+        free(s->keys);
+        s->keys = keys;
+        s->size = size;
+    }
+    size_t j = (size_t)fm_stock_hash3(k) & (s->size - 1);
+    for (; s->keys[j][0] != INT32_MIN; j = (j + 1) & (s->size - 1))
+        if (s->keys[j][0] == k[0] && s->keys[j][1] == k[1] && s->keys[j][2] == k[2]) return 0;
+    memcpy(s->keys[j], k, sizeof s->keys[j]);
+    s->n++;
+    return 0;
+}
+
+/* Does the projection on axis a separate triangle v from the open box of
+ * half extents e (both relative to the box's centre)? Touching separates:
+ * a voxel exactly w voxels from the surface is outside the band. A zero
+ * axis never separates. */
+static int separates(const double a[3], const double v[3][3], const double e[3])
+{
+    if (a[0] == 0 && a[1] == 0 && a[2] == 0) return 0;
+    double lo = INFINITY, hi = -INFINITY;
+    for (int j = 0; j < 3; j++) {
+        const double d = a[0] * v[j][0] + a[1] * v[j][1] + a[2] * v[j][2];
+        lo = fmin(lo, d);
+        hi = fmax(hi, d);
+    }
+    const double r = e[0] * fabs(a[0]) + e[1] * fabs(a[1]) + e[2] * fabs(a[2]);
+    return lo >= r || hi <= -r;
+}
+
+/* Triangle-box overlap on the 13 separating axes (the box's 3, the
+ * triangle's normal, edge x box axis); true for every box the triangle
+ * enters, degenerate triangles included (their zero axes do not count). */
+static int triangle_meets_box(const double v[3][3], const double e[3])
+{
+    double f[3][3];
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++) f[i][k] = v[(i + 1) % 3][k] - v[i][k];
+    for (int k = 0; k < 3; k++) {
+        double a[3] = {0, 0, 0};
+        a[k] = 1;
+        if (separates(a, v, e)) return 0;
+    }
+    const double n[3] = {f[0][1] * f[1][2] - f[0][2] * f[1][1],
+                         f[0][2] * f[1][0] - f[0][0] * f[1][2],
+                         f[0][0] * f[1][1] - f[0][1] * f[1][0]};
+    if (separates(n, v, e)) return 0;
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++) {
+            double a[3] = {0, 0, 0}; /* unit axis k x edge i */
+            a[(k + 1) % 3] = -f[i][(k + 2) % 3];
+            a[(k + 2) % 3] = f[i][(k + 1) % 3];
+            if (separates(a, v, e)) return 0;
+        }
+    return 1;
+}
+
+typedef struct leaf_count {
+    leaf_set leaves;
+    size_t max_leaves;        /* stop: the budget cannot hold more */
+    uint64_t tests, max_tests; /* stop: triangles piled on each other */
+} leaf_count;
+
+/* Add the leaves the band (w voxels) around triangle t (mm) reaches, at
+ * voxel h. 0, or -1 out of memory, 1 over max_leaves, 2 over max_tests. */
+static int count_triangle(leaf_count *c, const float *t, double h, double w)
+{
+    double p[3][3];
+    int32_t box[128][2][3], lo[3], hi[3];
+    for (int j = 0; j < 3; j++)
+        for (int k = 0; k < 3; k++) p[j][k] = t[3 * j + k] / h;
+    for (int k = 0; k < 3; k++) {
+        const double mn = fmin(p[0][k], fmin(p[1][k], p[2][k]));
+        const double mx = fmax(p[0][k], fmax(p[1][k], p[2][k]));
+        /* leaf L holds the voxel centres 8L .. 8L + 7 */
+        lo[k] = (int32_t)ceil((mn - w - 7) / 8);
+        hi[k] = (int32_t)floor((mx + w) / 8);
+    }
+    int top = 0;
+    memcpy(box[0][0], lo, sizeof lo);
+    memcpy(box[0][1], hi, sizeof hi);
+    while (top >= 0) {
+        memcpy(lo, box[top][0], sizeof lo);
+        memcpy(hi, box[top][1], sizeof hi);
+        top--;
+        if (++c->tests > c->max_tests) return 2;
+        double v[3][3], e[3];
+        int split = 0;
+        for (int k = 0; k < 3; k++) {
+            const double centre = 4.0 * ((double)lo[k] + hi[k]) + 3.5;
+            e[k] = 4.0 * ((double)hi[k] - lo[k]) + 3.5 + w;
+            for (int j = 0; j < 3; j++) v[j][k] = p[j][k] - centre;
+            if (hi[k] - lo[k] > hi[split] - lo[split]) split = k;
+        }
+        if (!triangle_meets_box(v, e)) continue;
+        if (hi[split] == lo[split]) { /* one leaf */
+            if (leaf_set_add(&c->leaves, lo)) return -1;
+            if (c->leaves.n > c->max_leaves) return 1;
+            continue;
+        }
+        /* halves; the depth is at most 3 x 28 levels, so 128 entries hold
+         * the stack */
+        const int32_t mid = lo[split] + (hi[split] - lo[split]) / 2;
+        top++;
+        memcpy(box[top][0], lo, sizeof lo);
+        memcpy(box[top][1], hi, sizeof hi);
+        box[top][1][split] = mid;
+        top++;
+        memcpy(box[top][0], lo, sizeof lo);
+        memcpy(box[top][1], hi, sizeof hi);
+        box[top][0][split] = mid + 1;
+    }
+    return 0;
+}
+
+static int32_t floor_div(int32_t a, int32_t b)
+{
+    return a >= 0 ? a / b : -((-a - 1) / b) - 1;
+}
+
+/* Bytes of the grid the leaves counted need: leaves, their 128^3 and
+ * 4096^3 internal nodes, and the same fixed part as the formula. */
+static fm_status counted_bytes(const leaf_set *leaves, double *bytes)
+{
+    leaf_set n1 = {0}, n2 = {0};
+    fm_status rc = FM_OK;
+    for (size_t i = 0; i < leaves->size && !rc; i++) {
+        const int32_t *k = leaves->keys[i];
+        if (k[0] == INT32_MIN) continue;
+        const int32_t a[3] = {floor_div(k[0], 16), floor_div(k[1], 16), floor_div(k[2], 16)};
+        const int32_t b[3] = {floor_div(k[0], 512), floor_div(k[1], 512), floor_div(k[2], 512)};
+        if (leaf_set_add(&n1, a) || leaf_set_add(&n2, b)) rc = FM_ERR_LIMIT;
+    }
+    *bytes = (double)leaves->n * (double)fm_vdb_leaf_bytes() +
+             (double)n1.n * (double)fm_vdb_internal1_bytes() +
+             (double)n2.n * (double)fm_vdb_internal2_bytes() + 65536.0;
+    free(n1.keys);
+    free(n2.keys);
+    return rc;
+}
+
 fm_stock *fm_stock_new_from_stl(const char *path, const fm_stock_options *opt_in, fm_error *err)
 {
     fm_stock_options opt;
@@ -257,6 +429,45 @@ fm_stock *fm_stock_new_from_stl(const char *path, const fm_stock_options *opt_in
                      "%.0f MB",
                      path, ((double)need + mesh_bytes) / 1048576.0, area, opt.voxel_mm,
                      opt.band_voxels, m.n, (double)opt.memory_budget / 1048576.0);
+        goto out;
+    }
+    /* the area says it fits: count the leaves the band really reaches */
+    for (size_t i = 0; i < 9 * m.n; i++)
+        if (fabs(m.pts[i] / opt.voxel_mm) >= MAX_INDEX) {
+            fm_error_set(err, FM_ERR_INPUT,
+                         "STL %s: coordinate %g mm is beyond the grid's index range at %g mm "
+                         "voxels (+-%.0f mm)",
+                         path, m.pts[i], opt.voxel_mm, MAX_INDEX * opt.voxel_mm);
+            goto out;
+        }
+    leaf_count lc = {{NULL, 0, 0}, opt.memory_budget / fm_vdb_leaf_bytes(), 0, 0};
+    lc.max_tests = 64 * ((uint64_t)lc.max_leaves + m.n);
+    int over = 0;
+    for (size_t i = 0; i < m.n && !over; i++)
+        over = count_triangle(&lc, m.pts + 9 * i, opt.voxel_mm, opt.band_voxels);
+    double counted = 0;
+    if (!over && counted_bytes(&lc.leaves, &counted)) over = -1;
+    free(lc.leaves.keys);
+    if (over < 0) {
+        fm_error_set(err, FM_ERR_LIMIT, "out of memory estimating the grid of %s", path);
+        goto out;
+    }
+    if (over == 2) {
+        fm_error_set(err, FM_ERR_LIMIT,
+                     "the STL stock %s: its triangles lie on each other so much that the grid "
+                     "they need could not be estimated within the memory budget of %.0f MB",
+                     path, (double)opt.memory_budget / 1048576.0);
+        goto out;
+    }
+    if (over == 1 || counted + mesh_bytes > (double)opt.memory_budget) {
+        fm_error_set(err, FM_ERR_LIMIT,
+                     "the STL stock %s would need %s %.0f MB (its band reaches %s%zu leaves of "
+                     "8^3 voxels at %g mm voxels, band %d; projected surface %.0f mm^2, %zu "
+                     "triangles) but the memory budget is %.0f MB",
+                     path, over ? "more than" : "about",
+                     (over ? (double)opt.memory_budget : counted + mesh_bytes) / 1048576.0,
+                     over ? "more than " : "", lc.leaves.n, opt.voxel_mm, opt.band_voxels, area,
+                     m.n, (double)opt.memory_budget / 1048576.0);
         goto out;
     }
     tris = malloc(m.n * 3 * sizeof *tris);

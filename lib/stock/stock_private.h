@@ -58,6 +58,8 @@ size_t fm_vdb_memory(const fm_vdb *v);
 /* Bytes one more leaf costs (for the estimate formula). */
 size_t fm_vdb_leaf_bytes(void);
 size_t fm_vdb_internal1_bytes(void);
+/* Bytes of one root child (4096^3 voxels). */
+size_t fm_vdb_internal2_bytes(void);
 double fm_vdb_voxel(const fm_vdb *v);
 int fm_vdb_band(const fm_vdb *v);
 void fm_vdb_origin(const fm_vdb *v, double origin[3]);

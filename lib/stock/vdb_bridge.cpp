@@ -683,6 +683,8 @@ size_t fm_vdb_leaf_bytes(void)
 
 size_t fm_vdb_internal1_bytes(void) { return sizeof(Node1) + 16; }
 
+size_t fm_vdb_internal2_bytes(void) { return sizeof(Tree::RootNodeType::ChildNodeType) + 16; }
+
 fm_vdb *fm_vdb_new(double voxel, int band, const double origin[3], int threads, fm_error *err)
 {
     fm_vdb *out = nullptr;

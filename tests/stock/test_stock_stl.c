@@ -1,7 +1,10 @@
 /* test_stock_stl.c: stock from STL files: binary and ASCII meshes of a box
  * and an octahedron against their closed-form volumes; malformed files
  * (size not matching the triangle count, NaN, garbage, no triangles) and
- * an over-budget mesh are refused with errors that say why. */
+ * an over-budget mesh are refused with errors that say why, including
+ * meshes whose band is far larger than their area says (a sliver found by
+ * fuzz_stl, a zero-area triangle, tiny triangles far apart) and
+ * coordinates beyond the grid's index range. */
 #include "stock/stock.h"
 #include "test.h"
 
@@ -136,6 +139,71 @@ static void refused(const char *path, fm_status code, const char *needle, int li
     fm_stock_free(s);
 }
 
+/* Refused within a small budget at coarse voxels (as fuzz_stl runs). */
+static void refused_small(const char *path, double voxel, size_t budget_mb, fm_status code,
+                          const char *needle)
+{
+    fm_stock_options o;
+    fm_stock_options_default(&o);
+    o.voxel_mm = voxel;
+    o.memory_budget = budget_mb << 20;
+    fm_error err;
+    fm_error_clear(&err);
+    fm_stock *s = fm_stock_new_from_stl(path, &o, &err);
+    CHECK(s == NULL);
+    if (s)
+        fprintf(stderr, "%s: accepted, grid of %.1f MB\n", path,
+                (double)fm_stock_memory_bytes(s) / 1048576.0);
+    CHECK(err.code == code);
+    CHECK_STR_CONTAINS(err.message, needle);
+    printf("refusal: %s\n", err.message);
+    fm_stock_free(s);
+}
+
+/* Meshes whose band is a tube or scattered blobs pass the projected-area
+ * estimate; before the leaf count they made grids of 199 MB in a 64 MB
+ * budget (the sliver), 47 MB in 16 MB (the line) and 103 MB in 64 MB (the
+ * scattered triangles), and the far triangle ran meshToLevelSet for 8 CPU
+ * minutes into an empty grid. */
+static void test_thin_and_scattered(void)
+{
+    char p[512];
+    /* fuzz_stl's find: a 1 mm wide sliver 98 m long in a closed cube */
+    const double lo[3] = {1, 1, 1}, hi[3] = {6, 6, 6};
+    tri t[216];
+    int n = box_tris(lo, hi, t);
+    const float sliver[9] = {6, 1, 1, 6, 0, 1, 98304, 6, 6};
+    memcpy(t[10].v, sliver, sizeof sliver);
+    snprintf(p, sizeof p, "%s/sliver.stl", dir);
+    write_binary(p, t, n, 0);
+    refused_small(p, 0.5, 64, FM_ERR_LIMIT, "leaves of 8^3 voxels");
+    /* one zero-area triangle along a 10 m line */
+    const float line[9] = {0, 0, 0, 5000, 0, 0, 10000, 0, 0};
+    memcpy(t[0].v, line, sizeof line);
+    snprintf(p, sizeof p, "%s/line.stl", dir);
+    write_binary(p, t, 1, 0);
+    refused_small(p, 0.5, 16, FM_ERR_LIMIT, "projected surface 0 mm^2");
+    /* 216 triangles of 0.5 mm^2, 2.1 m apart: each in internal nodes of its own */
+    n = 0;
+    for (int i = 0; i < 6; i++)
+        for (int j = 0; j < 6; j++)
+            for (int k = 0; k < 6; k++, n++) {
+                const float x = 2100.0f * i, y = 2100.0f * j, z = 2100.0f * k;
+                const float v[9] = {x, y, z, x + 1, y, z, x, y + 1, z};
+                memcpy(t[n].v, v, sizeof v);
+            }
+    snprintf(p, sizeof p, "%s/scattered.stl", dir);
+    write_binary(p, t, n, 0);
+    refused_small(p, 0.5, 64, FM_ERR_LIMIT, "reaches 1728 leaves");
+    /* a small triangle 9 km out at 1 um voxels: index 9e9 is beyond
+     * OpenVDB's int32 coordinates */
+    const float far[9] = {9e6f, 0, 0, 9e6f + 1, 0, 0, 9e6f, 1, 0};
+    memcpy(t[0].v, far, sizeof far);
+    snprintf(p, sizeof p, "%s/far.stl", dir);
+    write_binary(p, t, 1, 0);
+    refused_small(p, 0.001, 64, FM_ERR_INPUT, "beyond the grid's index range");
+}
+
 int main(void)
 {
     snprintf(dir, sizeof dir, "/tmp/fm-stock-stl-XXXXXX");
@@ -201,6 +269,8 @@ int main(void)
     CHECK(err.code == FM_ERR_LIMIT);
     CHECK_STR_CONTAINS(err.message, "would need about");
     printf("refusal: %s\n", err.message);
+
+    test_thin_and_scattered();
 
     char cmd[600];
     snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
