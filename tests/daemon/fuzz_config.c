@@ -10,28 +10,11 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "fuzz_input_file.h"
+
 #include "config.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
-
-static char input_path[64];
-static int input_fd = -1;
-
-/* In $TMPDIR if set, else in /dev/shm (tmpfs: on ext4 the truncate and
- * write of each input cost 15 times the parse), else in /tmp. */
-static void open_input_file(void)
-{
-    const char *dir = getenv("TMPDIR");
-    const char *dirs[] = {dir && *dir ? dir : "/dev/shm", "/tmp"};
-    char name[1024];
-    for (int i = 0; i < 2 && input_fd < 0; i++) {
-        snprintf(name, sizeof name, "%s/fuzz_config.XXXXXX", dirs[i]);
-        input_fd = mkstemp(name);
-    }
-    if (input_fd < 0) abort();
-    unlink(name); /* nothing is left behind however the run ends */
-    snprintf(input_path, sizeof input_path, "/proc/self/fd/%d", input_fd);
-}
 
 static void must_be_terminated(const char *s, size_t size)
 {
@@ -70,8 +53,7 @@ static void check_config(const fm_daemon_config *c)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    if (input_fd < 0) open_input_file();
-    if (ftruncate(input_fd, 0) != 0 || pwrite(input_fd, data, size, 0) != (ssize_t)size) abort();
+    const char *input_path = fuzz_input_file("fuzz_config", data, size);
 
     fm_daemon_config cfg;
     char msg[1024];

@@ -18,6 +18,8 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "fuzz_input_file.h"
+
 #include "fields.h"
 
 int LLVMFuzzerInitialize(int *argc, char ***argv);
@@ -31,8 +33,6 @@ static unsigned char *vdb;           /* the real snapshot's OpenVDB bytes */
 static size_t vdb_len;
 static unsigned char *file;          /* the file being built */
 static size_t file_cap;
-static char input_path[64];
-static int input_fd = -1;
 
 static void put_le64(unsigned char *p, uint64_t v)
 {
@@ -57,18 +57,6 @@ static const char *scratch_dir(int i)
 {
     const char *dir = getenv("TMPDIR");
     return i == 0 ? (dir && *dir ? dir : "/dev/shm") : "/tmp";
-}
-
-static void open_input_file(void)
-{
-    char name[1024];
-    for (int i = 0; i < 2 && input_fd < 0; i++) {
-        snprintf(name, sizeof name, "%s/fuzz_snapshot.XXXXXX", scratch_dir(i));
-        input_fd = mkstemp(name);
-    }
-    if (input_fd < 0) die("cannot create the input file", NULL);
-    unlink(name); /* nothing is left behind however the run ends */
-    snprintf(input_path, sizeof input_path, "/proc/self/fd/%d", input_fd);
 }
 
 /* The real snapshot: saved by fm_stock_save into a fresh folder, read
@@ -184,7 +172,6 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    if (input_fd < 0) open_input_file();
     const size_t n = HEADER + size + vdb_len + 8;
     if (n > file_cap) {
         free(file);
@@ -200,7 +187,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     uint64_t h = 0xcbf29ce484222325ULL; /* FNV-1a 64 */
     for (size_t i = 0; i < n - 8; i++) h = (h ^ file[i]) * 0x100000001b3ULL;
     put_le64(file + n - 8, h);
-    if (ftruncate(input_fd, 0) != 0 || pwrite(input_fd, file, n, 0) != (ssize_t)n) abort();
+    const char *input_path = fuzz_input_file("fuzz_snapshot", file, n);
 
     fm_stock_options opt;
     fm_stock_options_default(&opt);

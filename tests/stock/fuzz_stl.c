@@ -12,35 +12,17 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "fuzz_input_file.h"
+
 #include "stock/stock.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 #define BUDGET ((size_t)64 << 20)
 
-static char input_path[64];
-static int input_fd = -1;
-
-/* In $TMPDIR if set, else in /dev/shm (tmpfs: no disk writes per input),
- * else in /tmp. */
-static void open_input_file(void)
-{
-    const char *dir = getenv("TMPDIR");
-    const char *dirs[] = {dir && *dir ? dir : "/dev/shm", "/tmp"};
-    char name[1024];
-    for (int i = 0; i < 2 && input_fd < 0; i++) {
-        snprintf(name, sizeof name, "%s/fuzz_stl.XXXXXX", dirs[i]);
-        input_fd = mkstemp(name);
-    }
-    if (input_fd < 0) abort();
-    unlink(name); /* nothing is left behind however the run ends */
-    snprintf(input_path, sizeof input_path, "/proc/self/fd/%d", input_fd);
-}
-
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    if (input_fd < 0) open_input_file();
-    if (ftruncate(input_fd, 0) != 0 || pwrite(input_fd, data, size, 0) != (ssize_t)size) abort();
+    const char *input_path = fuzz_input_file("fuzz_stl", data, size);
 
     fm_stock_options opt;
     fm_stock_options_default(&opt);
