@@ -1,8 +1,9 @@
 // vdb_mesh_bridge.cpp: meshes from the stock's OpenVDB level set, whole grid
 // or one 64^3-voxel chunk at a time, with normals from the level-set gradient
-// and colours by depth or by the tool that last cut (lib/stock's tool marks). The only lib/mesh file that sees OpenVDB; it reaches
-// the grid through lib/stock's private door (fm_stock_vdb_grid) and never
-// changes it. Every exception stops at the extern "C" functions.
+// and colours by depth or by the tool that last cut (lib/stock's tool marks).
+// The only lib/mesh file that sees OpenVDB; it reaches the grid through
+// lib/stock's private door (fm_stock_vdb_grid) and never changes it. Every
+// exception stops at the extern "C" functions.
 #include "mesh/mesh.h"
 #include "stock/stock_private.h"
 
@@ -133,12 +134,12 @@ fm_mesh *to_mesh(const fm_stock *stock, const Grid &grid, const Polygons &pg,
     // Colours too depend only on the vertex position: the tool recorded at
     // the voxel nearest the vertex (one of its cell's corners, whose value
     // that tool's surface set).
+    const bool need_marks = o.coloring == FM_MESH_COLOR_TOOL || o.uncut_grey;
     for (size_t i = 0; o.coloring != FM_MESH_COLOR_NONE && i < m->vertex_count; i++) {
         const float *pf = m->positions + 3 * i;
         const double p[3] = {pf[0], pf[1], pf[2]};
         int tool = -1;
-        const bool need = o.coloring == FM_MESH_COLOR_TOOL || o.uncut_grey;
-        const int cut = need ? fm_stock_point_tool(stock, p, &tool) : 0;
+        const int cut = need_marks ? fm_stock_point_tool(stock, p, &tool) : 0;
         if (o.coloring == FM_MESH_COLOR_TOOL)
             fm_mesh_tool_color(cut ? tool : -1, m->colors + 3 * i);
         else if (o.uncut_grey && !cut)
