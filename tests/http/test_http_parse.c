@@ -52,6 +52,14 @@ static void test_job_ok(void)
         CHECK(job != NULL);
         json_decref(job);
     }
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-30,100,60,0\", \"tools\": %s, \"program\": {\"gcode\": "
+             "\"G0 X1\"}, \"options\": {\"color\": \"rainbow\"}}",
+             TOOLS);
+    job = parse(text, &err);
+    CHECK(job == NULL && err.status == 400);
+    CHECK_STR_CONTAINS(err.message, "options.color must be \"tool\"");
+    json_decref(job);
 }
 
 static void expect_error(const char *text, int status, const char *code)
