@@ -81,41 +81,6 @@ int fm_path_has_extension(const char *path, const char *ext)
     return 1;
 }
 
-typedef struct bounds_search {
-    fm_evaluator *ev;
-    double lo[3], hi[3];
-    int found;
-    size_t boxes;
-} bounds_search;
-
-/* Grow the search's box by every box where the model may be inside,
- * subdividing boxes where it is undecided down to min_size. */
-static int search_model_bounds(bounds_search *s, const fm_interval box[3], double min_size)
-{
-    if (++s->boxes > JOB_MODEL_MAX_BOXES) return 0;
-    fm_interval b4[4] = {box[0], box[1], box[2], {0, 0}};
-    fm_interval v = fm_eval_interval(s->ev, b4);
-    if (!(v.hi >= 0)) return 1; /* all outside (a NaN bound counts as undecided below) */
-    double size = box[0].hi - box[0].lo;
-    if (v.lo >= 0 || size <= min_size) {
-        for (int a = 0; a < 3; a++) {
-            if (!s->found || box[a].lo < s->lo[a]) s->lo[a] = box[a].lo;
-            if (!s->found || box[a].hi > s->hi[a]) s->hi[a] = box[a].hi;
-        }
-        s->found = 1;
-        return 1;
-    }
-    for (int k = 0; k < 8; k++) {
-        fm_interval sub[3];
-        for (int a = 0; a < 3; a++) {
-            double mid = 0.5 * (box[a].lo + box[a].hi);
-            sub[a] = (k >> a) & 1 ? (fm_interval){mid, box[a].hi} : (fm_interval){box[a].lo, mid};
-        }
-        if (!search_model_bounds(s, sub, min_size)) return 0;
-    }
-    return 1;
-}
-
 static fm_stock *stock_from_model(const char *path, const fm_stock_options *opt, fm_error *err)
 {
     fm_graph *g = fm_graph_new(0);
@@ -153,11 +118,11 @@ static fm_stock *stock_from_model(const char *path, const fm_stock_options *opt,
     ev = fm_evaluator_new(raw_tape, err);
     if (!ev) goto done;
     double voxel = opt && opt->voxel_mm > 0 ? opt->voxel_mm : 0.1;
-    bounds_search s = {.ev = ev};
+    fm_inside_bounds s;
     fm_interval start[3];
     for (int a = 0; a < 3; a++) start[a] = (fm_interval){-JOB_MODEL_SEARCH_MM, JOB_MODEL_SEARCH_MM};
     double min_size = fmax(voxel, 2 * JOB_MODEL_SEARCH_MM / 1024.0);
-    if (!search_model_bounds(&s, start, min_size)) {
+    if (fm_find_inside_bounds(ev, start, min_size, JOB_MODEL_MAX_BOXES, &s) != FM_OK) {
         fm_error_at(err, FM_ERR_LIMIT, path, 0, 0,
                     "the stock model's boundary is too complex to bound (over %u boxes)",
                     JOB_MODEL_MAX_BOXES);

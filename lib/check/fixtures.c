@@ -46,39 +46,6 @@ static check_fixture *new_fixture(fm_check *c, const char *path, fm_error *err)
     return fx;
 }
 
-typedef struct search {
-    fm_evaluator *ev;
-    double lo[3], hi[3];
-    int found;
-    size_t boxes;
-} search;
-
-/* Grow the search's box by every box where the model may be inside. */
-static int search_bounds(search *s, const fm_interval box[3])
-{
-    if (++s->boxes > CHECK_FIXTURE_MAX_BOXES) return 0;
-    fm_interval b4[4] = {box[0], box[1], box[2], {0, 0}};
-    fm_interval v = fm_eval_interval(s->ev, b4);
-    if (v.hi < 0) return 1; /* all outside (NaN goes on, as undecided) */
-    if (box[0].hi - box[0].lo <= CHECK_FIXTURE_MIN_BOX_MM) {
-        for (int a = 0; a < 3; a++) {
-            if (!s->found || box[a].lo < s->lo[a]) s->lo[a] = box[a].lo;
-            if (!s->found || box[a].hi > s->hi[a]) s->hi[a] = box[a].hi;
-        }
-        s->found = 1;
-        return 1;
-    }
-    for (int k = 0; k < 8; k++) {
-        fm_interval sub[3];
-        for (int a = 0; a < 3; a++) {
-            double mid = 0.5 * (box[a].lo + box[a].hi);
-            sub[a] = (k >> a) & 1 ? (fm_interval){mid, box[a].hi} : (fm_interval){box[a].lo, mid};
-        }
-        if (!search_bounds(s, sub)) return 0;
-    }
-    return 1;
-}
-
 fm_status fm_check_add_fixture_hf(fm_check *c, const char *path, const char *model_name,
                                   fm_error *err)
 {
@@ -109,11 +76,12 @@ fm_status fm_check_add_fixture_hf(fm_check *c, const char *path, const char *mod
         st = err ? err->code : FM_ERR_INPUT;
         goto fail;
     }
-    search s = {.ev = fx->ev};
+    fm_inside_bounds s;
     fm_interval start[3];
     for (int a = 0; a < 3; a++)
         start[a] = (fm_interval){-CHECK_FIXTURE_SEARCH_MM, CHECK_FIXTURE_SEARCH_MM};
-    if (!search_bounds(&s, start)) {
+    if (fm_find_inside_bounds(fx->ev, start, CHECK_FIXTURE_MIN_BOX_MM, CHECK_FIXTURE_MAX_BOXES,
+                              &s) != FM_OK) {
         st = fm_error_at(err, FM_ERR_LIMIT, path, 0, 0,
                          "the fixture model's boundary is too complex to bound");
         goto fail;

@@ -298,6 +298,20 @@ int fm_intersects(const fm_graph *g, fm_node f1, fm_node f2, const fm_interval b
 int fm_includes(const fm_graph *g, fm_node inner, fm_node outer, const fm_interval box[4],
                 double tol, fm_error *err);
 
+/* Bounds of where an object may be inside (f >= 0) within box at t = 0,
+ * by interval subdivision: boxes provably outside are dropped, boxes
+ * provably inside or of edge min_size or less are kept (a NaN bound counts
+ * as undecided). found = 0: outside everywhere in the box. FM_ERR_LIMIT
+ * (err untouched: the caller names the model) after max_boxes interval
+ * evaluations. */
+typedef struct fm_inside_bounds {
+    double lo[3], hi[3];
+    int found;
+    size_t boxes; /* interval evaluations made */
+} fm_inside_bounds;
+fm_status fm_find_inside_bounds(fm_evaluator *ev, const fm_interval box[3], double min_size,
+                                size_t max_boxes, fm_inside_bounds *out);
+
 /* ---------------------------------------------------------- fields -- */
 
 /* A 3D scalar field as lib/stock consumes it: positive inside, first-order

@@ -262,3 +262,38 @@ int fm_includes(const fm_graph *g, fm_node inner, fm_node outer, const fm_interv
     if (r.upper <= tol) return 1;
     return -1;
 }
+
+/* ------------------------------------------------------ inside bounds -- */
+
+static int inside_bounds_step(fm_evaluator *ev, const fm_interval box[3], double min_size,
+                              size_t max_boxes, fm_inside_bounds *s)
+{
+    if (++s->boxes > max_boxes) return 0;
+    fm_interval b4[4] = {box[0], box[1], box[2], {0, 0}};
+    fm_interval v = fm_eval_interval(ev, b4);
+    if (v.hi < 0) return 1; /* all outside (NaN goes on, as undecided) */
+    if (v.lo >= 0 || box[0].hi - box[0].lo <= min_size) {
+        for (int a = 0; a < 3; a++) {
+            if (!s->found || box[a].lo < s->lo[a]) s->lo[a] = box[a].lo;
+            if (!s->found || box[a].hi > s->hi[a]) s->hi[a] = box[a].hi;
+        }
+        s->found = 1;
+        return 1;
+    }
+    for (int k = 0; k < 8; k++) {
+        fm_interval sub[3];
+        for (int a = 0; a < 3; a++) {
+            double mid = 0.5 * (box[a].lo + box[a].hi);
+            sub[a] = (k >> a) & 1 ? (fm_interval){mid, box[a].hi} : (fm_interval){box[a].lo, mid};
+        }
+        if (!inside_bounds_step(ev, sub, min_size, max_boxes, s)) return 0;
+    }
+    return 1;
+}
+
+fm_status fm_find_inside_bounds(fm_evaluator *ev, const fm_interval box[3], double min_size,
+                                size_t max_boxes, fm_inside_bounds *out)
+{
+    memset(out, 0, sizeof *out);
+    return inside_bounds_step(ev, box, min_size, max_boxes, out) ? FM_OK : FM_ERR_LIMIT;
+}

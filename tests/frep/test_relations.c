@@ -2,7 +2,8 @@
  * and inclusion relations on spheres, against closed forms (two spheres
  * meet iff the centre distance <= r1 + r2; one is inside the other iff
  * distance + r1 <= r2; the maximum of r - |p - c| over a box is r minus the
- * distance from c to the box). */
+ * distance from c to the box; a sphere's inside bounds are [c - r, c + r]
+ * up to the subdivision's smallest box). */
 #include "frep/tape_internal.h"
 #include "test.h"
 #include "frep_shapes.h"
@@ -91,8 +92,47 @@ static void check_sphere_relations(void)
     fm_graph_free(g);
 }
 
+static void check_inside_bounds(void)
+{
+    const fm_interval cube[3] = {{-8, 8}, {-8, 8}, {-8, 8}};
+    for (int k = 0; k < 10; k++) {
+        fm_graph *g = fm_graph_new(0);
+        double c[3] = {test_uniform(-3, 3), test_uniform(-3, 3), test_uniform(-3, 3)};
+        double r = test_uniform(0.5, 2);
+        fm_error err;
+        fm_tape *t = fm_tape_compile(g, shape_sphere(g, c[0], c[1], c[2], r), &err);
+        fm_evaluator *ev = fm_evaluator_new(t, &err);
+        fm_inside_bounds b;
+        const double min_size = 16.0 / 256; /* the 16 mm cube halved ... */
+        CHECK(fm_find_inside_bounds(ev, cube, min_size, 1000000, &b) == FM_OK && b.found);
+        for (int a = 0; a < 3; a++) {
+            /* ... 8 halvings: the kept boxes hold the sphere and reach at
+             * most one box edge (plus the interval's looseness, here a
+             * second) beyond it */
+            CHECK(b.lo[a] <= c[a] - r && b.lo[a] >= c[a] - r - 2 * min_size);
+            CHECK(b.hi[a] >= c[a] + r && b.hi[a] <= c[a] + r + 2 * min_size);
+        }
+        /* a budget too small to decide is a limit, not a wrong box */
+        CHECK(fm_find_inside_bounds(ev, cube, min_size, 20, &b) == FM_ERR_LIMIT);
+        fm_evaluator_free(ev);
+        fm_tape_free(t);
+        fm_graph_free(g);
+    }
+    /* a sphere outside the cube: nothing found */
+    fm_graph *g = fm_graph_new(0);
+    fm_error err;
+    fm_tape *t = fm_tape_compile(g, shape_sphere(g, 20, 0, 0, 1), &err);
+    fm_evaluator *ev = fm_evaluator_new(t, &err);
+    fm_inside_bounds b;
+    CHECK(fm_find_inside_bounds(ev, cube, 0.1, 1000000, &b) == FM_OK && !b.found);
+    fm_evaluator_free(ev);
+    fm_tape_free(t);
+    fm_graph_free(g);
+}
+
 int main(void)
 {
+    check_inside_bounds();
     check_classify();
     check_maximize();
     check_sphere_relations();
