@@ -1,4 +1,4 @@
-/* bench_simulate.c: whole programs through the job runner (daemon/job.h) at
+/* bench_simulate.c: whole programs through the job runner (daemon/runner/job.h) at
  * 0.1 mm: LinuxCNC's 3D_Chips.ngc (10 mm ball end mill, skipped when absent)
  * and a generated 50,000-motion pocket (6 mm flat end mill, zigzag clearing
  * of a 84 x 44 mm area in 12 depths of 1 mm, 0.3 mm segments). Prints

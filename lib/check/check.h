@@ -13,7 +13,7 @@
  * (the coarse grid inflated by its interpolation error, tightened by the
  * exact swept volumes of the motions that cut it); docs/check.md argues why
  * no contact deeper than the tolerance is missed. No JSON and no printing
- * here: daemon/findings_json.c writes the findings. */
+ * here: daemon/runner/findings_json.c writes the findings. */
 #ifndef FM_CHECK_H
 #define FM_CHECK_H
 

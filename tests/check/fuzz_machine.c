@@ -1,5 +1,5 @@
 /* fuzz_machine.c: libFuzzer target for the collision check's machine file
- * reader (fm_check_machine_load in daemon/findings_json.c: jansson's file
+ * reader (fm_check_machine_load in daemon/runner/findings_json.c: jansson's file
  * reader, then fm_check_machine_from_json, which the daemon also uses for a
  * job's options.check.machine). The reader takes a path, so each input is
  * written to one unlinked temporary file, opened through /proc/self/fd. Any

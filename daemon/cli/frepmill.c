@@ -6,21 +6,11 @@
 #include <string.h>
 
 static const fm_command commands[] = {
-#ifdef FM_HAVE_CMD_CHECK
     {"check", "find collisions and unsafe moves in a program before it runs", fm_cmd_check},
-#endif
-#ifdef FM_HAVE_CMD_EVAL
     {"eval", "evaluate a HyperFun model at a point", fm_cmd_eval},
-#endif
-#ifdef FM_HAVE_CMD_MESH
     {"mesh", "mesh a HyperFun model (and draw it)", fm_cmd_mesh},
-#endif
-#ifdef FM_HAVE_CMD_SIMULATE
     {"simulate", "cut a program out of a stock and report what was removed", fm_cmd_simulate},
-#endif
-#ifdef FM_HAVE_CMD_MOTIONS
     {"motions", "print the motions of a G-code program or trajectory", fm_cmd_motions},
-#endif
     {NULL, NULL, NULL}};
 
 static void usage(FILE *out)

@@ -21,9 +21,7 @@
 #include "hf/hf.h"
 #include "sweep/sweep.h"
 #include "toolpaths/tooltable/tooltable.h"
-#ifdef FM_HAVE_TRAJ
 #include "toolpaths/traj/traj.h"
-#endif
 
 #define JOB_MAX_BATCH 256
 /* Stock models given as HyperFun are searched for within this cube (mm). */
@@ -323,7 +321,6 @@ static fm_status run_program(const fm_job_spec *spec, const fm_tool_table *tools
     if (!spec->program_path && !spec->program_text)
         return fm_error_set(err, FM_ERR_INPUT, "no program given");
     if (program_kind(spec) == FM_PROGRAM_TRAJECTORY) {
-#ifdef FM_HAVE_TRAJ
         fm_traj_options topt;
         fm_traj_options_default(&topt);
         topt.rapid_rate = spec->rapid_rate > 0 ? spec->rapid_rate : topt.rapid_rate;
@@ -331,9 +328,6 @@ static fm_status run_program(const fm_job_spec *spec, const fm_tool_table *tools
         return fm_traj_run_string(spec->program_text, spec->program_length,
                                   spec->program_name ? spec->program_name : "trajectory", &topt,
                                   sink, user, NULL, err);
-#else
-        return fm_error_set(err, FM_ERR_INPUT, "parametric trajectories are not built in");
-#endif
     }
     fm_gcode_options gopt;
     fm_gcode_options_default(&gopt);

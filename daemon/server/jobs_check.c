@@ -11,8 +11,8 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "check_pass.h"
-#include "findings_json.h"
+#include "runner/check_pass.h"
+#include "runner/findings_json.h"
 #include "store.h"
 #include "toolpaths/tooltable/tooltable.h"
 

@@ -12,9 +12,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#ifdef FM_HAVE_CHECK
 #include "jobs_check.h"
-#endif
 #include "jobs_internal.h"
 #include "toolpaths/gcode/gcode.h"
 #include "toolpaths/tooltable/tooltable.h"
@@ -475,7 +473,6 @@ static int svc_toolpath(void *ctx, const char *id, fm_http_blob *out, fm_http_er
     return 0;
 }
 
-#ifdef FM_HAVE_CHECK
 /* Runs on the request's own connection thread (libmicrohttpd's thread per
  * connection), so a check blocks only its caller; size and concurrency are
  * bounded in fm_jobs_check_request. */
@@ -484,7 +481,6 @@ static int svc_check(void *ctx, json_t *request, json_t **out, fm_http_error *er
     fm_jobs *jobs = ctx;
     return fm_jobs_check_request(jobs->state_dir, jobs->cfg.job_memory_bytes, request, out, err);
 }
-#endif
 
 void fm_jobs_http_service(fm_jobs *jobs, fm_http_service *out)
 {
@@ -502,10 +498,6 @@ void fm_jobs_http_service(fm_jobs *jobs, fm_http_service *out)
     out->chunk = svc_chunk;
     out->stock_path = svc_stock_path;
     out->events = svc_events;
-#ifdef FM_HAVE_CHECK
     out->check = svc_check;
-#else
-    out->check = NULL; /* lib/check is not built: 501 */
-#endif
     out->toolpath = svc_toolpath;
 }

@@ -17,9 +17,7 @@
 #include "config.h"
 #include "jobs.h"
 #include "log.h"
-#ifdef FM_HAVE_MODBUS
 #include "modbus_service.h"
-#endif
 #include "store.h"
 
 #ifndef FM_SOURCE_DIR
@@ -50,13 +48,11 @@ static void http_log(void *ctx, int level, const char *message)
     fm_log((fm_log_level)level, "%s", message);
 }
 
-#ifdef FM_HAVE_MODBUS
 static void modbus_log(void *ctx, int level, const char *message)
 {
     (void)ctx;
     fm_log((fm_log_level)level, "%s", message); /* the server names itself */
 }
-#endif
 
 static int file_exists(const char *path)
 {
@@ -255,7 +251,6 @@ int main(int argc, char **argv)
            hcfg.viewer_dir[0] ? hcfg.viewer_dir : "built-in index",
            cfg.token[0] ? "required for writes" : "off");
 
-#ifdef FM_HAVE_MODBUS
     fm_modbus_server *modbus = NULL;
     if (strcmp(cfg.modbus_listen, "off") != 0) {
         fm_modbus_config mcfg;
@@ -288,10 +283,6 @@ int main(int argc, char **argv)
         }
     }
 
-#else
-    if (strcmp(cfg.modbus_listen, "off") != 0)
-        fm_log(FM_LOG_WARN, "modbus: not built in (libmodbus missing); modbus_listen ignored");
-#endif
 
     if (cfg.demo) submit_demo(jobs, &cfg, port);
     fm_log(FM_LOG_INFO, "frepmilld ready: %d workers, state in %s", cfg.workers, cfg.state_dir);
@@ -314,9 +305,7 @@ int main(int argc, char **argv)
      * snapshotted for the next start. */
     fm_jobs_begin_shutdown(jobs);
     fm_http_server_stop(http);
-#ifdef FM_HAVE_MODBUS
     fm_modbus_server_stop(modbus);
-#endif
     fm_jobs_close(jobs);
     fm_log(FM_LOG_INFO, "frepmilld stopped");
     fm_log_close();

@@ -12,7 +12,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "job.h"
+#include "runner/job.h"
 #include "jobs_internal.h"
 #include "log.h"
 #include "sweep/sweep.h"

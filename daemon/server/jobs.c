@@ -22,11 +22,9 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "job.h"
-#include "report_json.h"
-#ifdef FM_HAVE_CHECK
+#include "runner/job.h"
+#include "runner/report_json.h"
 #include "jobs_check.h"
-#endif
 #include "jobs_internal.h"
 #include "log.h"
 #include "store.h"
@@ -468,9 +466,7 @@ static int check_tools(json_t *spec, fm_http_error *err)
 int fm_jobs_submit(fm_jobs *jobs, json_t *spec, char *id, size_t id_size, fm_http_error *err)
 {
     if (check_tools(spec, err) || check_budget(jobs, spec, err)) return err->status;
-#ifdef FM_HAVE_CHECK
     if (fm_jobs_check_validate(spec, err)) return err->status;
-#endif
     pthread_mutex_lock(&jobs->lock);
     size_t live = 0;
     for (size_t i = 0; i < jobs->count; i++) live += !jobs->table[i]->deleted;
@@ -822,7 +818,6 @@ static void finish(fm_jobs *jobs, job *j, fm_job_state state, const char *what)
     fm_log(state == FM_JOB_FAILED ? FM_LOG_WARN : FM_LOG_INFO, "job %s: %s", j->id, what);
 }
 
-#ifdef FM_HAVE_CHECK
 /* The check pass of a job stops for cancel, delete and shutdown like the
  * simulation does. */
 static int check_keep_going(void *user)
@@ -834,7 +829,6 @@ static int check_keep_going(void *user)
     pthread_mutex_unlock(&rc->jobs->lock);
     return !stopping;
 }
-#endif
 
 static void run_job(fm_jobs *jobs, job *j)
 {
@@ -906,7 +900,6 @@ static void run_job(fm_jobs *jobs, job *j)
             fm_error_clear(&err);
         }
     }
-#ifdef FM_HAVE_CHECK
     /* The collision check first, as its own coarse pass (check_pass.h):
      * the findings are known before the simulation starts (a gate wants
      * them early) and are the ones `frepmill check` gives. */
@@ -931,7 +924,6 @@ static void run_job(fm_jobs *jobs, job *j)
             json_decref(cr.findings);
         }
     }
-#endif
     if (st == FM_OK) fm_log(FM_LOG_INFO, "job %s: running", j->id);
 
     fm_job_result result;

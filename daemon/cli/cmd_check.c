@@ -13,10 +13,10 @@
 #include <string.h>
 
 #include "check/check.h"
-#include "check_pass.h"
+#include "runner/check_pass.h"
 #include "commands.h"
-#include "findings_json.h"
-#include "job.h"
+#include "runner/findings_json.h"
+#include "runner/job.h"
 
 #define CHECK_MAX_FIXTURES 32
 #define CHECK_DEFAULT_VOXEL FM_CHECK_PASS_VOXEL

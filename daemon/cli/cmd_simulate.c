@@ -10,13 +10,11 @@
 #include <unistd.h>
 
 #include "commands.h"
-#include "job.h"
-#include "report_json.h"
-#include "outputs.h"
-#ifdef FM_HAVE_CHECK
-#include "check_pass.h"
-#include "findings_json.h"
-#endif
+#include "runner/job.h"
+#include "runner/report_json.h"
+#include "runner/outputs.h"
+#include "runner/check_pass.h"
+#include "runner/findings_json.h"
 
 #define SIMULATE_MAX_OUTPUTS 8
 
@@ -241,7 +239,6 @@ int fm_cmd_simulate(int argc, char **argv)
      * exactly the findings of `frepmill check` (docs/check.md). */
     json_t *findings = NULL;
     if (want_check) {
-#ifdef FM_HAVE_CHECK
         fm_check_pass_input in;
         fm_check_pass_input_default(&in);
         in.spec = spec;
@@ -268,10 +265,6 @@ int fm_cmd_simulate(int argc, char **argv)
                 fm_check_count_severity(check, FM_CHECK_ERROR),
                 fm_check_count_severity(check, FM_CHECK_WARNING));
         fm_check_free(check);
-#else
-        fprintf(stderr, "frepmill simulate: --check: lib/check is not built\n");
-        return 2;
-#endif
     }
 
     progress_bar bar = {0};
