@@ -498,6 +498,7 @@ static double bb_search(const fm_sweep *s, void *pw, const double p[3], fm_sweep
         out->upper = DBL_MAX;
         out->t = s->t0;
         out->evaluations = 1;
+        out->exhausted = 1;
         return out->value;
     }
     h->count = 0;
@@ -561,6 +562,7 @@ static double bb_search(const fm_sweep *s, void *pw, const double p[3], fm_sweep
     out->upper = upper_rest > best + cert_tol ? upper_rest : best + cert_tol;
     out->t = s->t0 + ubest * (s->t1 - s->t0);
     out->evaluations = evals;
+    out->exhausted = upper_rest > best + cert_tol;
     return best;
 }
 
@@ -577,6 +579,7 @@ static double concave_search(const fm_sweep *s, void *pw, const double p[3], fm_
     out->upper = up + 1e-12 * (1 + fabs(up));
     out->t = s->t0 + u * (s->t1 - s->t0);
     out->evaluations = evals;
+    out->exhausted = up - v > s->tol;
     return v;
 }
 
@@ -584,6 +587,7 @@ void fm_sweep_eval_ex(const fm_sweep *s, fm_sweep_worker *worker, const double p
 {
     void *pw = worker ? worker->part_worker : NULL;
     double u = 0;
+    out->exhausted = 0;
     switch (s->method) {
     case FM_SWEEP_STATIC:
         out->value = out->upper = eval_F(s, pw, p, 0, NULL);

@@ -67,6 +67,10 @@ typedef struct fm_sweep_value {
     double upper;  /* proven upper bound of S(p) */
     double t;
     size_t evaluations; /* evaluations of the part */
+    /* 1: the search stopped at its evaluation budget (or out of memory)
+     * before proving value within its tolerance of the maximum; upper is
+     * still sound, but value may be low by up to upper - value. */
+    int exhausted;
 } fm_sweep_value;
 
 double fm_sweep_eval(const fm_sweep *sweep, fm_sweep_worker *worker, const double p[3]);
