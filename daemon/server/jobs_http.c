@@ -38,7 +38,7 @@ static int svc_status(void *ctx, const char *id, json_t **out, fm_http_error *er
 {
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
-    *out = fm_jobs_status_json(j);
+    *out = fm_publish_status_json(j);
     fm_jobs_put(ctx, j);
     return 0;
 }
@@ -61,7 +61,7 @@ static int svc_list(void *ctx, json_t **out, fm_http_error *err)
     if (!copy) return fm_http_error_set(err, 503, "out_of_memory", "out of memory");
     json_t *list = json_array();
     for (size_t i = 0; i < n; i++) {
-        json_array_append_new(list, fm_jobs_status_json(copy[i]));
+        json_array_append_new(list, fm_publish_status_json(copy[i]));
         fm_jobs_put(jobs, copy[i]);
     }
     free(copy);
@@ -100,7 +100,7 @@ static int svc_chunks(void *ctx, const char *id, uint64_t since, json_t **out, f
 {
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
-    int rc = fm_jobs_ensure_meshes(ctx, j, err);
+    int rc = fm_publish_ensure_meshes(j, err);
     if (rc) {
         fm_jobs_put(ctx, j);
         return rc;
@@ -132,7 +132,7 @@ static int svc_chunk(void *ctx, const char *id, const char *name, fm_http_blob *
 {
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
-    int rc = fm_jobs_ensure_meshes(ctx, j, err);
+    int rc = fm_publish_ensure_meshes(j, err);
     if (rc) {
         fm_jobs_put(ctx, j);
         return rc;
@@ -172,7 +172,7 @@ static int svc_mesh(void *ctx, const char *id, const char *format, fm_http_blob 
                                  "format=%.16s: expected drc, stl, ply or obj", format);
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
-    int rc = fm_jobs_ensure_meshes(ctx, j, err);
+    int rc = fm_publish_ensure_meshes(j, err);
     if (rc) {
         fm_jobs_put(ctx, j);
         return rc;

@@ -1,7 +1,13 @@
-/* jobs_internal.h: the job record shared by the job manager (jobs.c) and
- * the HTTP service over it (jobs_http.c). Nothing outside those two files
- * includes it. Locking: fm_jobs.lock guards the table, the queue and each
- * job's refs; job.lock guards everything a worker publishes. */
+/* jobs_internal.h: the job record and the job manager's parts, shared by the
+ * files of the manager and its service implementations; nothing outside
+ * daemon/server includes it. The parts:
+ *   jobs.c       the table of jobs: records, references, submit, cancel,
+ *                pause, remove, views for Modbus, open and close
+ *   job_store.c  the durable side: job folders, specs, results, snapshots
+ *   queue.c      the queue and the worker threads that run the job runner
+ *   publish.c    what readers see: status snapshots, events, chunk meshes
+ * Locking: fm_jobs.lock guards the table, the queue and each job's refs;
+ * job.lock guards everything a worker publishes. */
 #ifndef FM_DAEMON_JOBS_INTERNAL_H
 #define FM_DAEMON_JOBS_INTERNAL_H
 
@@ -11,6 +17,7 @@
 
 #include "jobs.h"
 #include "mesh/mesh.h"
+#include "runner/job.h"
 #include "stock/stock.h"
 
 #define JOB_EVENT_RING 256
@@ -83,26 +90,89 @@ struct fm_jobs {
     pthread_mutex_t live_lock; /* guards live and live_ending */
 };
 
+/* ------------------------------------------------------------ jobs.c -- */
+
+double fm_jobs_mono_s(void);
+double fm_jobs_wall_s(void);
+/* A new record with one reference (the table's). */
+job *fm_jobs_record_new(const char *id, const char *jobs_dir, json_t *spec, double created);
+/* Insert in creation order (caller holds jobs->lock). */
+void fm_jobs_table_add(fm_jobs *jobs, job *j);
 /* Find a job and take a reference (NULL if unknown or deleted). */
 job *fm_jobs_get(fm_jobs *jobs, const char *id);
 void fm_jobs_put(fm_jobs *jobs, job *j);
-/* Status of a job as JSON (under its lock). */
-json_t *fm_jobs_status_json(job *j);
-/* Make sure the chunks of a finished job are published (loads its stock
- * snapshot once after a restart). */
-int fm_jobs_ensure_meshes(fm_jobs *jobs, job *j, fm_http_error *err);
+/* 1 once fm_jobs_begin_shutdown was called. */
+int fm_jobs_stopping(fm_jobs *jobs);
 int fm_jobs_remove(fm_jobs *jobs, const char *id, fm_http_error *err);
-
 /* For jobs_live.c: a job record in the table that no worker runs and that is
  * not stored (its folder has no spec.json, so a restart drops it); returned
  * with a reference for the caller. */
 job *fm_jobs_add_unstored(fm_jobs *jobs, json_t *spec);
-/* Emit an event (caller holds j->lock); data is stolen. */
-void fm_jobs_emit(job *j, const char *type, json_t *data);
-/* Remesh and publish the chunks of stock that changed (the caller owns the
- * stock exclusively). */
-void fm_jobs_publish_chunks(job *j, fm_stock *stock);
 /* Stop the live job's thread and free the session (fm_jobs_close). */
 void fm_jobs_live_close(fm_jobs *jobs);
+
+/* ------------------------------------------------------- job_store.c -- */
+
+/* Make the job's folder and write its spec durably (temp file, fsync,
+ * rename, fsync of the folder and of jobs/): after this the job survives a
+ * crash. On failure nothing is left behind. */
+fm_status fm_job_store_create(fm_jobs *jobs, const char *id, double created, json_t *spec,
+                              fm_error *err);
+/* The terminal record: state, last status, error and report (result.json). */
+void fm_job_store_write_result(job *j);
+/* Read every job folder back at start (finished jobs with their results,
+ * unfinished ones to be queued by the caller); drops unacknowledged and
+ * half-deleted folders. */
+void fm_job_store_load_all(fm_jobs *jobs);
+/* stock.vdb with "resume_from=N": every motion before N is in it. */
+void fm_job_store_save_snapshot(job *j, fm_stock *stock, long resume_from);
+/* The snapshot to resume from, with its N; NULL if none or unusable. */
+fm_stock *fm_job_store_load_snapshot(job *j, const fm_stock_options *opt, long *resume_from);
+/* An inline stock model is written into the job's folder once, so that
+ * the runner (and a resumed run) reads it like the CLI reads files. */
+fm_status fm_job_store_materialize_stock(job *j, char *path, size_t size, const char **spec_out,
+                                         fm_error *err);
+/* Delete: the folder is renamed to ID.deleted first (one atomic step that
+ * a restart honours), then removed by fm_job_store_remove_deleted. */
+fm_status fm_job_store_mark_deleted(fm_jobs *jobs, job *j, fm_error *err);
+void fm_job_store_remove_deleted(job *j);
+
+/* ----------------------------------------------------------- queue.c -- */
+
+/* Queue a job for the workers (caller holds jobs->lock). */
+void fm_queue_push(fm_jobs *jobs, job *j);
+/* Start and join the worker threads. */
+fm_status fm_queue_start_workers(fm_jobs *jobs, int count, fm_error *err);
+void fm_queue_join_workers(fm_jobs *jobs);
+/* Drop the queue's references of jobs that never ran (at close). */
+void fm_queue_drain(fm_jobs *jobs);
+/* End a job: state, result.json, the "end" event, a log line. */
+void fm_queue_finish(job *j, fm_job_state state, const char *what);
+
+/* --------------------------------------------------------- publish.c -- */
+
+/* Emit an event (caller holds j->lock); data is stolen. */
+void fm_publish_event(job *j, const char *type, json_t *data);
+/* Status of a job as JSON (takes j->lock). */
+json_t *fm_publish_status_json(job *j);
+/* The check's findings into the status and the Modbus view (caller holds
+ * j->lock, or owns j alone). */
+void fm_publish_findings(job *j, json_t *findings);
+/* The view of a finished job from its stored status (at start). */
+void fm_publish_view_from_status(job *j, json_t *status);
+/* A worker's progress into the view, and (at most every
+ * FM_PUBLISH_EVENT_INTERVAL_S) progress and block events; takes j->lock. */
+typedef struct publish_pace {
+    double last_event;
+    int last_line;
+} publish_pace;
+void fm_publish_progress(job *j, const fm_job_progress *p, publish_pace *pace);
+/* Remesh and publish the chunks of stock that changed (the caller owns the
+ * stock exclusively). */
+void fm_publish_chunks(job *j, fm_stock *stock);
+/* Make sure the chunks of a finished job are published (loads its stock
+ * snapshot once after a restart). */
+int fm_publish_ensure_meshes(job *j, fm_http_error *err);
+void fm_publish_chunks_free(job *j);
 
 #endif

@@ -106,7 +106,7 @@ static void fail(jobs_live *L, const fm_error *err)
     j->error = json_pack("{s:s, s:i, s:s, s:n, s:n, s:s}", "code", "live", "status",
                          (int)err->code, "message", err->message, "line", "column", "file",
                          err->file);
-    fm_jobs_emit(j, "end", json_pack("{s:s, s:O?}", "state", "failed", "error", j->error));
+    fm_publish_event(j, "end", json_pack("{s:s, s:O?}", "state", "failed", "error", j->error));
     pthread_mutex_unlock(&j->lock);
     fm_log(FM_LOG_WARN, "job %s: live mode failed: %s", j->id, err->message);
 }
@@ -142,9 +142,9 @@ static void *live_main(void *arg)
     j->state = FM_JOB_RUNNING;
     j->initial_mm3 = initial;
     j->view.stock_mm3 = initial;
-    fm_jobs_emit(j, "state", json_pack("{s:s, s:b}", "state", "running", "live", 1));
+    fm_publish_event(j, "state", json_pack("{s:s, s:b}", "state", "running", "live", 1));
     pthread_mutex_unlock(&j->lock);
-    fm_jobs_publish_chunks(j, stock);
+    fm_publish_chunks(j, stock);
     fm_log(FM_LOG_INFO, "job %s: live mode on (stock %s, voxel %g mm)", j->id, L->stock_spec,
            opt.voxel_mm);
 
@@ -222,7 +222,7 @@ static void *live_main(void *arg)
         j->motions_total = L->received > 0 ? L->received - 1 : 0;
         int more = L->count > 0;
         pthread_mutex_unlock(&L->lock);
-        fm_jobs_emit(j, "progress",
+        fm_publish_event(j, "progress",
                      json_pack("{s:f, s:i, s:I, s:i, s:[f,f,f], s:f, s:f}", "progress", 0.0,
                                "line", v->line, "block", (json_int_t)-1, "tool", v->tool,
                                "position", prev[0], prev[1], prev[2], "removed_volume_mm3",
@@ -231,14 +231,14 @@ static void *live_main(void *arg)
         /* Publish meshes at the configured pace, and whenever the queue
          * has run dry so that the view catches up with the machine. */
         if (!more || mono_s() - last_publish >= jobs->cfg.publish_interval_s) {
-            fm_jobs_publish_chunks(j, stock);
+            fm_publish_chunks(j, stock);
             last_publish = mono_s();
         }
     }
     if (st != FM_OK) {
         fail(L, &err);
     } else {
-        fm_jobs_publish_chunks(j, stock);
+        fm_publish_chunks(j, stock);
         char path[PATH_MAX];
         snprintf(path, sizeof path, "%s/stock.vdb", j->dir);
         fm_error serr;
@@ -248,7 +248,7 @@ static void *live_main(void *arg)
         j->state = FM_JOB_DONE;
         j->view.progress = 1;
         j->meshes_loaded = 1;
-        fm_jobs_emit(j, "end", json_pack("{s:s}", "state", "done"));
+        fm_publish_event(j, "end", json_pack("{s:s}", "state", "done"));
         pthread_mutex_unlock(&j->lock);
         fm_log(FM_LOG_INFO, "job %s: live mode off after %ld moves, removed %.1f mm3", j->id,
                motions, fm_stock_removed_volume(stock));

@@ -1,0 +1,295 @@
+/* publish.c: what readers of a job see, published by the thread that owns
+ * the job's stock (its worker, or a reader loading a finished job's
+ * snapshot): the status snapshot, the event ring that server-sent events
+ * read, and the chunk meshes (remeshed where the stock changed,
+ * Draco-encoded). Readers copy under the job's lock and never touch a grid
+ * being cut. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "jobs_internal.h"
+
+/* progress and block events at most this often (the status itself is
+ * updated after every cut) */
+#define FM_PUBLISH_EVENT_INTERVAL_S 0.2
+
+/* ------------------------------------------------------------- events -- */
+
+void fm_publish_event(job *j, const char *type, json_t *data)
+{
+    char *text = json_dumps(data, JSON_COMPACT | JSON_REAL_PRECISION(10));
+    json_decref(data);
+    if (!text) return;
+    job_event *e = &j->ring[j->next_event % JOB_EVENT_RING];
+    free(e->data);
+    e->id = j->next_event++;
+    snprintf(e->type, sizeof e->type, "%s", type);
+    e->data = text;
+    if (!strcmp(type, "end")) j->ended = 1;
+    pthread_cond_broadcast(&j->cond);
+}
+
+/* The colour of each tool of the job's table in its meshes (options.color
+ * "tool", the default), for a legend: [{"tool": N, "color": "#rrggbb"}];
+ * an empty array when the meshes have no colours. */
+static json_t *tool_colors_json(const job *j)
+{
+    json_t *out = json_array();
+    const char *color =
+        json_string_value(json_object_get(json_object_get(j->spec, "options"), "color"));
+    if (color && !strcmp(color, "none")) return out;
+    json_t *tools = json_object_get(json_object_get(j->spec, "tools"), "tools");
+    size_t i;
+    json_t *t;
+    json_array_foreach(tools, i, t) {
+        json_t *number = json_object_get(t, "number");
+        if (!json_is_integer(number)) continue;
+        uint8_t rgb[3];
+        fm_mesh_tool_color((int)json_integer_value(number), rgb);
+        char hex[8];
+        snprintf(hex, sizeof hex, "#%02x%02x%02x", rgb[0], rgb[1], rgb[2]);
+        json_array_append_new(out, json_pack("{s:I, s:s}", "tool", json_integer_value(number),
+                                             "color", hex));
+    }
+    return out;
+}
+
+json_t *fm_publish_status_json(job *j)
+{
+    pthread_mutex_lock(&j->lock);
+    const fm_job_view *v = &j->view;
+    json_t *name = json_object_get(json_object_get(j->spec, "options"), "name");
+    json_t *out = json_pack(
+        "{s:s, s:s, s:b, s:f, s:i, s:I, s:i, s:[f,f,f], s:f, s:f, s:f, s:f, s:I, s:I, s:o, "
+        "s:O?, s:I, s:f, s:O?}",
+        "id", j->id, "state", fm_job_state_name(j->state), "paused", j->paused, "progress",
+        v->progress, "line", v->line, "block", (json_int_t)v->block, "tool", v->tool, "position",
+        v->position[0], v->position[1], v->position[2], "program_time_s", v->program_time_s,
+        "removed_volume_mm3", v->removed_mm3, "stock_volume_mm3", v->stock_mm3,
+        "initial_volume_mm3", j->initial_mm3, "motions_done", (json_int_t)j->motions_done,
+        "motions_total", (json_int_t)j->motions_total, "findings",
+        j->findings ? json_incref(j->findings) : json_array(), "error", j->error,
+        "mesh_version", (json_int_t)j->mesh_version, "created", j->created, "name", name);
+    if (out) json_object_set_new(out, "tool_colors", tool_colors_json(j));
+    pthread_mutex_unlock(&j->lock);
+    return out;
+}
+
+/* ------------------------------------------------------------- status -- */
+
+void fm_publish_findings(job *j, json_t *findings)
+{
+    json_decref(j->findings);
+    j->findings = json_incref(findings);
+    fm_job_view *v = &j->view;
+    v->finding_count = (int)json_array_size(findings);
+    v->error_finding_count = 0;
+    size_t i;
+    json_t *f;
+    json_array_foreach(findings, i, f)
+    {
+        const char *severity = json_string_value(json_object_get(f, "severity"));
+        if (severity && !strcmp(severity, "error")) v->error_finding_count++;
+    }
+    v->first_finding_line =
+        v->finding_count ? (int)json_integer_value(json_object_get(json_array_get(findings, 0), "line"))
+                         : 0;
+}
+
+void fm_publish_view_from_status(job *j, json_t *status)
+{
+    fm_job_view *v = &j->view;
+    v->progress = json_real_value(json_object_get(status, "progress"));
+    v->line = (int)json_integer_value(json_object_get(status, "line"));
+    v->block = (long)json_integer_value(json_object_get(status, "block"));
+    v->tool = (int)json_integer_value(json_object_get(status, "tool"));
+    json_t *pos = json_object_get(status, "position");
+    for (int a = 0; a < 3; a++) v->position[a] = json_number_value(json_array_get(pos, (size_t)a));
+    v->program_time_s = json_number_value(json_object_get(status, "program_time_s"));
+    v->removed_mm3 = json_number_value(json_object_get(status, "removed_volume_mm3"));
+    v->stock_mm3 = json_number_value(json_object_get(status, "stock_volume_mm3"));
+    j->initial_mm3 = json_number_value(json_object_get(status, "initial_volume_mm3"));
+    j->motions_done = (long)json_integer_value(json_object_get(status, "motions_done"));
+    j->motions_total = (long)json_integer_value(json_object_get(status, "motions_total"));
+    json_t *findings = json_object_get(status, "findings");
+    if (json_is_array(findings)) {
+        fm_publish_findings(j, findings);
+    }
+    json_t *error = json_object_get(status, "error");
+    if (json_is_object(error)) {
+        j->error = json_incref(error);
+        v->error_code = (int)json_integer_value(json_object_get(error, "status"));
+    }
+}
+
+void fm_publish_progress(job *j, const fm_job_progress *p, publish_pace *pace)
+{
+    double now = fm_jobs_mono_s();
+    pthread_mutex_lock(&j->lock);
+    /* The stock (made by the runner, or a snapshot with its stored initial
+     * volume) is first seen here. */
+    if (j->initial_mm3 <= 0) j->initial_mm3 = fm_stock_initial_volume(p->stock);
+    fm_job_view *v = &j->view;
+    v->progress = p->program_time_total > 0 ? p->program_time / p->program_time_total
+                  : p->motions_total > 0    ? (double)p->motions_done / (double)p->motions_total
+                                            : 1.0;
+    if (v->progress > 1) v->progress = 1;
+    v->line = p->line;
+    v->block = p->block;
+    v->tool = p->tool;
+    memcpy(v->position, p->position, sizeof v->position);
+    v->program_time_s = p->program_time;
+    v->removed_mm3 = p->removed_mm3;
+    v->stock_mm3 = j->initial_mm3 - p->removed_mm3;
+    v->removal_rate_mm3_s = p->program_time > 0 ? p->removed_mm3 / p->program_time : 0;
+    j->motions_done = p->motions_done;
+    j->motions_total = p->motions_total;
+    if (now - pace->last_event >= FM_PUBLISH_EVENT_INTERVAL_S) {
+        pace->last_event = now;
+        if (p->line != pace->last_line) {
+            pace->last_line = p->line;
+            fm_publish_event(j, "block", json_pack("{s:i, s:I}", "line", p->line, "block",
+                                                   (json_int_t)p->block));
+        }
+        fm_publish_event(j, "progress",
+                         json_pack("{s:f, s:i, s:I, s:i, s:[f,f,f], s:f, s:f}", "progress",
+                                   v->progress, "line", v->line, "block", (json_int_t)v->block,
+                                   "tool", v->tool, "position", v->position[0], v->position[1],
+                                   v->position[2], "removed_volume_mm3", v->removed_mm3,
+                                   "stock_volume_mm3", v->stock_mm3));
+    }
+    pthread_mutex_unlock(&j->lock);
+}
+
+/* ------------------------------------------------------------ meshes -- */
+
+void fm_publish_chunks_free(job *j)
+{
+    for (size_t i = 0; i < j->chunk_count; i++) {
+        fm_mesh_free(j->chunks[i].mesh);
+        free(j->chunks[i].drc);
+    }
+    free(j->chunks);
+    j->chunks = NULL;
+    j->chunk_count = j->chunk_cap = 0;
+}
+
+/* Remesh the chunks that changed since the last publication and swap them
+ * in. Runs on the worker's thread (or a reader's, for a finished job whose
+ * stock was loaded from its snapshot) with exclusive use of stock. */
+void fm_publish_chunks(job *j, fm_stock *stock)
+{
+    uint64_t version = fm_stock_version(stock);
+    pthread_mutex_lock(&j->lock);
+    uint64_t since = j->chunk_count ? j->mesh_version : 0;
+    pthread_mutex_unlock(&j->lock);
+    if (j->chunk_count && version == since) return;
+    size_t cap = 256;
+    fm_stock_chunk *changed = malloc(cap * sizeof *changed);
+    if (!changed) return;
+    size_t n = fm_stock_changed_chunks(stock, since, changed, cap);
+    if (n > cap) {
+        fm_stock_chunk *bigger = realloc(changed, n * sizeof *changed);
+        if (!bigger) {
+            free(changed);
+            return;
+        }
+        changed = bigger;
+        cap = n;
+        n = fm_stock_changed_chunks(stock, since, changed, cap);
+    }
+    fm_mesh_extract_options opt;
+    fm_mesh_extract_default(&opt);
+    /* options.color (validated on submission): "tool" unless "none" */
+    const char *color =
+        json_string_value(json_object_get(json_object_get(j->spec, "options"), "color"));
+    opt.coloring = color && !strcmp(color, "none") ? FM_MESH_COLOR_NONE : FM_MESH_COLOR_TOOL;
+    job_chunk *fresh = calloc(n ? n : 1, sizeof *fresh);
+    if (!fresh) {
+        free(changed);
+        return;
+    }
+    for (size_t i = 0; i < n; i++) {
+        job_chunk *c = &fresh[i];
+        memcpy(c->index, changed[i].index, sizeof c->index);
+        c->version = version;
+        memcpy(c->lo, changed[i].lo, sizeof c->lo);
+        memcpy(c->hi, changed[i].hi, sizeof c->hi);
+        fm_error err;
+        c->mesh = fm_mesh_from_stock_chunk(stock, c->index, &opt, &err);
+        if (c->mesh && c->mesh->triangle_count > 0 &&
+            fm_mesh_encode_draco(c->mesh, NULL, &c->drc, &c->drc_size, &err) != FM_OK) {
+            c->drc = NULL;
+            c->drc_size = 0;
+        }
+    }
+    free(changed);
+    json_t *ids = json_array();
+    pthread_mutex_lock(&j->lock);
+    for (size_t i = 0; i < n; i++) {
+        job_chunk *c = &fresh[i];
+        char name[48];
+        snprintf(name, sizeof name, "%d_%d_%d", c->index[0], c->index[1], c->index[2]);
+        json_array_append_new(ids, json_string(name));
+        size_t k = 0;
+        while (k < j->chunk_count && memcmp(j->chunks[k].index, c->index, sizeof c->index)) k++;
+        if (k == j->chunk_count) {
+            if (j->chunk_count == j->chunk_cap) {
+                size_t ncap = j->chunk_cap ? j->chunk_cap * 2 : 64;
+                job_chunk *t = realloc(j->chunks, ncap * sizeof *t);
+                if (!t) {
+                    fm_mesh_free(c->mesh);
+                    free(c->drc);
+                    continue;
+                }
+                j->chunks = t;
+                j->chunk_cap = ncap;
+            }
+            j->chunk_count++;
+        } else {
+            fm_mesh_free(j->chunks[k].mesh);
+            free(j->chunks[k].drc);
+        }
+        j->chunks[k] = *c;
+    }
+    j->mesh_version = version;
+    fm_publish_event(j, "chunks", json_pack("{s:I, s:o}", "version", (json_int_t)version, "changed", ids));
+    pthread_mutex_unlock(&j->lock);
+    free(fresh);
+}
+
+int fm_publish_ensure_meshes(job *j, fm_http_error *err)
+{
+    pthread_mutex_lock(&j->lock);
+    int ready = j->meshes_loaded || j->state < FM_JOB_DONE;
+    pthread_mutex_unlock(&j->lock);
+    if (ready) return 0;
+    pthread_mutex_lock(&j->load_lock);
+    pthread_mutex_lock(&j->lock);
+    ready = j->meshes_loaded;
+    pthread_mutex_unlock(&j->lock);
+    int rc = 0;
+    if (!ready) {
+        char path[PATH_MAX];
+        snprintf(path, sizeof path, "%s/stock.vdb", j->dir);
+        fm_stock_options opt;
+        fm_stock_options_default(&opt);
+        fm_error ferr;
+        fm_stock *stock = access(path, R_OK) == 0 ? fm_stock_load_vdb(path, &opt, &ferr) : NULL;
+        if (!stock) {
+            rc = fm_http_error_set(err, 404, "no_mesh", "job %s has no stored stock to mesh",
+                                   j->id);
+        } else {
+            fm_publish_chunks(j, stock);
+            fm_stock_free(stock);
+            pthread_mutex_lock(&j->lock);
+            j->meshes_loaded = 1;
+            pthread_mutex_unlock(&j->lock);
+        }
+    }
+    pthread_mutex_unlock(&j->load_lock);
+    return rc;
+}

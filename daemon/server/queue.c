@@ -1,0 +1,311 @@
+/* queue.c: the queue of jobs and the worker threads that take them. A
+ * worker runs fm_job_run (daemon/runner, shared with the CLI) with a
+ * progress hook that, between cuts and on the worker's own thread,
+ * publishes the status (publish.c), snapshots the stock every
+ * snapshot_interval_s of work (job_store.c), remeshes the chunks that
+ * changed every publish_interval_s, and holds the job while it is paused. */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "jobs_check.h"
+#include "jobs_internal.h"
+#include "log.h"
+#include "runner/report_json.h"
+#include "toolpaths/tooltable/tooltable.h"
+
+void fm_queue_push(fm_jobs *jobs, job *j)
+{
+    j->next_queued = NULL;
+    j->refs++; /* the queue's */
+    if (jobs->queue_tail) jobs->queue_tail->next_queued = j;
+    else jobs->queue_head = j;
+    jobs->queue_tail = j;
+    pthread_cond_signal(&jobs->queue_cond);
+}
+
+typedef struct run_ctx {
+    fm_jobs *jobs;
+    job *j;
+    double last_snapshot, last_publish;
+    publish_pace pace;
+    long resume_from;
+    int stopped_for_shutdown;
+} run_ctx;
+
+static int on_progress(void *user, const fm_job_progress *p)
+{
+    run_ctx *rc = user;
+    job *j = rc->j;
+    double now = fm_jobs_mono_s();
+    rc->resume_from = p->resume_from;
+    fm_publish_progress(j, p, &rc->pace);
+    pthread_mutex_lock(&j->lock);
+    /* Paused (Modbus): wait here, between cuts, until resumed. */
+    while (j->paused && !atomic_load(&j->cancel_requested) && !rc->jobs->stopping)
+        pthread_cond_wait(&j->cond, &j->lock);
+    pthread_mutex_unlock(&j->lock);
+
+    if (atomic_load(&j->cancel_requested)) return 1;
+    pthread_mutex_lock(&rc->jobs->lock);
+    int stopping = rc->jobs->stopping;
+    pthread_mutex_unlock(&rc->jobs->lock);
+    if (stopping) {
+        rc->stopped_for_shutdown = 1;
+        return 1;
+    }
+    if (now - rc->last_snapshot >= rc->jobs->cfg.snapshot_interval_s) {
+        fm_job_store_save_snapshot(j, p->stock, p->resume_from);
+        rc->last_snapshot = fm_jobs_mono_s();
+    }
+    if (now - rc->last_publish >= rc->jobs->cfg.publish_interval_s) {
+        fm_publish_chunks(j, p->stock);
+        rc->last_publish = fm_jobs_mono_s();
+    }
+    return 0;
+}
+
+static json_t *error_json(const fm_error *err)
+{
+    static const char *const codes[] = {"ok", "", "input", "limit", "io", "internal"};
+    const char *code = (unsigned)err->code < 6 ? codes[err->code] : "internal";
+    return json_pack("{s:s, s:i, s:s, s:o, s:o, s:s}", "code", code, "status", (int)err->code,
+                     "message", err->message, "line",
+                     err->line > 0 ? json_integer(err->line) : json_null(), "column",
+                     err->column > 0 ? json_integer(err->column) : json_null(), "file", err->file);
+}
+
+void fm_queue_finish(job *j, fm_job_state state, const char *what)
+{
+    pthread_mutex_lock(&j->lock);
+    j->state = state;
+    if (state == FM_JOB_DONE) j->view.progress = 1;
+    j->meshes_loaded = state != FM_JOB_FAILED;
+    pthread_mutex_unlock(&j->lock);
+    fm_job_store_write_result(j);
+    pthread_mutex_lock(&j->lock);
+    fm_publish_event(j, "end", json_pack("{s:s, s:O?}", "state", fm_job_state_name(state), "error", j->error));
+    pthread_mutex_unlock(&j->lock);
+    fm_log(state == FM_JOB_FAILED ? FM_LOG_WARN : FM_LOG_INFO, "job %s: %s", j->id, what);
+}
+
+/* The check pass of a job stops for cancel, delete and shutdown like the
+ * simulation does. */
+static int check_keep_going(void *user)
+{
+    run_ctx *rc = user;
+    if (atomic_load(&rc->j->cancel_requested)) return 0;
+    pthread_mutex_lock(&rc->jobs->lock);
+    int stopping = rc->jobs->stopping;
+    pthread_mutex_unlock(&rc->jobs->lock);
+    return !stopping;
+}
+
+static void run_job(fm_jobs *jobs, job *j)
+{
+    fm_job_spec spec;
+    fm_job_spec_default(&spec);
+    fm_error err;
+    fm_error_clear(&err);
+    run_ctx rc = {.jobs = jobs, .j = j, .pace = {.last_line = -1}};
+    rc.last_snapshot = rc.last_publish = fm_jobs_mono_s();
+
+    pthread_mutex_lock(&j->lock);
+    j->state = FM_JOB_RUNNING;
+    fm_publish_event(j, "state", json_pack("{s:s}", "state", "running"));
+    pthread_mutex_unlock(&j->lock);
+
+    json_t *options = json_object_get(j->spec, "options");
+    spec.stock.voxel_mm = json_number_value(json_object_get(j->spec, "voxel"));
+    spec.stock.threads = jobs->cfg.threads_per_job;
+    spec.stock.memory_budget = jobs->cfg.job_memory_bytes;
+    json_t *v;
+    if ((v = json_object_get(options, "memory_budget_mb")) &&
+        json_number_value(v) * 1048576.0 < (double)spec.stock.memory_budget)
+        spec.stock.memory_budget = (size_t)(json_number_value(v) * 1048576.0);
+    if ((v = json_object_get(options, "band"))) spec.stock.band_voxels = (int)json_integer_value(v);
+    if ((v = json_object_get(options, "threads")))
+        spec.stock.threads = (int)json_integer_value(v);
+    if ((v = json_object_get(options, "batch"))) spec.batch_diameters = json_number_value(v);
+    if ((v = json_object_get(options, "rapid_rate"))) spec.rapid_rate = json_number_value(v);
+
+    fm_tool_table table;
+    memset(&table, 0, sizeof table);
+    char *tools_text = json_dumps(json_object_get(j->spec, "tools"), JSON_INDENT(1));
+    char *trajectory_text = NULL;
+    char stock_path[PATH_MAX];
+    fm_status st = tools_text ? fm_tooltable_parse_json(tools_text, strlen(tools_text), "tools",
+                                                        &table, &err)
+                              : fm_error_set(&err, FM_ERR_INPUT, "no tool table");
+    spec.tools = &table;
+    if (st == FM_OK) st = fm_job_store_materialize_stock(j, stock_path, sizeof stock_path, &spec.stock_spec, &err);
+    json_t *program = json_object_get(j->spec, "program");
+    json_t *gcode = json_object_get(program, "gcode");
+    if (gcode) {
+        spec.program_text = json_string_value(gcode);
+        spec.program_length = json_string_length(gcode);
+        spec.program_name = "program";
+        spec.program_kind = FM_PROGRAM_GCODE;
+    } else {
+        trajectory_text = json_dumps(json_object_get(program, "trajectory"), JSON_INDENT(1));
+        spec.program_text = trajectory_text ? trajectory_text : "";
+        spec.program_length = strlen(spec.program_text);
+        spec.program_name = "trajectory";
+        spec.program_kind = FM_PROGRAM_TRAJECTORY;
+    }
+
+    /* Resume from the last snapshot, if any. */
+    long from = 0;
+    if (st == FM_OK && (spec.resume_stock = fm_job_store_load_snapshot(j, &spec.stock, &from))) {
+        spec.skip_motions = from;
+        fm_log(FM_LOG_INFO, "job %s: resuming from its snapshot at motion %ld", j->id, from);
+    }
+    /* The collision check first, as its own coarse pass (check_pass.h):
+     * the findings are known before the simulation starts (a gate wants
+     * them early) and are the ones `frepmill check` gives. */
+    if (st == FM_OK && fm_jobs_check_enabled(j->spec)) {
+        fm_jobs_check_result cr;
+        double t0 = fm_jobs_mono_s();
+        int stopped = 0;
+        st = fm_jobs_check_run_until(j->spec, j->dir, spec.stock.memory_budget, check_keep_going,
+                                     &rc, &cr, &stopped, &err);
+        /* Stopped (cancel, shutdown): the runner below stops at its first
+         * cut and takes the usual path (cancelled, or resumed next start). */
+        if (st == FM_OK && !stopped) {
+            pthread_mutex_lock(&j->lock);
+            fm_publish_findings(j, cr.findings);
+            size_t i;
+            json_t *f;
+            json_array_foreach(cr.findings, i, f) fm_publish_event(j, "finding", json_incref(f));
+            pthread_mutex_unlock(&j->lock);
+            fm_log(cr.errors ? FM_LOG_WARN : FM_LOG_INFO,
+                   "job %s: check: %d errors, %d warnings (first at line %d) in %.2f s", j->id,
+                   cr.errors, cr.warnings, cr.first_line, fm_jobs_mono_s() - t0);
+            json_decref(cr.findings);
+        }
+    }
+    if (st == FM_OK) fm_log(FM_LOG_INFO, "job %s: running", j->id);
+
+    fm_job_result result;
+    memset(&result, 0, sizeof result);
+    fm_job_hooks hooks = {.user = &rc, .progress = on_progress};
+    if (st == FM_OK) {
+        st = fm_job_run(&spec, &hooks, &result, &err);
+        spec.resume_stock = NULL; /* the runner took it */
+    } else {
+        fm_stock_free(spec.resume_stock);
+        spec.resume_stock = NULL;
+    }
+    free(tools_text);
+    free(trajectory_text);
+    fm_tool_table_free(&table);
+
+    if (st != FM_OK) {
+        pthread_mutex_lock(&j->lock);
+        json_decref(j->error);
+        j->error = error_json(&err);
+        j->view.error_code = (int)err.code;
+        pthread_mutex_unlock(&j->lock);
+        char buf[1024];
+        char what[1200];
+        snprintf(what, sizeof what, "failed: %s", fm_error_format(&err, buf, sizeof buf));
+        fm_queue_finish(j, FM_JOB_FAILED, what);
+        return;
+    }
+    pthread_mutex_lock(&j->lock);
+    j->initial_mm3 = result.initial_volume_mm3;
+    pthread_mutex_unlock(&j->lock);
+    if (result.stopped && rc.stopped_for_shutdown && !atomic_load(&j->cancel_requested)) {
+        /* Stopping: keep the work done, resume at the next start. */
+        fm_job_store_save_snapshot(j, result.stock, rc.resume_from);
+        fm_stock_free(result.stock);
+        pthread_mutex_lock(&j->lock);
+        j->state = FM_JOB_QUEUED;
+        pthread_mutex_unlock(&j->lock);
+        fm_log(FM_LOG_INFO, "job %s: stopped by shutdown at motion %ld; will resume", j->id,
+               rc.resume_from);
+        return;
+    }
+    pthread_mutex_lock(&jobs->lock);
+    int deleted = j->deleted;
+    pthread_mutex_unlock(&jobs->lock);
+    if (deleted) {
+        fm_stock_free(result.stock);
+        fm_job_store_remove_deleted(j);
+        fm_log(FM_LOG_INFO, "job %s: stopped (deleted)", j->id);
+        return;
+    }
+    fm_publish_chunks(j, result.stock);
+    pthread_mutex_lock(&j->lock);
+    j->view.removed_mm3 = result.initial_volume_mm3 - result.final_volume_mm3;
+    j->view.stock_mm3 = result.final_volume_mm3;
+    j->report = fm_job_report_json(&result);
+    pthread_mutex_unlock(&j->lock);
+    fm_job_store_save_snapshot(j, result.stock, result.stopped ? rc.resume_from : result.motions);
+    fm_stock_free(result.stock);
+    if (result.stopped) {
+        fm_queue_finish(j, FM_JOB_CANCELLED, "cancelled");
+    } else {
+        char what[256];
+        snprintf(what, sizeof what, "done: %ld motions, removed %.1f mm3 in %.2f s",
+                 result.motions, result.removed_volume_mm3, result.wall_time_s);
+        fm_queue_finish(j, FM_JOB_DONE, what);
+    }
+}
+
+static void *worker_main(void *arg)
+{
+    fm_jobs *jobs = arg;
+    pthread_mutex_lock(&jobs->lock);
+    for (;;) {
+        while (!jobs->stopping && !jobs->queue_head) pthread_cond_wait(&jobs->queue_cond, &jobs->lock);
+        if (jobs->stopping) break;
+        job *j = jobs->queue_head;
+        jobs->queue_head = j->next_queued;
+        if (!jobs->queue_head) jobs->queue_tail = NULL;
+        int skip = j->deleted;
+        pthread_mutex_unlock(&jobs->lock);
+        pthread_mutex_lock(&j->lock);
+        skip = skip || j->state >= FM_JOB_DONE; /* cancelled while queued */
+        pthread_mutex_unlock(&j->lock);
+        if (!skip && atomic_load(&j->cancel_requested)) {
+            fm_queue_finish(j, FM_JOB_CANCELLED, "cancelled before it started");
+        } else if (!skip) {
+            run_job(jobs, j);
+        }
+        fm_jobs_put(jobs, j); /* the queue's reference */
+        pthread_mutex_lock(&jobs->lock);
+    }
+    pthread_mutex_unlock(&jobs->lock);
+    return NULL;
+}
+
+fm_status fm_queue_start_workers(fm_jobs *jobs, int count, fm_error *err)
+{
+    jobs->workers = calloc((size_t)(count > 0 ? count : 1), sizeof *jobs->workers);
+    for (int i = 0; jobs->workers && i < count; i++)
+        if (pthread_create(&jobs->workers[i], NULL, worker_main, jobs) == 0) jobs->worker_count++;
+    if (jobs->worker_count == 0)
+        return fm_error_set(err, FM_ERR_INTERNAL, "cannot start worker threads");
+    return FM_OK;
+}
+
+void fm_queue_join_workers(fm_jobs *jobs)
+{
+    for (int i = 0; i < jobs->worker_count; i++) pthread_join(jobs->workers[i], NULL);
+    jobs->worker_count = 0;
+    free(jobs->workers);
+    jobs->workers = NULL;
+}
+
+void fm_queue_drain(fm_jobs *jobs)
+{
+    for (job *j = jobs->queue_head; j;) {
+        job *next = j->next_queued;
+        j->refs--;
+        j = next;
+    }
+    jobs->queue_head = jobs->queue_tail = NULL;
+}
