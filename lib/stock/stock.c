@@ -1,7 +1,7 @@
 /* stock.c: the C side of lib/stock: options and the memory estimate, box and
  * cylinder stock as closed-form fields, the bookkeeping around each cut
  * (version, dirty chunks, removed volume per tool and per block) and the
- * measures and accessors of stock.h. The grid work is in vdb_bridge.cpp. */
+ * measures and accessors of stock.h. The grid work is in the vdb_*.cpp files. */
 #include "stock/stock_impl.h"
 
 #include <math.h>

@@ -1,5 +1,5 @@
 /* stock_private.h: what lib/stock's C files and its C++ bridge
- * (vdb_bridge.cpp) say to each other, and the one door lib/mesh's C++ bridge
+ * (vdb_*.cpp) say to each other, and the one door lib/mesh's C++ bridge
  * may use (fm_stock_vdb_grid). Not part of the public API. Signs here are
  * OpenVDB's (phi < 0 inside) unless a comment says otherwise. */
 #ifndef FM_STOCK_PRIVATE_H
@@ -12,7 +12,7 @@ extern "C" {
 
 #include "stock/stock.h"
 
-/* The grid plus its thread arena; defined in vdb_bridge.cpp. */
+/* The grid plus its thread arena; defined in vdb_bridge.hpp. */
 typedef struct fm_vdb fm_vdb;
 
 /* Chunk and budget bookkeeping the bridge reports back to C. */
