@@ -1,7 +1,6 @@
-/* gcode_expr.c: the lexical layer of the G-code interpreter: LinuxCNC's line
- * normalization (case, spaces, comments), number syntax, [...] expressions
- * with every LinuxCNC operator and function, and numbered and named
- * parameters. */
+/* gcode_expr.c: values in the G-code interpreter: number syntax, [...]
+ * expressions with every LinuxCNC operator and function, numbered and named
+ * parameters, and the error helper every file uses (file:line:column). */
 #include "gcode_internal.h"
 
 #include <math.h>
@@ -10,7 +9,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define GC_PI 3.14159265358979323846
 /* LinuxCNC compares EQ and NE with this tolerance (TOLERANCE_EQUAL). */
 #define GC_TOLERANCE_EQUAL 0.0001
 
@@ -28,69 +26,6 @@ int gc_col(const gc_line *ln, size_t p)
 {
     if (p > ln->n) p = ln->n;
     return ln->col[p];
-}
-
-static int line_reserve(gc_line *ln, size_t n)
-{
-    if (n + 1 <= ln->cap) return 1;
-    size_t cap = ln->cap ? ln->cap : 128;
-    while (cap < n + 1) cap *= 2;
-    char *s = realloc(ln->s, cap);
-    if (!s) return 0;
-    ln->s = s;
-    int *c = realloc(ln->col, cap * sizeof *c);
-    if (!c) return 0;
-    ln->col = c;
-    ln->cap = cap;
-    return 1;
-}
-
-fm_status gc_normalize(gc_interp *g, size_t idx, gc_line *out, int report)
-{
-    size_t a = g->line_start[idx], b = g->line_start[idx + 1];
-    const char *t = g->text;
-    if (!line_reserve(out, b - a + 1))
-        return fm_error_set(g->err, FM_ERR_LIMIT, "out of memory normalizing line %zu", idx + 1);
-    size_t n = 0;
-    int in_comment = 0, comment_col = 0;
-    for (size_t i = a; i < b; i++) {
-        unsigned char c = (unsigned char)t[i];
-        int column = (int)(i - a) + 1;
-        if (c == '\n' || c == '\r') continue;
-        if (c == '\0') {
-            if (!report) return FM_ERR_INPUT;
-            return gc_fail(g, FM_ERR_INPUT, column, "NUL byte in the program; expected text");
-        }
-        if (in_comment) {
-            if (c == ')') in_comment = 0;
-            else if (c == '(' && report)
-                return gc_fail(g, FM_ERR_INPUT, column,
-                               "nested comment: '(' inside the comment opened at column %d; "
-                               "expected ')' first", comment_col);
-            else if (c == '(') return FM_ERR_INPUT;
-            continue;
-        }
-        if (c == '(') {
-            in_comment = 1;
-            comment_col = column;
-            continue;
-        }
-        if (c == ';') break;
-        if (c == ' ' || c == '\t') continue;
-        if (c >= 'A' && c <= 'Z') c = (unsigned char)(c - 'A' + 'a');
-        out->s[n] = (char)c;
-        out->col[n] = column;
-        n++;
-    }
-    if (in_comment) {
-        if (!report) return FM_ERR_INPUT;
-        return gc_fail(g, FM_ERR_INPUT, comment_col,
-                       "unclosed comment: '(' without ')'; expected ')' before the end of the line");
-    }
-    out->s[n] = '\0';
-    out->col[n] = (int)(b - a) + 1;
-    out->n = n;
-    return FM_OK;
 }
 
 /* ---- tables ---- */

@@ -1,0 +1,258 @@
+/* gcode_block.c: reading blocks: a source line normalized as LinuxCNC
+ * does (lower case, no spaces, comments removed, each character's source
+ * column kept for errors), then its words (G and M codes checked against
+ * their modal groups, letters, parameter assignments) gathered into a
+ * gc_block for gcode_modal.c to execute. */
+#include "gcode_internal.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int line_reserve(gc_line *ln, size_t n)
+{
+    if (n + 1 <= ln->cap) return 1;
+    size_t cap = ln->cap ? ln->cap : 128;
+    while (cap < n + 1) cap *= 2;
+    char *s = realloc(ln->s, cap);
+    if (!s) return 0;
+    ln->s = s;
+    int *c = realloc(ln->col, cap * sizeof *c);
+    if (!c) return 0;
+    ln->col = c;
+    ln->cap = cap;
+    return 1;
+}
+
+fm_status gc_normalize(gc_interp *g, size_t idx, gc_line *out, int report)
+{
+    size_t a = g->line_start[idx], b = g->line_start[idx + 1];
+    const char *t = g->text;
+    if (!line_reserve(out, b - a + 1))
+        return fm_error_set(g->err, FM_ERR_LIMIT, "out of memory normalizing line %zu", idx + 1);
+    size_t n = 0;
+    int in_comment = 0, comment_col = 0;
+    for (size_t i = a; i < b; i++) {
+        unsigned char c = (unsigned char)t[i];
+        int column = (int)(i - a) + 1;
+        if (c == '\n' || c == '\r') continue;
+        if (c == '\0') {
+            if (!report) return FM_ERR_INPUT;
+            return gc_fail(g, FM_ERR_INPUT, column, "NUL byte in the program; expected text");
+        }
+        if (in_comment) {
+            if (c == ')') in_comment = 0;
+            else if (c == '(' && report)
+                return gc_fail(g, FM_ERR_INPUT, column,
+                               "nested comment: '(' inside the comment opened at column %d; "
+                               "expected ')' first", comment_col);
+            else if (c == '(') return FM_ERR_INPUT;
+            continue;
+        }
+        if (c == '(') {
+            in_comment = 1;
+            comment_col = column;
+            continue;
+        }
+        if (c == ';') break;
+        if (c == ' ' || c == '\t') continue;
+        if (c >= 'A' && c <= 'Z') c = (unsigned char)(c - 'A' + 'a');
+        out->s[n] = (char)c;
+        out->col[n] = column;
+        n++;
+    }
+    if (in_comment) {
+        if (!report) return FM_ERR_INPUT;
+        return gc_fail(g, FM_ERR_INPUT, comment_col,
+                       "unclosed comment: '(' without ')'; expected ')' before the end of the line");
+    }
+    out->s[n] = '\0';
+    out->col[n] = (int)(b - a) + 1;
+    out->n = n;
+    return FM_OK;
+}
+
+/* ------------------------------------------------------------------ */
+/* Words of a block                                                    */
+
+/* Modal group of a G code; GC_GROUP_UNKNOWN if unknown. Codes LinuxCNC
+ * knows but this interpreter refuses are GC_GROUP_REFUSED, with a message in
+ * refused_g(). */
+gc_group gc_g_group(int code)
+{
+    switch (code) {
+    case GC_G0: case GC_G1: case GC_G2: case GC_G3: case GC_G73: case GC_G80: case GC_G81:
+    case GC_G82: case GC_G83: case GC_G84: case GC_G85: case GC_G86: case GC_G87: case GC_G88:
+    case GC_G89:
+        return GC_GROUP_MOTION;
+    case GC_G4: case GC_G10: case GC_G28: case GC_G28_1: case GC_G30: case GC_G30_1: case GC_G53:
+    case GC_G92: case GC_G92_1: case GC_G92_2: case GC_G92_3:
+        return GC_GROUP_NON_MODAL;
+    case GC_G17: case GC_G18: case GC_G19: return GC_GROUP_PLANE;
+    case GC_G90: case GC_G91: return GC_GROUP_DISTANCE;
+    case GC_G90_1: case GC_G91_1: return GC_GROUP_ARC_DISTANCE;
+    case GC_G93: case GC_G94: case GC_G95: return GC_GROUP_FEED_MODE;
+    case GC_G20: case GC_G21: return GC_GROUP_UNITS;
+    case GC_G40: case GC_G41: case GC_G42: case GC_G41_1: case GC_G42_1:
+        return GC_GROUP_CUTTER_COMP;
+    case GC_G43: case GC_G43_1: case GC_G49: return GC_GROUP_TOOL_LENGTH;
+    case GC_G98: case GC_G99: return GC_GROUP_RETURN_MODE;
+    case GC_G54: case GC_G55: case GC_G56: case GC_G57: case GC_G58: case GC_G59: case GC_G59_1:
+    case GC_G59_2: case GC_G59_3:
+        return GC_GROUP_COORD_SYSTEM;
+    case GC_G61: case GC_G61_1: case GC_G64: return GC_GROUP_PATH_MODE;
+    case GC_G96: case GC_G97: return GC_GROUP_SPINDLE_MODE;
+    case GC_G5: case GC_G5_1: case GC_G5_2: case GC_G5_3: case GC_G7: case GC_G8: case GC_G33:
+    case GC_G33_1: case GC_G38_2: case GC_G38_3: case GC_G38_4: case GC_G38_5: case GC_G43_2:
+    case GC_G52: case GC_G74: case GC_G76: case GC_G17_1: case GC_G18_1: case GC_G19_1:
+    case GC_G28_2: case GC_G30_2:
+        return GC_GROUP_REFUSED;
+    default: return GC_GROUP_UNKNOWN;
+    }
+}
+
+static const char *refused_g(int code)
+{
+    switch (code) {
+    case GC_G41: case GC_G42: case GC_G41_1: case GC_G42_1:
+        return "cutter radius compensation is not supported; give the toolpath of the tool "
+               "centre (G40) instead";
+    case GC_G5: case GC_G5_1: case GC_G5_2: case GC_G5_3:
+        return "splines and NURBS (G5.x) are not supported";
+    case GC_G7: case GC_G8: return "lathe diameter/radius mode is not supported (milling only)";
+    case GC_G33: case GC_G33_1: case GC_G76: case GC_G74:
+        return "spindle-synchronized motion is not supported";
+    case GC_G38_2: case GC_G38_3: case GC_G38_4: case GC_G38_5:
+        return "probing is not supported by a simulation";
+    case GC_G43_2: return "G43.2 (additional tool offsets) is not supported; use G43 H or G43.1";
+    case GC_G52: return "G52 local offsets are not supported; use G92";
+    case GC_G17_1: case GC_G18_1: case GC_G19_1: return "UVW planes are not supported";
+    case GC_G28_2: case GC_G30_2: return "homing (G28.2/G30.2) is not supported";
+    case GC_G95: return "G95 (feed per revolution) is not supported; use G94 or G93";
+    default: return "is not supported";
+    }
+}
+
+void gc_g_name(int code, char *buf, size_t n)
+{
+    if (code % 10) snprintf(buf, n, "G%d.%d", code / 10, code % 10);
+    else snprintf(buf, n, "G%d", code / 10);
+}
+
+fm_status gc_parse_block(gc_interp *g, size_t p, gc_block *b)
+{
+    const gc_line *ln = &g->ln;
+    const char *s = ln->s;
+    while (s[p]) {
+        char c = s[p];
+        size_t at = p;
+        if (c == '#') {
+            if (b->nassign >= GC_MAX_ASSIGN)
+                return gc_fail(g, FM_ERR_LIMIT, gc_col(ln, at),
+                               "more than %d parameter assignments on one line", GC_MAX_ASSIGN);
+            gc_assign *a = &b->assign[b->nassign];
+            fm_status st = gc_read_param_ref(g, ln, &p, &a->num, a->name);
+            if (st) return st;
+            if (s[p] != '=')
+                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, p),
+                               "parameter outside an assignment; expected '=' after #%s",
+                               a->name[0] ? a->name : "N");
+            p++;
+            st = gc_read_real(g, ln, &p, &a->v);
+            if (st) return st;
+            b->nassign++;
+            continue;
+        }
+        if (c < 'a' || c > 'z' || !strchr("abcdfghijklmpqrstuvwxyz", c)) {
+            if (c == 'n')
+                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
+                               "N word after other words; expected the line number first");
+            if (c == 'o')
+                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
+                               "O word after other words; expected it at the start of the line");
+            if (c == '@' || c == '^')
+                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
+                               "polar coordinates ('%c') are not supported", c);
+            return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
+                           "unexpected '%c'; expected a word letter (G, M, X, ...) or #parameter", c);
+        }
+        p++;
+        double v;
+        fm_status st = gc_read_real(g, ln, &p, &v);
+        if (st) return st;
+        if (c == 'g') {
+            double t = v * 10.0;
+            double r = floor(t + 0.5);
+            char name[32];
+            if (fabs(t - r) > 1e-6 || r < 0 || r > 10000)
+                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
+                               "G%g: not a G code; expected a number with at most one decimal", v);
+            int code = (int)r;
+            gc_g_name(code, name, sizeof name);
+            gc_group grp = gc_g_group(code);
+            if (grp == GC_GROUP_UNKNOWN)
+                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at), "%s: unknown G code", name);
+            if (grp == GC_GROUP_REFUSED)
+                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at), "%s: %s", name, refused_g(code));
+            if (grp == GC_GROUP_CUTTER_COMP && code != GC_G40)
+                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at), "%s: %s", name, refused_g(code));
+            if (code == GC_G95)
+                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at), "%s: %s", name, refused_g(code));
+            if (b->ghas[grp]) {
+                char other[32];
+                gc_g_name(b->gcode[grp], other, sizeof other);
+                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
+                               "%s: same modal group as %s on this line; expected one G code "
+                               "per group", name, other);
+            }
+            b->ghas[grp] = 1;
+            b->gcode[grp] = code;
+            b->gcol[grp] = gc_col(ln, at);
+        } else if (c == 'm') {
+            double r = floor(v + 0.5);
+            if (fabs(v - r) > 1e-6 || r < 0 || r > 1000)
+                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at), "M%g: not an M code", v);
+            if (b->nm >= 4)
+                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
+                               "more than four M words on one line");
+            b->m[b->nm] = (int)r;
+            b->mcol[b->nm] = gc_col(ln, at);
+            b->nm++;
+        } else {
+            if (b->has[L(c)])
+                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
+                               "second %c word on one line (first at column %d); expected one",
+                               c - 'a' + 'A', b->col[L(c)]);
+            b->has[L(c)] = 1;
+            b->v[L(c)] = v;
+            b->col[L(c)] = gc_col(ln, at);
+        }
+    }
+    return FM_OK;
+}
+
+int gc_block_has_m(const gc_block *b, int m, int *col)
+{
+    for (int i = 0; i < b->nm; i++)
+        if (b->m[i] == m) {
+            if (col) *col = b->mcol[i];
+            return 1;
+        }
+    return 0;
+}
+
+int gc_block_has_axis(const gc_block *b)
+{
+    return HAS(b, 'x') || HAS(b, 'y') || HAS(b, 'z') || HAS(b, 'a') || HAS(b, 'b') ||
+           HAS(b, 'c') || HAS(b, 'u') || HAS(b, 'v') || HAS(b, 'w');
+}
+
+int gc_first_axis_col(const gc_block *b)
+{
+    const char *ax = "xyzabcuvw";
+    int best = 0;
+    for (const char *a = ax; *a; a++)
+        if (HAS(b, *a) && (!best || COL(b, *a) < best)) best = COL(b, *a);
+    return best;
+}

@@ -1,0 +1,439 @@
+/* gcode_motion.c: motions: straight lines, arcs and helices (IJK and R
+ * centres, LinuxCNC's tolerances), dwells, and the canned cycles G73 and
+ * G81-G89 with LinuxCNC's rules for R, the initial level, G98/G99, L
+ * repeats and G91. Each motion is converted from program units and
+ * coordinates to machine millimetres and handed to the sink (emit). */
+#include "gcode_internal.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void to_machine(const gc_interp *g, const double p[3], double out[3])
+{
+    for (int i = 0; i < 3; i++) out[i] = (p[i] + g->g5x[i] + g->g92[i]) * g->unit;
+}
+
+static fm_status emit(gc_interp *g, fm_motion *m, double seconds)
+{
+    m->axis_start[0] = m->axis_start[1] = 0;
+    m->axis_start[2] = 1;
+    memcpy(m->axis_end, m->axis_start, sizeof m->axis_end);
+    for (int i = 0; i < 3; i++) m->tip_offset[i] = g->tlo[i] * g->unit;
+    m->tip_offset[2] -= gc_tool_length_mm(g, g->tool);
+    m->spindle_rpm = g->spindle_dir ? g->speed : 0.0;
+    m->spindle_dir = g->spindle_dir;
+    m->coolant = g->coolant;
+    m->tool = g->tool;
+    m->t0 = g->t;
+    m->t1 = g->t + seconds;
+    g->t = m->t1;
+    m->line = g->lineno;
+    m->block = g->cur_block;
+    m->index = g->motion_index++;
+    m->path = NULL;
+    if (m->index >= g->opt.skip_motions && g->sink && g->sink(g->user, m)) g->stop = 1;
+    return FM_OK;
+}
+
+fm_status gc_check_feed(gc_interp *g, const char *what, int col)
+{
+    if (g->feed <= 0)
+        return gc_fail(g, FM_ERR_INPUT, col,
+                       "%s: feed rate is zero; expected an F word > 0 before or in this block",
+                       what);
+    return FM_OK;
+}
+
+static double feed_seconds(gc_interp *g, double len_mm, double *feed_mm)
+{
+    if (g->inverse_time) {
+        double sec = 60.0 / g->feed;
+        *feed_mm = sec > 0 ? len_mm / sec * 60.0 : 0;
+        return sec;
+    }
+    *feed_mm = g->feed * g->unit;
+    return len_mm / *feed_mm * 60.0;
+}
+
+fm_status gc_move_line(gc_interp *g, int rapid, const double to[3])
+{
+    fm_motion m;
+    memset(&m, 0, sizeof m);
+    m.kind = rapid ? FM_MOTION_RAPID : FM_MOTION_LINE;
+    to_machine(g, g->pos, m.start);
+    to_machine(g, to, m.end);
+    double len = sqrt((m.end[0] - m.start[0]) * (m.end[0] - m.start[0]) +
+                      (m.end[1] - m.start[1]) * (m.end[1] - m.start[1]) +
+                      (m.end[2] - m.start[2]) * (m.end[2] - m.start[2]));
+    double sec;
+    if (rapid) {
+        sec = len / g->opt.rapid_rate * 60.0;
+    } else {
+        sec = feed_seconds(g, len, &m.feed);
+    }
+    memcpy(g->pos, to, sizeof g->pos);
+    return emit(g, &m, sec);
+}
+
+fm_status gc_dwell(gc_interp *g, double seconds)
+{
+    fm_motion m;
+    memset(&m, 0, sizeof m);
+    m.kind = FM_MOTION_DWELL;
+    to_machine(g, g->pos, m.start);
+    memcpy(m.end, m.start, sizeof m.end);
+    return emit(g, &m, seconds > 0 ? seconds : 0);
+}
+
+/* Plane axes: first and second in-plane axis and the normal, in LinuxCNC's
+ * order (G18's first axis is Z), so that ARC_FEED's rotation sign is the
+ * counter-clockwise sense about +normal. */
+static void plane_axes(gc_plane plane, int *a, int *b, int *c)
+{
+    if (plane == GC_PLANE_XZ) { *a = 2; *b = 0; *c = 1; }
+    else if (plane == GC_PLANE_YZ) { *a = 1; *b = 2; *c = 0; }
+    else { *a = 0; *b = 1; *c = 2; }
+}
+
+static fm_status move_arc(gc_interp *g, const double to[3], const double center_ab[2], int turns)
+{
+    int a, b, c;
+    plane_axes(g->plane, &a, &b, &c);
+    fm_motion m;
+    memset(&m, 0, sizeof m);
+    m.kind = FM_MOTION_ARC;
+    double cen[3];
+    cen[a] = center_ab[0];
+    cen[b] = center_ab[1];
+    cen[c] = g->pos[c];
+    to_machine(g, g->pos, m.start);
+    to_machine(g, to, m.end);
+    to_machine(g, cen, m.center);
+    m.plane_axis = c;
+    m.turns = turns;
+    double sa = atan2(m.start[b] - m.center[b], m.start[a] - m.center[a]);
+    double ea = atan2(m.end[b] - m.center[b], m.end[a] - m.center[a]);
+    double r0 = hypot(m.start[a] - m.center[a], m.start[b] - m.center[b]);
+    double r1 = hypot(m.end[a] - m.center[a], m.end[b] - m.center[b]);
+    double sweep = turns > 0 ? ea - sa : sa - ea;
+    double chord = hypot(m.end[a] - m.start[a], m.end[b] - m.start[b]);
+    if (chord <= 1e-12 * (1 + r0)) sweep = 0;
+    while (sweep <= 1e-12) sweep += 2 * GC_PI;
+    while (sweep > 2 * GC_PI + 1e-12) sweep -= 2 * GC_PI;
+    sweep += 2 * GC_PI * (abs(turns) - 1);
+    double axial = m.end[c] - m.start[c];
+    double len = hypot(0.5 * (r0 + r1) * sweep, axial);
+    double sec = feed_seconds(g, len, &m.feed);
+    memcpy(g->pos, to, sizeof g->pos);
+    return emit(g, &m, sec);
+}
+
+/* The end point of a G0/G1/G2/G3 block in program coordinates (LinuxCNC's
+ * find_ends): absolute or incremental, or machine coordinates with G53. */
+void gc_find_ends(gc_interp *g, const gc_block *b, int g53, double end[3])
+{
+    const char ax[3] = {'x', 'y', 'z'};
+    for (int i = 0; i < 3; i++) {
+        if (!b->has[L(ax[i])]) {
+            end[i] = g->pos[i];
+        } else if (g53) {
+            end[i] = b->v[L(ax[i])] - g->g5x[i] - g->g92[i] - g->tlo[i];
+        } else if (g->absolute) {
+            end[i] = b->v[L(ax[i])];
+        } else {
+            end[i] = g->pos[i] + b->v[L(ax[i])];
+        }
+    }
+}
+
+fm_status gc_exec_arc(gc_interp *g, const gc_block *b, int code, int col)
+{
+    char name[32];
+    gc_g_name(code, name, sizeof name);
+    int a, bb, c;
+    plane_axes(g->plane, &a, &bb, &c);
+    static const char axl[3] = {'x', 'y', 'z'};
+    static const char offl[3] = {'i', 'j', 'k'};
+    char la = axl[a], lb = axl[bb];
+    char oa = offl[a], ob = offl[bb], oc = offl[c];
+    if (!HAS(b, la) && !HAS(b, lb) && !HAS(b, axl[c]))
+        return gc_fail(g, FM_ERR_INPUT, col,
+                       "%s: no end point; expected %c or %c words in the G%d plane", name,
+                       la - 32, lb - 32, g->plane);
+    fm_status st = gc_check_feed(g, name, col);
+    if (st) return st;
+    int turns = 1;
+    if (HAS(b, 'p')) {
+        double p = VAL(b, 'p');
+        if (p < 1 || floor(p) != p || p > 1e6)
+            return gc_fail(g, FM_ERR_INPUT, COL(b, 'p'),
+                           "%s P%g: expected a whole number of turns >= 1", name, p);
+        turns = (int)p;
+    }
+    double end[3];
+    gc_find_ends(g, b, 0, end);
+    double ca, cb;
+    double tol = g->unit == 1.0 ? 0.005 : 0.0005; /* LinuxCNC's TOLERANCE_MM / _INCH */
+    if (HAS(b, 'r')) {
+        double radius = VAL(b, 'r');
+        if (end[a] == g->pos[a] && end[bb] == g->pos[bb])
+            return gc_fail(g, FM_ERR_INPUT, COL(b, 'r'),
+                           "%s R: the end point equals the start point; a full circle needs "
+                           "the centre (I J K), not R", name);
+        double ar = fabs(radius);
+        double mid_a = (end[a] + g->pos[a]) / 2.0, mid_b = (end[bb] + g->pos[bb]) / 2.0;
+        double half = hypot(mid_a - end[a], mid_b - end[bb]);
+        if (ar == 0 || half - ar > tol)
+            return gc_fail(g, FM_ERR_INPUT, COL(b, 'r'),
+                           "%s R%g: radius too small to reach the end point; expected |R| >= %.6g",
+                           name, radius, half);
+        if (half / ar > 1 - 1e-12) half = ar; /* a semicircle within rounding */
+        double theta;
+        if ((code == GC_G2 && radius > 0) || (code == GC_G3 && radius < 0))
+            theta = atan2(end[bb] - g->pos[bb], end[a] - g->pos[a]) - GC_PI / 2;
+        else
+            theta = atan2(end[bb] - g->pos[bb], end[a] - g->pos[a]) + GC_PI / 2;
+        double turn2 = asin(half / ar);
+        double off = ar * cos(turn2);
+        ca = mid_a + off * cos(theta);
+        cb = mid_b + off * sin(theta);
+    } else {
+        if (HAS(b, oc))
+            return gc_fail(g, FM_ERR_INPUT, COL(b, oc),
+                           "%s: %c word in the G%d plane; expected %c and %c for the centre",
+                           name, oc - 32, g->plane, oa - 32, ob - 32);
+        if (!HAS(b, oa) && !HAS(b, ob))
+            return gc_fail(g, FM_ERR_INPUT, col,
+                           "%s: no centre; expected %c and/or %c (or R) in the G%d plane", name,
+                           oa - 32, ob - 32, g->plane);
+        if (g->arc_absolute) {
+            ca = HAS(b, oa) ? VAL(b, oa) : g->pos[a];
+            cb = HAS(b, ob) ? VAL(b, ob) : g->pos[bb];
+        } else {
+            ca = g->pos[a] + (HAS(b, oa) ? VAL(b, oa) : 0);
+            cb = g->pos[bb] + (HAS(b, ob) ? VAL(b, ob) : 0);
+        }
+        double r0 = hypot(ca - g->pos[a], cb - g->pos[bb]);
+        double r1 = hypot(ca - end[a], cb - end[bb]);
+        if (r0 < tol / 10 || r1 < tol / 10)
+            return gc_fail(g, FM_ERR_INPUT, col, "%s: zero-radius arc (centre on an end point)",
+                           name);
+        double abs_err = fabs(r0 - r1);
+        if (abs_err > tol * 20 || (abs_err > tol && abs_err / fmax(r0, r1) > 0.001))
+            return gc_fail(g, FM_ERR_INPUT, col,
+                           "%s: radius to the end point (%.6g) differs from the radius to the "
+                           "start point (%.6g); expected the same circle", name, r1, r0);
+    }
+    double cab[2] = {ca, cb};
+    return move_arc(g, end, cab, code == GC_G2 ? -turns : turns);
+}
+
+/* Canned cycles: LinuxCNC's convert_cycle_xy/yz/zx with aa, bb in the plane
+ * and cc along its normal. */
+typedef struct gc_cyc {
+    int a, b, c;
+} gc_cyc;
+
+static fm_status cyc_move(gc_interp *g, const gc_cyc *k, int rapid, double aa, double bb, double cc)
+{
+    double to[3];
+    to[k->a] = aa;
+    to[k->b] = bb;
+    to[k->c] = cc;
+    return gc_move_line(g, rapid, to);
+}
+
+fm_status gc_exec_cycle(gc_interp *g, const gc_block *b, int code, int col)
+{
+    char name[32];
+    gc_g_name(code, name, sizeof name);
+    if (g->feed <= 0) return gc_check_feed(g, name, col);
+    if (g->inverse_time)
+        return gc_fail(g, FM_ERR_INPUT, col, "%s: canned cycles need G94, not inverse time G93",
+                       name);
+    double r_word;
+    if (HAS(b, 'r')) r_word = VAL(b, 'r');
+    else if (g->motion == code) r_word = g->cycle_r;
+    else
+        return gc_fail(g, FM_ERR_INPUT, col,
+                       "%s: R clearance plane unspecified; expected an R word", name);
+    long reps = 1;
+    if (HAS(b, 'l')) {
+        double l = VAL(b, 'l');
+        if (l < 1 || floor(l) != l || l > 1e6)
+            return gc_fail(g, FM_ERR_INPUT, COL(b, 'l'),
+                           "%s L%g: expected a whole number of repeats >= 1", name, l);
+        reps = (long)l;
+    }
+    gc_cyc k;
+    plane_axes(g->plane, &k.a, &k.b, &k.c);
+    static const char axl[3] = {'x', 'y', 'z'};
+    char la = axl[k.a], lb = axl[k.b], lc = axl[k.c];
+    if (g->motion != code && !HAS(b, lc))
+        return gc_fail(g, FM_ERR_INPUT, col,
+                       "%s: %c value unspecified; expected %c on the first block of a cycle",
+                       name, lc - 32, lc - 32);
+    double c_word = HAS(b, lc) ? VAL(b, lc) : g->cycle_cc;
+    double current_cc = g->pos[k.c], old_cc;
+    if (g->cycle_il_flag) {
+        old_cc = g->cycle_il;
+    } else {
+        old_cc = g->cycle_il = current_cc;
+        g->cycle_il_flag = 1;
+    }
+    double aa, bb, aa_inc = 0, bb_inc = 0, r, cc;
+    if (g->absolute) {
+        r = r_word;
+        cc = c_word;
+        aa = HAS(b, la) ? VAL(b, la) : g->pos[k.a];
+        bb = HAS(b, lb) ? VAL(b, lb) : g->pos[k.b];
+    } else {
+        if (HAS(b, la)) aa_inc = VAL(b, la);
+        if (HAS(b, lb)) bb_inc = VAL(b, lb);
+        r = r_word + old_cc;
+        cc = r + c_word;
+        aa = g->pos[k.a];
+        bb = g->pos[k.b];
+    }
+    if (r < cc)
+        return gc_fail(g, FM_ERR_INPUT, HAS(b, 'r') ? COL(b, 'r') : col,
+                       "%s: R (%g) below the bottom %c (%g); expected R above the hole", name, r,
+                       lc - 32, cc);
+    /* check the words the cycle needs before moving */
+    double p = -1, q = -1, ci = 0, cj = 0, ck = 0;
+    if (HAS(b, 'p')) p = VAL(b, 'p');
+    if (HAS(b, 'q')) q = VAL(b, 'q');
+    switch (code) {
+    case GC_G82: case GC_G86: case GC_G88: case GC_G89:
+        if (p < 0 && g->motion != code)
+            return gc_fail(g, FM_ERR_INPUT, col, "%s: dwell time P missing; expected P seconds",
+                           name);
+        if (p < 0) p = g->cycle_p;
+        break;
+    case GC_G73: case GC_G83:
+        if (q < 0 && g->motion != code)
+            return gc_fail(g, FM_ERR_INPUT, col, "%s: peck depth Q missing; expected Q > 0", name);
+        if (q < 0) q = g->cycle_q;
+        if (q <= 0)
+            return gc_fail(g, FM_ERR_INPUT, HAS(b, 'q') ? COL(b, 'q') : col,
+                           "%s: Q%g; expected a peck depth Q > 0", name, q);
+        break;
+    case GC_G87:
+        if (g->motion != code) {
+            const char *ijk = "ijk";
+            for (int i = 0; i < 3; i++)
+                if (!b->has[L(ijk[i])])
+                    return gc_fail(g, FM_ERR_INPUT, col, "%s: %c missing; expected I, J and K",
+                                   name, ijk[i] - 32);
+        }
+        ci = HAS(b, 'i') ? VAL(b, 'i') : g->cycle_i;
+        cj = HAS(b, 'j') ? VAL(b, 'j') : g->cycle_j;
+        ck = HAS(b, 'k') ? VAL(b, 'k') : g->cycle_k;
+        g->cycle_i = ci;
+        g->cycle_j = cj;
+        g->cycle_k = ck;
+        if (!g->absolute) ck = cc + ck;
+        break;
+    default: break;
+    }
+    if (code == GC_G84 && g->spindle_dir != 1)
+        return gc_fail(g, FM_ERR_INPUT, col,
+                       "G84: spindle not turning clockwise; expected M3 before a right-hand tap");
+    if (code == GC_G84 && p < 0) p = g->cycle_p;
+    if ((code == GC_G86 || code == GC_G87 || code == GC_G88) && !g->spindle_dir)
+        return gc_fail(g, FM_ERR_INPUT, col, "%s: spindle not turning; expected M3 or M4 first",
+                       name);
+    fm_status st;
+    if (old_cc < r) {
+        double to[3] = {g->pos[0], g->pos[1], g->pos[2]};
+        to[k.c] = r;
+        if ((st = gc_move_line(g, 1, to))) return st;
+        old_cc = r;
+        current_cc = old_cc;
+    }
+    double clear = g->retract_r ? r : old_cc;
+    /* G83's small rapid back into the hole: 0.010 inch in either unit system */
+    double delta = g->unit == 1.0 ? 0.010 * GC_INCH : 0.010;
+    for (long rep = reps; rep > 0 && !g->stop; rep--) {
+        aa += aa_inc;
+        bb += bb_inc;
+        if (rep == reps && current_cc > r) {
+            if ((st = cyc_move(g, &k, 1, aa, bb, current_cc))) return st;
+            if ((st = cyc_move(g, &k, 1, aa, bb, r))) return st;
+        } else {
+            if ((st = cyc_move(g, &k, 1, aa, bb, clear))) return st;
+            if (clear > r && (st = cyc_move(g, &k, 1, aa, bb, r))) return st;
+        }
+        switch (code) {
+        case GC_G81:
+            if ((st = cyc_move(g, &k, 0, aa, bb, cc))) return st;
+            st = cyc_move(g, &k, 1, aa, bb, clear);
+            break;
+        case GC_G82:
+        case GC_G89:
+            if ((st = cyc_move(g, &k, 0, aa, bb, cc))) return st;
+            if ((st = gc_dwell(g, p))) return st;
+            st = cyc_move(g, &k, code == GC_G82, aa, bb, clear);
+            break;
+        case GC_G73:
+        case GC_G83: {
+            long pecks = 0;
+            for (double d = r - q; d > cc; d -= q) {
+                if (++pecks > 1000000)
+                    return gc_fail(g, FM_ERR_LIMIT, col, "%s: more than 10^6 pecks", name);
+                if ((st = cyc_move(g, &k, 0, aa, bb, d))) return st;
+                if (code == GC_G83 && (st = cyc_move(g, &k, 1, aa, bb, r))) return st;
+                if ((st = cyc_move(g, &k, 1, aa, bb, d + delta))) return st;
+            }
+            if ((st = cyc_move(g, &k, 0, aa, bb, cc))) return st;
+            st = cyc_move(g, &k, 1, aa, bb, clear);
+            break;
+        }
+        case GC_G84:
+            /* floating tap: feed in, reverse (dwell P), feed out to the clear plane */
+            if ((st = cyc_move(g, &k, 0, aa, bb, cc))) return st;
+            if ((st = gc_dwell(g, p))) return st;
+            st = cyc_move(g, &k, 0, aa, bb, clear);
+            break;
+        case GC_G85:
+            if ((st = cyc_move(g, &k, 0, aa, bb, cc))) return st;
+            if ((st = cyc_move(g, &k, 0, aa, bb, r))) return st;
+            st = cyc_move(g, &k, 1, aa, bb, clear);
+            break;
+        case GC_G86:
+            if ((st = cyc_move(g, &k, 0, aa, bb, cc))) return st;
+            if ((st = gc_dwell(g, p))) return st;
+            st = cyc_move(g, &k, 1, aa, bb, clear);
+            break;
+        case GC_G87:
+            if ((st = cyc_move(g, &k, 1, aa + ci, bb + cj, r))) return st;
+            if ((st = cyc_move(g, &k, 1, aa + ci, bb + cj, cc))) return st;
+            if ((st = cyc_move(g, &k, 1, aa, bb, cc))) return st;
+            if ((st = cyc_move(g, &k, 0, aa, bb, ck))) return st;
+            if ((st = cyc_move(g, &k, 0, aa, bb, cc))) return st;
+            if ((st = cyc_move(g, &k, 1, aa + ci, bb + cj, cc))) return st;
+            if ((st = cyc_move(g, &k, 1, aa + ci, bb + cj, clear))) return st;
+            st = cyc_move(g, &k, 1, aa, bb, clear);
+            break;
+        case GC_G88:
+            /* the operator retracts by hand at LinuxCNC's program stop */
+            if ((st = cyc_move(g, &k, 0, aa, bb, cc))) return st;
+            st = gc_dwell(g, p);
+            break;
+        default: st = FM_OK;
+        }
+        if (st) return st;
+    }
+    g->pos[k.a] = aa;
+    g->pos[k.b] = bb;
+    g->pos[k.c] = clear;
+    g->cycle_cc = c_word;
+    g->cycle_r = r_word;
+    if (p >= 0) g->cycle_p = p;
+    if (q > 0) g->cycle_q = q;
+    g->motion = (gc_gcode)code;
+    return FM_OK;
+}
+
