@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "log.h"
+#include "queue_redis.h"
 
 void fm_daemon_config_default(fm_daemon_config *cfg)
 {
@@ -34,6 +35,9 @@ void fm_daemon_config_default(fm_daemon_config *cfg)
     cfg->demo_voxel = 0.1;
     cfg->live_voxel = 0.25;
     cfg->live_feed = 1000;
+    snprintf(cfg->queue_stream, sizeof cfg->queue_stream, "frepmill:jobs");
+    snprintf(cfg->queue_group, sizeof cfg->queue_group, "frepmilld");
+    cfg->queue_claim_s = 30;
 }
 
 int fm_daemon_split_addr(const char *spec, char *addr, size_t addr_size, unsigned *port)
@@ -73,7 +77,7 @@ static int parse_bool(const char *v, int *out)
     return 0;
 }
 
-typedef enum { K_TEXT, K_INT, K_REAL, K_BOOL, K_ADDR, K_LEVEL } key_kind;
+typedef enum { K_TEXT, K_INT, K_REAL, K_BOOL, K_ADDR, K_LEVEL, K_QUEUE } key_kind;
 
 typedef struct key_def {
     const char *name;
@@ -117,6 +121,11 @@ static const key_def keys[] = {
     TEXT("live_tools", live_tools),
     REAL("live_voxel", live_voxel, 0.01, 10),
     REAL("live_feed", live_feed, 0.001, 1e7),
+    {"queue", K_QUEUE, offsetof(fm_daemon_config, queue), sizeof(((fm_daemon_config *)0)->queue), 0, 0},
+    TEXT("queue_stream", queue_stream),
+    TEXT("queue_group", queue_group),
+    TEXT("queue_consumer", queue_consumer),
+    REAL("queue_claim_s", queue_claim_s, 0.1, 86400),
 };
 
 int fm_daemon_config_set(fm_daemon_config *cfg, const char *key, const char *value, char *msg,
@@ -144,6 +153,16 @@ int fm_daemon_config_set(fm_daemon_config *cfg, const char *key, const char *val
             }
         } /* fall through: stored as text */
         /* FALLTHROUGH */
+        case K_QUEUE:
+            if (k->kind == K_QUEUE && value[0] && strcmp(value, "off") != 0) {
+                fm_redis_url url;
+                fm_error uerr;
+                if (fm_redis_url_parse(value, &url, &uerr) != FM_OK) {
+                    snprintf(msg, msg_size, "%s: %s", key, uerr.message);
+                    return -1;
+                }
+            }
+            /* FALLTHROUGH */
         case K_TEXT:
             if (strlen(value) >= k->size) {
                 snprintf(msg, msg_size, "%s: the value is longer than %zu characters", key,

@@ -37,6 +37,13 @@ typedef struct fm_daemon_config {
     char live_tools[1024];
     double live_voxel;
     double live_feed;          /* mm/min: the program time given to each live move */
+    /* A Redis Streams job queue shared by several daemons (docs/fleet.md):
+     * "" (off) or redis://[user[:password]@]host[:port][/db]. */
+    char queue[1024];
+    char queue_stream[256];    /* default frepmill:jobs */
+    char queue_group[256];     /* default frepmilld */
+    char queue_consumer[256];  /* default HOST-PID */
+    double queue_claim_s;      /* claim entries idle longer than this; default 30 */
 } fm_daemon_config;
 
 void fm_daemon_config_default(fm_daemon_config *cfg);

@@ -18,6 +18,7 @@
 #include "jobs.h"
 #include "log.h"
 #include "modbus_service.h"
+#include "queue_redis.h"
 #include "store.h"
 
 #ifndef FM_SOURCE_DIR
@@ -33,7 +34,8 @@ static void usage(FILE *out)
             "usage: frepmilld [--config FILE] [--listen ADDR:PORT] [--state-dir DIR]\n"
             "                 [--workers N] [--modbus-listen ADDR:PORT|off] [--token TOKEN]\n"
             "                 [--log-file FILE] [--log-level error|warn|info|debug]\n"
-            "                 [--viewer-dir DIR] [--demo] [--demo-voxel MM] [--KEY VALUE]...\n"
+            "                 [--viewer-dir DIR] [--demo] [--demo-voxel MM]\n"
+            "                 [--queue redis://HOST:PORT] [--KEY VALUE]...\n"
             "\n"
             "Every config key (deploy/frepmilld.conf, docs/daemon.md) is also a flag: --KEY\n"
             "VALUE, dashes or underscores. Flags override the config file.\n"
@@ -284,6 +286,36 @@ int main(int argc, char **argv)
     }
 
 
+    fm_redis_queue *queue = NULL;
+    if (cfg.queue[0] && strcmp(cfg.queue, "off") != 0) {
+        char consumer[300];
+        if (cfg.queue_consumer[0]) {
+            snprintf(consumer, sizeof consumer, "%s", cfg.queue_consumer);
+        } else {
+            char host[200] = "frepmilld";
+            gethostname(host, sizeof host - 1);
+            host[sizeof host - 1] = '\0';
+            snprintf(consumer, sizeof consumer, "%s-%ld", host, (long)getpid());
+        }
+        fm_redis_queue_config qcfg = {.url = cfg.queue,
+                                      .stream = cfg.queue_stream,
+                                      .group = cfg.queue_group,
+                                      .consumer = consumer,
+                                      .claim_s = cfg.queue_claim_s,
+                                      .max_job_bytes = hcfg.max_request_bytes,
+                                      .capacity = cfg.workers};
+        queue = fm_redis_queue_start(&qcfg, jobs, &err);
+        if (!queue) {
+            fm_log(FM_LOG_ERROR, "queue: %s", err.message);
+            fm_http_server_stop(http);
+            fm_modbus_server_stop(modbus);
+            fm_jobs_close(jobs);
+            return 2;
+        }
+        fm_log(FM_LOG_INFO, "queue: consuming %s as %s of group %s", cfg.queue_stream, consumer,
+               cfg.queue_group);
+    }
+
     if (cfg.demo) submit_demo(jobs, &cfg, port);
     fm_log(FM_LOG_INFO, "frepmilld ready: %d workers, state in %s", cfg.workers, cfg.state_dir);
 
@@ -303,6 +335,7 @@ int main(int argc, char **argv)
     }
     /* Order: no new requests, then jobs stop at their next cut and are
      * snapshotted for the next start. */
+    fm_redis_queue_stop(queue); /* takes no more; writes the results it holds */
     fm_jobs_begin_shutdown(jobs);
     fm_http_server_stop(http);
     fm_modbus_server_stop(modbus);

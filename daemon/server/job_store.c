@@ -203,6 +203,22 @@ void fm_job_store_load_all(fm_jobs *jobs)
     closedir(d);
 }
 
+int fm_job_store_load_one(fm_jobs *jobs, const char *id)
+{
+    char path[PATH_MAX];
+    struct stat st;
+    snprintf(path, sizeof path, "%s/%.40s", jobs->jobs_dir, id);
+    if (stat(path, &st) != 0 || !S_ISDIR(st.st_mode)) return 0;
+    fm_error err;
+    size_t removed = 0;
+    fm_stock_snapshot_cleanup(path, &removed, &err);
+    load_job(jobs, id);
+    job *j = fm_jobs_get(jobs, id);
+    if (!j) return 0;
+    fm_jobs_put(jobs, j);
+    return 1;
+}
+
 fm_status fm_job_store_materialize_stock(job *j, char *path, size_t size, const char **spec_out,
                                          fm_error *err)
 {

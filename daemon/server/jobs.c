@@ -204,7 +204,9 @@ static int check_tools(json_t *spec, fm_http_error *err)
     return rc;
 }
 
-int fm_jobs_submit(fm_jobs *jobs, json_t *spec, char *id, size_t id_size, fm_http_error *err)
+/* Store and queue a new job under given_id, or a new id when NULL. */
+static int submit_as(fm_jobs *jobs, json_t *spec, const char *given_id, char *id, size_t id_size,
+                     fm_http_error *err)
 {
     if (check_tools(spec, err) || check_budget(jobs, spec, err)) return err->status;
     if (fm_jobs_check_validate(spec, err)) return err->status;
@@ -220,7 +222,8 @@ int fm_jobs_submit(fm_jobs *jobs, json_t *spec, char *id, size_t id_size, fm_htt
                                  "finished jobs first",
                                  live);
     char new_id[32];
-    make_id(jobs, new_id, sizeof new_id);
+    if (given_id) snprintf(new_id, sizeof new_id, "%s", given_id);
+    else make_id(jobs, new_id, sizeof new_id);
     double created = fm_jobs_wall_s();
     fm_error ferr;
     if (fm_job_store_create(jobs, new_id, created, spec, &ferr) != FM_OK) {
@@ -242,6 +245,100 @@ int fm_jobs_submit(fm_jobs *jobs, json_t *spec, char *id, size_t id_size, fm_htt
     fm_log(FM_LOG_INFO, "job %s: accepted%s%s", new_id, name ? " as " : "",
            name ? json_string_value(name) : "");
     return 0;
+}
+
+int fm_jobs_submit(fm_jobs *jobs, json_t *spec, char *id, size_t id_size, fm_http_error *err)
+{
+    return submit_as(jobs, spec, NULL, id, id_size, err);
+}
+
+/* ------------------------------------------------------ shared queues -- */
+
+int fm_jobs_take(fm_jobs *jobs, const char *id, json_t *spec, fm_jobs_take_result *result,
+                 json_t **final, fm_http_error *err)
+{
+    *final = NULL;
+    if (strlen(id) >= 32)
+        return fm_http_error_set(err, 400, "bad_id", "the queue's job id '%s' is too long", id);
+    job *j = fm_jobs_get(jobs, id);
+    /* Not known here: a folder that a daemon sharing the state folder left. */
+    if (!j && fm_job_store_load_one(jobs, id)) j = fm_jobs_get(jobs, id);
+    if (!j) {
+        char out[32];
+        *result = FM_JOBS_TAKEN;
+        return submit_as(jobs, spec, id, out, sizeof out, err);
+    }
+    pthread_mutex_lock(&j->lock);
+    int ended = j->state >= FM_JOB_DONE;
+    pthread_mutex_unlock(&j->lock);
+    if (ended) {
+        *final = fm_publish_status_json(j);
+        *result = FM_JOBS_TAKEN_FINAL;
+        fm_jobs_put(jobs, j);
+        return 0;
+    }
+    pthread_mutex_lock(&jobs->lock);
+    if (j->held) {
+        j->held = 0;
+        atomic_store(&j->released, 0);
+        fm_queue_push(jobs, j);
+        *result = FM_JOBS_TAKEN;
+        fm_log(FM_LOG_INFO, "job %s: taken from the queue again; resuming", id);
+    } else {
+        *result = FM_JOBS_TAKEN_ALREADY;
+    }
+    pthread_mutex_unlock(&jobs->lock);
+    fm_jobs_put(jobs, j);
+    return 0;
+}
+
+void fm_jobs_set_end_hook(fm_jobs *jobs, fm_jobs_end_hook hook, void *user)
+{
+    pthread_mutex_lock(&jobs->lock);
+    jobs->end_hook = hook;
+    jobs->end_hook_user = user;
+    pthread_mutex_unlock(&jobs->lock);
+}
+
+void fm_jobs_notify_end(fm_jobs *jobs, job *j)
+{
+    pthread_mutex_lock(&jobs->lock);
+    fm_jobs_end_hook hook = jobs->end_hook;
+    void *user = jobs->end_hook_user;
+    pthread_mutex_unlock(&jobs->lock);
+    if (!hook) return;
+    json_t *status = fm_publish_status_json(j);
+    if (status) hook(user, j->id, status);
+    json_decref(status);
+}
+
+int fm_jobs_busy(fm_jobs *jobs)
+{
+    int n = 0;
+    pthread_mutex_lock(&jobs->lock);
+    for (size_t i = 0; i < jobs->count; i++) {
+        job *j = jobs->table[i];
+        if (j->deleted || j->held) continue;
+        pthread_mutex_lock(&j->lock);
+        n += j->state == FM_JOB_QUEUED || j->state == FM_JOB_RUNNING;
+        pthread_mutex_unlock(&j->lock);
+    }
+    pthread_mutex_unlock(&jobs->lock);
+    return n;
+}
+
+void fm_jobs_release(fm_jobs *jobs, const char *id)
+{
+    job *j = fm_jobs_get(jobs, id);
+    if (!j) return;
+    pthread_mutex_lock(&jobs->lock);
+    atomic_store(&j->released, 1);
+    j->held = 1;
+    pthread_mutex_unlock(&jobs->lock);
+    pthread_mutex_lock(&j->lock);
+    pthread_cond_broadcast(&j->cond); /* out of a pause */
+    pthread_mutex_unlock(&j->lock);
+    fm_jobs_put(jobs, j);
 }
 
 int fm_jobs_remove(fm_jobs *jobs, const char *id, fm_http_error *err)
@@ -307,8 +404,13 @@ fm_jobs *fm_jobs_open(const fm_jobs_config *cfg, fm_error *err)
     fm_job_store_load_all(jobs);
     /* Resume in creation order (the folders were read in any order). */
     pthread_mutex_lock(&jobs->lock);
-    for (size_t i = 0; i < jobs->count; i++)
-        if (jobs->table[i]->state < FM_JOB_DONE) fm_queue_push(jobs, jobs->table[i]);
+    for (size_t i = 0; i < jobs->count; i++) {
+        job *j = jobs->table[i];
+        if (j->state >= FM_JOB_DONE) continue;
+        /* A queue job waits for its queue (fm_jobs_take). */
+        if (!strncmp(j->id, "q-", 2)) j->held = 1;
+        else fm_queue_push(jobs, j);
+    }
     pthread_mutex_unlock(&jobs->lock);
     if (fm_queue_start_workers(jobs, cfg->workers, err) != FM_OK) {
         fm_jobs_close(jobs);
@@ -439,7 +541,7 @@ int fm_jobs_cancel(fm_jobs *jobs, const char *id)
         if (queued) j->state = FM_JOB_CANCELLED;
     }
     pthread_mutex_unlock(&j->lock);
-    if (queued) fm_queue_finish(j, FM_JOB_CANCELLED, "cancelled before it started");
+    if (queued) fm_queue_finish(jobs, j, FM_JOB_CANCELLED, "cancelled before it started");
     fm_jobs_put(jobs, j);
     return ok ? 0 : -2;
 }

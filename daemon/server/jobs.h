@@ -75,6 +75,31 @@ void fm_jobs_begin_shutdown(fm_jobs *jobs);
  * its id, or the HTTP status of the refusal with err filled. */
 int fm_jobs_submit(fm_jobs *jobs, json_t *spec, char *id, size_t id_size, fm_http_error *err);
 
+/* --------------------------------------------------- shared queues -- */
+/* Jobs taken from a shared queue (queue_redis.c, docs/fleet.md) carry the
+ * id the queue gives them ("q-" + entry id), are stored like any job, and
+ * at start are held, not resumed: the entry may have gone to another
+ * daemon meanwhile. The queue resumes them by taking them again. */
+typedef enum fm_jobs_take_result {
+    FM_JOBS_TAKEN = 0,     /* stored and queued here, or resumed from its folder */
+    FM_JOBS_TAKEN_ALREADY, /* already queued or running here */
+    FM_JOBS_TAKEN_FINAL    /* it ended before (here or in a shared folder): *final is its status */
+} fm_jobs_take_result;
+/* Take a canonical job under the queue's id. 0, or the HTTP status of the
+ * refusal (the same checks and budgets as fm_jobs_submit) with err filled.
+ * *final (FM_JOBS_TAKEN_FINAL) is the caller's to json_decref. */
+int fm_jobs_take(fm_jobs *jobs, const char *id, json_t *spec, fm_jobs_take_result *result,
+                 json_t **final, fm_http_error *err);
+/* Called on a worker thread as each job ends (done, failed, cancelled),
+ * with its final status (the GET /v1/jobs/{id} object, borrowed). */
+typedef void (*fm_jobs_end_hook)(void *user, const char *id, json_t *status);
+void fm_jobs_set_end_hook(fm_jobs *jobs, fm_jobs_end_hook hook, void *user);
+/* Jobs queued or running here now. */
+int fm_jobs_busy(fm_jobs *jobs);
+/* Stop a job without ending it (its queue entry went to another daemon):
+ * like a shutdown, it keeps its snapshot, writes no result and is held. */
+void fm_jobs_release(fm_jobs *jobs, const char *id);
+
 /* The fm_http_service over this manager. */
 void fm_jobs_http_service(fm_jobs *jobs, fm_http_service *out);
 

@@ -51,6 +51,12 @@ typedef struct job {
     struct job *next_queued;
 
     atomic_int cancel_requested;
+    /* A job from a shared queue (queue_redis.c) whose entry went to another
+     * daemon: stop it like a shutdown does (snapshot, no result). */
+    atomic_int released;
+    /* Loaded from its folder but not queued: a queue job waits until its
+     * queue hands it to this daemon (guarded by fm_jobs.lock). */
+    int held;
 
     pthread_mutex_t lock;
     pthread_cond_t cond;   /* events and pause */
@@ -88,6 +94,9 @@ struct fm_jobs {
     struct jobs_live *live; /* jobs_live.c: the session taking positions, or NULL */
     struct jobs_live *live_ending; /* a stopped session whose thread is still to be joined */
     pthread_mutex_t live_lock; /* guards live and live_ending */
+    /* Told of every job that ends (queue_redis.c); guarded by lock. */
+    fm_jobs_end_hook end_hook;
+    void *end_hook_user;
 };
 
 /* ------------------------------------------------------------ jobs.c -- */
@@ -111,6 +120,10 @@ job *fm_jobs_add_unstored(fm_jobs *jobs, json_t *spec);
 /* Stop the live job's thread and free the session (fm_jobs_close). */
 void fm_jobs_live_close(fm_jobs *jobs);
 
+/* The end hook, if any, with the job's final status (queue.c calls it when
+ * a job ends). */
+void fm_jobs_notify_end(fm_jobs *jobs, job *j);
+
 /* ------------------------------------------------------- job_store.c -- */
 
 /* Make the job's folder and write its spec durably (temp file, fsync,
@@ -124,6 +137,9 @@ void fm_job_store_write_result(job *j);
  * unfinished ones to be queued by the caller); drops unacknowledged and
  * half-deleted folders. */
 void fm_job_store_load_all(fm_jobs *jobs);
+/* Read one job folder (a queue job that another daemon sharing the state
+ * folder started): 1 if it is now in the table. */
+int fm_job_store_load_one(fm_jobs *jobs, const char *id);
 /* stock.vdb with "resume_from=N": every motion before N is in it. */
 void fm_job_store_save_snapshot(job *j, fm_stock *stock, long resume_from);
 /* The snapshot to resume from, with its N; NULL if none or unusable. */
@@ -147,7 +163,7 @@ void fm_queue_join_workers(fm_jobs *jobs);
 /* Drop the queue's references of jobs that never ran (at close). */
 void fm_queue_drain(fm_jobs *jobs);
 /* End a job: state, result.json, the "end" event, a log line. */
-void fm_queue_finish(job *j, fm_job_state state, const char *what);
+void fm_queue_finish(fm_jobs *jobs, job *j, fm_job_state state, const char *what);
 
 /* --------------------------------------------------------- publish.c -- */
 

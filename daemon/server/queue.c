@@ -44,13 +44,14 @@ static int on_progress(void *user, const fm_job_progress *p)
     fm_publish_progress(j, p, &rc->pace);
     pthread_mutex_lock(&j->lock);
     /* Paused (Modbus): wait here, between cuts, until resumed. */
-    while (j->paused && !atomic_load(&j->cancel_requested) && !rc->jobs->stopping)
+    while (j->paused && !atomic_load(&j->cancel_requested) && !rc->jobs->stopping &&
+           !atomic_load(&j->released))
         pthread_cond_wait(&j->cond, &j->lock);
     pthread_mutex_unlock(&j->lock);
 
     if (atomic_load(&j->cancel_requested)) return 1;
     pthread_mutex_lock(&rc->jobs->lock);
-    int stopping = rc->jobs->stopping;
+    int stopping = rc->jobs->stopping || atomic_load(&j->released);
     pthread_mutex_unlock(&rc->jobs->lock);
     if (stopping) {
         rc->stopped_for_shutdown = 1;
@@ -77,7 +78,7 @@ static json_t *error_json(const fm_error *err)
                      err->column > 0 ? json_integer(err->column) : json_null(), "file", err->file);
 }
 
-void fm_queue_finish(job *j, fm_job_state state, const char *what)
+void fm_queue_finish(fm_jobs *jobs, job *j, fm_job_state state, const char *what)
 {
     pthread_mutex_lock(&j->lock);
     j->state = state;
@@ -89,6 +90,7 @@ void fm_queue_finish(job *j, fm_job_state state, const char *what)
     fm_publish_event(j, "end", json_pack("{s:s, s:O?}", "state", fm_job_state_name(state), "error", j->error));
     pthread_mutex_unlock(&j->lock);
     fm_log(state == FM_JOB_FAILED ? FM_LOG_WARN : FM_LOG_INFO, "job %s: %s", j->id, what);
+    fm_jobs_notify_end(jobs, j);
 }
 
 /* The check pass of a job stops for cancel, delete and shutdown like the
@@ -211,7 +213,7 @@ static void run_job(fm_jobs *jobs, job *j)
         char buf[1024];
         char what[1200];
         snprintf(what, sizeof what, "failed: %s", fm_error_format(&err, buf, sizeof buf));
-        fm_queue_finish(j, FM_JOB_FAILED, what);
+        fm_queue_finish(jobs, j, FM_JOB_FAILED, what);
         return;
     }
     pthread_mutex_lock(&j->lock);
@@ -224,7 +226,8 @@ static void run_job(fm_jobs *jobs, job *j)
         pthread_mutex_lock(&j->lock);
         j->state = FM_JOB_QUEUED;
         pthread_mutex_unlock(&j->lock);
-        fm_log(FM_LOG_INFO, "job %s: stopped by shutdown at motion %ld; will resume", j->id,
+        fm_log(FM_LOG_INFO, "job %s: stopped by %s at motion %ld; will resume", j->id,
+               atomic_load(&j->released) ? "its queue (another daemon has it)" : "shutdown",
                rc.resume_from);
         return;
     }
@@ -246,12 +249,12 @@ static void run_job(fm_jobs *jobs, job *j)
     fm_job_store_save_snapshot(j, result.stock, result.stopped ? rc.resume_from : result.motions);
     fm_stock_free(result.stock);
     if (result.stopped) {
-        fm_queue_finish(j, FM_JOB_CANCELLED, "cancelled");
+        fm_queue_finish(jobs, j, FM_JOB_CANCELLED, "cancelled");
     } else {
         char what[256];
         snprintf(what, sizeof what, "done: %ld motions, removed %.1f mm3 in %.2f s",
                  result.motions, result.removed_volume_mm3, result.wall_time_s);
-        fm_queue_finish(j, FM_JOB_DONE, what);
+        fm_queue_finish(jobs, j, FM_JOB_DONE, what);
     }
 }
 
@@ -270,8 +273,9 @@ static void *worker_main(void *arg)
         pthread_mutex_lock(&j->lock);
         skip = skip || j->state >= FM_JOB_DONE; /* cancelled while queued */
         pthread_mutex_unlock(&j->lock);
+        skip = skip || atomic_load(&j->released); /* its queue gave it to another daemon */
         if (!skip && atomic_load(&j->cancel_requested)) {
-            fm_queue_finish(j, FM_JOB_CANCELLED, "cancelled before it started");
+            fm_queue_finish(jobs, j, FM_JOB_CANCELLED, "cancelled before it started");
         } else if (!skip) {
             run_job(jobs, j);
         }
