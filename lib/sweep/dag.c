@@ -39,6 +39,9 @@ fm_node fm_sweep_build_4d(fm_graph *g, const fm_motion *m, const fm_tool_part *p
         for (int i = 0; i < 3; i++) a[i] = K(s->a0[i]);
         break;
     }
+    case SW_KIN:
+        fm_kin_build_pose(g, &s->kin, u, c, a);
+        break;
     case SW_PARAM:
         if (!pose) {
             fm_sweep_free(s);

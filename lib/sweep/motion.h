@@ -24,6 +24,38 @@ typedef struct fm_path {
                         double axis_lo[3], double axis_hi[3]);
 } fm_path;
 
+/* A machine's rotary axes (DESIGN.md "Rotary axes", docs/sweep.md "Machine
+ * kinematics"). Each axis turns the link it carries about a line: positive
+ * joint values turn that link right-handed about `around` (as LinuxCNC).
+ * Table axes turn the workpiece (stock, fixtures, design); head axes turn
+ * the spindle. Axes are listed in chain order from the base: a table axis
+ * rides on the table axes before it, a head axis on the head axes before
+ * it. Every line is given with all joints at 0, where the workpiece frame
+ * is the machine frame. */
+#define FM_MACHINE_MAX_ROTARY 3
+
+typedef enum fm_rotary_link { FM_ROTARY_TABLE = 0, FM_ROTARY_HEAD } fm_rotary_link;
+
+typedef struct fm_rotary_axis {
+    int letter;             /* 0 = A, 1 = B, 2 = C: the G-code word that drives it */
+    fm_rotary_link carries;
+    double around[3];       /* unit direction of the line */
+    /* Table: a point of the line in machine coordinates. Head: the line's
+     * offset from the pivot point, which lies on the spindle axis
+     * pivot_length above the gauge line (all joints at 0). */
+    double through[3];
+    double pivot_length;    /* head axes: pivot point to spindle gauge line, mm */
+    int has_limits;         /* travel limits of the joint, degrees */
+    double limit_lo, limit_hi;
+    int wrapped;            /* rolls over: absolute targets modulo 360, sign = direction */
+} fm_rotary_axis;
+
+typedef struct fm_machine {
+    int rotary_count;                              /* 0: a 3-axis machine */
+    fm_rotary_axis rotary[FM_MACHINE_MAX_ROTARY];  /* chain order from the base */
+    int tcp;  /* tool centre point control: active from the start (G43.4 on, G49 off) */
+} fm_machine;
+
 /* Positions are millimetres in machine coordinates: the programmed point plus
  * the active G5x and G92 offsets. The tool tip is start/end + tip_offset
  * (tip_offset is zero when the active tool length offset matches the tool).
@@ -51,6 +83,20 @@ typedef struct fm_motion {
     long block;            /* N number if given, else -1 */
     long index;            /* 0-based position in the motion stream */
     const fm_path *path;   /* FM_MOTION_PARAM only; valid while the producer lives */
+    /* Rotary axes. machine NULL or without rotary axes: a 3-axis motion as
+     * above. Otherwise rotary_start/rotary_end are the joint values in
+     * degrees (index 0 = A, 1 = B, 2 = C) and the tool's pose comes from
+     * the machine's chain (docs/sweep.md): with tcp, start/end (+
+     * tip_offset turned with the tool) are the tool tip in the workpiece
+     * frame, moving on the line or arc; without, start/end are the linear
+     * joints and every joint moves linearly in time. axis_start/axis_end
+     * then hold the tool axis in the workpiece frame at the ends (for
+     * reports; the sweep recomputes it). machine must outlive the motion's
+     * consumers (the producer's options own it). */
+    const fm_machine *machine;
+    double rotary_start[3], rotary_end[3];
+    int tcp;
+    double tool_length;    /* gauge line to tip (the tool's G43 length); head axes without TCP */
 } fm_motion;
 
 /* Receives motions in program order; return non-zero to stop the producer. */

@@ -95,15 +95,18 @@ static void compute_bounds(fm_sweep *s)
         }
         return;
     }
-    /* Changing axis or parametric path: pieces of the pose box, each grown
-     * by the radius of the ball round the tip that holds the part. */
+    /* Changing axis, rotary axes or parametric path: pieces of the pose
+     * box, each grown by the radius of the ball round the tip that holds
+     * the part. */
     double B = sqrt(s->part.r_max * s->part.r_max +
                     fmax(s->part.z_lo * s->part.z_lo, s->part.z_hi * s->part.z_hi));
     int pieces = 64;
     for (int k = 0; k < pieces; k++) {
         double clo[3], chi[3], alo[3], ahi[3];
         double ua = (double)k / pieces, ub = (double)(k + 1) / pieces;
-        if (s->kind == SW_PARAM) {
+        if (s->kind == SW_KIN) {
+            fm_kin_pose_box(&s->kin, ua, ub, clo, chi, alo, ahi);
+        } else if (s->kind == SW_PARAM) {
             s->path->pose_bounds(s->path->ctx, s->t0 + ua * (s->t1 - s->t0), s->t0 + ub * (s->t1 - s->t0), clo,
                                  chi, alo, ahi);
             for (int i = 0; i < 3; i++) {
@@ -129,6 +132,10 @@ fm_status fm_sweep_new(const fm_motion *m, const fm_tool_part *part, const fm_sw
 {
     *out = NULL;
     if (!m || !part) return fm_error_set(err, FM_ERR_INTERNAL, "sweep: no motion or no tool part");
+    /* Rotary joints that stand still: the same motion in the workpiece
+     * frame, with every fast path of a 3-axis motion. */
+    fm_motion folded;
+    if (fm_kin_fold(m, &folded)) m = &folded;
     if (!(m->t1 >= m->t0) || !isfinite(m->t0) || !isfinite(m->t1))
         return fm_error_at(err, FM_ERR_INPUT, "", m->line, 0, "motion %ld: time interval [%g, %g] is not valid",
                            m->index, m->t0, m->t1);
@@ -154,7 +161,22 @@ fm_status fm_sweep_new(const fm_motion *m, const fm_tool_part *part, const fm_sw
     if (s->axis_const) memcpy(s->a1, s->a0, sizeof s->a0);
     for (int i = 0; i < 3; i++) s->c0[i] = m->start[i] + m->tip_offset[i];
 
-    switch (m->kind) {
+    if (fm_motion_has_rotary(m)) {
+        /* Rotary axes: the machine's chain (kinematics.c), searched. */
+        if (!fm_kin_init(&s->kin, m, err)) {
+            free(s);
+            return err ? err->code : FM_ERR_INPUT;
+        }
+        s->kind = SW_KIN;
+        s->axis_const = 0;
+        s->lipschitz = s->kin.speed;
+        s->turn_rate = s->kin.turn;
+        s->pieces = (int)ceil(s->kin.turn / (PI / 2));
+        if (s->pieces < 2) s->pieces = 2;
+        if (s->pieces > 64) s->pieces = 64;
+        fm_kin_pose(&s->kin, 0, s->c0, s->a0, NULL, NULL);
+        memcpy(s->a1, s->a0, sizeof s->a0);
+    } else switch (m->kind) {
     case FM_MOTION_DWELL:
         s->kind = SW_STATIC;
         break;
@@ -275,6 +297,8 @@ fm_status fm_sweep_new(const fm_motion *m, const fm_tool_part *part, const fm_sw
     }
     /* Second-order bound: a convex part on a fixed axis has F'' <= |tip''|. */
     s->second_order = profile && part->convex && s->axis_const && (s->kind == SW_LINE || s->kind == SW_ARC);
+    /* ... and on a rotary motion F'' <= |q''|, bounded per piece (kinematics.c). */
+    if (profile && part->convex && s->kind == SW_KIN) s->second_order = 1;
     s->certified = s->second_order;
     compute_bounds(s);
     *out = s;

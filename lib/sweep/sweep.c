@@ -82,6 +82,9 @@ static void pose_u(const fm_sweep *s, double u, double c[3], double a[3], double
         }
         return;
     }
+    case SW_KIN:
+        fm_kin_pose(&s->kin, u, c, a, dc, da);
+        return;
     case SW_STATIC:
     default:
         memcpy(c, s->c0, sizeof s->c0);
@@ -390,6 +393,10 @@ static void rz_bounds(const double p[3], const double clo[3], const double chi[3
 static void pose_box(const fm_sweep *s, double ua, double ub, double clo[3], double chi[3], double alo[3],
                      double ahi[3])
 {
+    if (s->kind == SW_KIN) {
+        fm_kin_pose_box(&s->kin, ua, ub, clo, chi, alo, ahi);
+        return;
+    }
     if (s->kind == SW_PARAM) {
         double ta = s->t0 + ua * (s->t1 - s->t0), tb = s->t0 + ub * (s->t1 - s->t0);
         s->path->pose_bounds(s->path->ctx, ta, tb, clo, chi, alo, ahi);
@@ -454,6 +461,15 @@ static double node_bound(const fm_sweep *s, void *pw, const double p[3], const b
          * H <= 0): parabolas from both ends bound F; they differ by a
          * linear function, so the bound is at their crossing or an end. */
         double A = s->accel;
+        if (s->kind == SW_KIN) {
+            /* Rotary axes: |q''| grows with the distance from p to the tip,
+             * at most the mean of the ends' plus speed * w / 2. */
+            double ca[3], cb[3], aa[3];
+            pose_u(s, n->ua, ca, aa, NULL, NULL);
+            pose_u(s, n->ub, cb, aa, NULL, NULL);
+            double va[3] = {p[0] - ca[0], p[1] - ca[1], p[2] - ca[2]}, vb[3] = {p[0] - cb[0], p[1] - cb[1], p[2] - cb[2]};
+            A = fm_kin_second(&s->kin, 0.5 * (norm3(va) + norm3(vb) + s->lipschitz * w));
+        }
         double Qa_b = n->Fa + n->Da * w + 0.5 * A * w * w;
         double Qb_a = n->Fb - n->Db * w + 0.5 * A * w * w;
         double U2 = fmax(fmin(n->Fa, Qb_a), fmin(Qa_b, n->Fb));
@@ -468,7 +484,8 @@ static double node_bound(const fm_sweep *s, void *pw, const double p[3], const b
         }
         if (U2 < U) U = U2;
     }
-    if (s->part.kind != FM_TOOL_PART_PROFILE || s->kind == SW_PARAM || U == DBL_MAX) {
+    if (s->part.kind != FM_TOOL_PART_PROFILE || s->kind == SW_PARAM || (s->kind == SW_KIN && !s->second_order) ||
+        U == DBL_MAX) {
         double clo[3], chi[3], alo[3], ahi[3];
         pose_box(s, n->ua, n->ub, clo, chi, alo, ahi);
         fm_interval rho, zeta;

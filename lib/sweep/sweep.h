@@ -95,6 +95,63 @@ double fm_sweep_tool_at(const fm_sweep *sweep, fm_sweep_worker *worker, const do
 double fm_sweep_tool_at_u(const fm_sweep *sweep, fm_sweep_worker *worker, const double p[3],
                           double u);
 
+/* ------------------------------------------------ motion geometry -- */
+
+/* One place for the geometry of a motion, used by the sweep, the check,
+ * pictures and the viewer (docs/sweep.md "Motions"). */
+
+/* An arc as LinuxCNC's ARC_FEED runs it, for the programmed point (no tip
+ * offset): P(u) = center + r(u) (cos th(u) e_ai + sin th(u) e_aj) + u dh
+ * e_k with th(u) = th0 + u dth, r(u) = r0 + u dr. */
+typedef struct fm_motion_arc {
+    int plane_axis, ai, aj; /* k; the in-plane axes (k+1, k+2) mod 3, right-handed */
+    double center[3];       /* center[k] = start[k] */
+    double r0, dr;
+    double th0, dth;        /* radians; dth > 0 counter-clockwise seen from +k */
+    double dh;
+} fm_motion_arc;
+
+/* The arc of an FM_MOTION_ARC motion: turns > 0 counter-clockwise, |turns|
+ * - 1 extra full circles, the same start and end angle a full circle.
+ * Returns 0 (and describes a straight line's worth of nothing: dth = 0)
+ * when the arc is degenerate: plane axis not 0..2, turns 0, zero start
+ * radius or a coordinate not finite. */
+int fm_motion_arc_of(const fm_motion *m, fm_motion_arc *arc);
+/* The point at u and its derivative d/du (dp may be NULL). */
+void fm_motion_arc_point(const fm_motion_arc *arc, double u, double p[3], double dp[3]);
+
+/* The programmed point at u in [0, 1] (start/end, the arc, or a
+ * parametric path minus tip_offset; dwells stay at start). */
+void fm_motion_point_at(const fm_motion *m, double u, double p[3]);
+/* The tool tip and unit axis in the workpiece frame at u in [0, 1]: every
+ * kind, rotary axes included (what the sweep cuts with). */
+void fm_motion_pose_at(const fm_motion *m, double u, double tip[3], double axis[3]);
+/* Boxes that hold the tip and the axis for every u in [ua, ub] (sound:
+ * interval arithmetic on the chain; tests/sweep/test_kinematics.c). */
+void fm_motion_pose_bounds(const fm_motion *m, double ua, double ub, double tip_lo[3], double tip_hi[3],
+                           double axis_lo[3], double axis_hi[3]);
+/* Does the motion's pose come from a machine's rotary axes? */
+int fm_motion_has_rotary(const fm_motion *m);
+/* Into how many equal pieces of u to cut a motion for drawing: arcs by
+ * max_angle of turn (radians) per piece, rotary motions by max_angle of
+ * any joint, parametric paths into param_pieces; lines 1. At most
+ * max_pieces. */
+int fm_motion_pieces(const fm_motion *m, double max_angle, int param_pieces, int max_pieces);
+
+/* --------------------------------------------------------- machine -- */
+
+/* Is the machine well formed (unit axes once normalized, distinct letters,
+ * limits lo <= hi, finite numbers)? Normalizes `around` in place. */
+fm_status fm_machine_validate(fm_machine *machine, fm_error *err);
+/* The index in machine->rotary of the axis driven by letter (0 = A), or -1. */
+int fm_machine_axis_of(const fm_machine *machine, int letter);
+/* Where the table's link `upto` (the number of table axes counted from
+ * the base that move it; -1: all) puts the workpiece at the joint values
+ * (degrees, A B C): x_machine = rot x_workpiece + trans (rot row-major).
+ * For pictures of the workpiece in its machine position. */
+void fm_machine_table_transform(const fm_machine *machine, const double rotary[3], int upto, double rot[9],
+                                double trans[3]);
+
 /* ------------------------------------------------------ frep DAGs -- */
 
 /* T(p, t) of motion and part in g. For FM_MOTION_PARAM give pose[0..2]

@@ -3,9 +3,10 @@
 #ifndef FM_SWEEP_INTERNAL_H
 #define FM_SWEEP_INTERNAL_H
 
+#include "sweep/kin_internal.h"
 #include "sweep/sweep.h"
 
-typedef enum sw_kind { SW_STATIC = 0, SW_LINE, SW_ARC, SW_PARAM } sw_kind;
+typedef enum sw_kind { SW_STATIC = 0, SW_LINE, SW_ARC, SW_PARAM, SW_KIN } sw_kind;
 
 struct fm_sweep {
     fm_tool_part part;
@@ -24,6 +25,8 @@ struct fm_sweep {
     double ctr[3], th0, dth, r0, drr, dh;
     /* parametric */
     const fm_path *path;
+    /* rotary axes (kinematics.c) */
+    fm_kin kin;
     double tip_offset[3];
     /* search: |dtip/du| <= lipschitz, |daxis/du| <= turn_rate,
      * |d2tip/du2| <= accel; pieces to start the branch-and-bound with */
