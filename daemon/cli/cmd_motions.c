@@ -16,7 +16,7 @@ static void usage(FILE *out)
     fprintf(out,
             "usage: frepmill motions PROGRAM [--tools TOOLS] [--format jsonl]\n"
             "                        [--rapid-rate MM_PER_MIN] [--skip N] [--inch]\n"
-            "                        [--block-delete]\n\n"
+            "                        [--block-delete] [--subroutine-path DIRS] [--messages]\n\n"
             "Interpret a G-code program (LinuxCNC dialect), or a parametric trajectory\n"
             "(PROGRAM.json, docs/trajectory.md), and print one motion per line:\n"
             "  {\"line\":12,\"block\":12,\"kind\":\"arc\",\"start\":[x,y,z],\"end\":[x,y,z],\n"
@@ -24,8 +24,11 @@ static void usage(FILE *out)
             "   \"tip_offset\":[0,0,0],\"t\":[t0,t1]}\n"
             "Positions are machine millimetres (program point + G5x + G92 offsets).\n"
             "TOOLS is a JSON tool table or a LinuxCNC .tbl file. --skip N interprets\n"
-            "everything but prints motions from index N on. Exit status: 0 ok, 2 bad\n"
-            "input, 3 limit exceeded, 4 I/O error.\n");
+            "everything but prints motions from index N on. --subroutine-path lists the\n"
+            "folders (':'-separated) holding NAME.ngc files for o<NAME> call.\n"
+            "--messages also prints (debug,...) and (msg,...) texts in order as\n"
+            "  {\"kind\":\"message\",\"line\":12,\"text\":\"...\"}\n"
+            "Exit status: 0 ok, 2 bad input, 3 limit exceeded, 4 I/O error.\n");
 }
 
 static const char *kind_name(fm_motion_kind k)
@@ -56,6 +59,20 @@ static int print_motion(void *user, const fm_motion *m)
             m->feed, m->tool, m->spindle_rpm * m->spindle_dir, m->tip_offset[0],
             m->tip_offset[1], m->tip_offset[2], m->t0, m->t1);
     return ferror(out) ? 1 : 0;
+}
+
+/* A message as a JSON string (quotes, backslashes and control characters
+ * escaped). */
+static void print_message(void *user, int line, const char *text)
+{
+    FILE *out = user;
+    fprintf(out, "{\"kind\":\"message\",\"line\":%d,\"text\":\"", line);
+    for (const unsigned char *p = (const unsigned char *)text; *p; p++) {
+        if (*p == '"' || *p == '\\') fprintf(out, "\\%c", *p);
+        else if (*p < 0x20) fprintf(out, "\\u%04x", *p);
+        else fputc(*p, out);
+    }
+    fprintf(out, "\"}\n");
 }
 
 int fm_cmd_motions(int argc, char **argv)
@@ -94,6 +111,11 @@ int fm_cmd_motions(int argc, char **argv)
             opt.start_inch = 1;
         } else if (!strcmp(a, "--block-delete")) {
             opt.block_delete = 1;
+        } else if (!strcmp(a, "--subroutine-path") && i + 1 < argc) {
+            opt.subroutine_path = argv[++i];
+        } else if (!strcmp(a, "--messages")) {
+            opt.message = print_message;
+            opt.message_user = stdout;
         } else if (a[0] == '-' && a[1]) {
             fprintf(stderr, "frepmill motions: unknown or incomplete option '%s'\n", a);
             usage(stderr);

@@ -33,12 +33,14 @@ static fm_status run(gc_interp *g)
     if (!b) return fm_error_set(g->err, FM_ERR_LIMIT, "out of memory");
     int seen_content = 0;
     g->cur = 0;
-    while (!g->stop && g->cur < g->nlines) {
-        g->lineno = (int)g->cur + 1;
+    /* a subroutine file's lines follow the program's: only a call runs them */
+    while (!g->stop && g->cur < (g->depth ? g->nlines_all : g->nlines)) {
+        gc_set_line(g, g->cur);
         g->lines_run++;
         if ((st = gc_normalize(g, g->cur, &g->ln, 1))) goto out;
         const char *s = g->ln.s;
         if (g->ln.n == 0) {
+            gc_emit_message(g, &g->ln);
             g->cur++;
             continue;
         }
@@ -55,6 +57,7 @@ static fm_status run(gc_interp *g)
                 continue;
             }
             g->ended = 1; /* the closing % ends the program, as in LinuxCNC */
+            if ((st = gc_comp_finish(g))) goto out;
             break;
         }
         seen_content = 1;
@@ -99,7 +102,7 @@ static fm_status run(gc_interp *g)
         }
         g->cur = next;
     }
-    st = FM_OK;
+    st = g->stop ? FM_OK : gc_comp_finish(g);
 out:
     free(b);
     return st;
@@ -149,6 +152,10 @@ static fm_status interp_init(gc_interp *g, const char *text, size_t len, const c
     g->retract_r = 1; /* rs274 starts in G99 (retract to R) */
     g->cs = 1;
     g->params[GC_PARAM_COORD_SYSTEM] = 1;
+    g->nlines_all = g->nlines;
+    g->line_name = g->name;
+    g->comp.firstmove = 1;
+    g->nurbs_order = 3;
     return FM_OK;
 }
 
@@ -164,6 +171,11 @@ static void interp_free(gc_interp *g)
     free(g->ln.col);
     free(g->scan.s);
     free(g->scan.col);
+    gc_comp_free(&g->comp);
+    gc_spline_free(&g->spline);
+    free(g->nurbs);
+    free(g->tool_edits);
+    gc_sources_free(g);
 }
 
 fm_status fm_gcode_run_string(const char *text, size_t len, const char *name,

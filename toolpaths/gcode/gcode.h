@@ -23,6 +23,23 @@ typedef struct fm_gcode_options {
     long skip_motions;          /* interpret everything, but do not emit motions with
                                    index < skip_motions (resume after a restart) */
     int block_delete;           /* 1: skip lines starting with '/' (default 0, as rs274) */
+    /* Folders holding <name>.ngc files for `o<name> call`, ':'-separated, as
+     * LinuxCNC's SUBROUTINE_PATH (NULL or "": none). */
+    const char *subroutine_path;
+    /* (debug, ...) comments, with LinuxCNC's parameter substitution, and
+     * (msg, ...) comments, in program order (NULL: dropped). */
+    void (*message)(void *user, int line, const char *text);
+    void *message_user;
+    /* G38.2-G38.5: where the probe trips along `move` (a feed line, machine
+     * mm; the tool tip is move->start/end + tip_offset). toward_contact: 1
+     * stops at the first contact (G38.2/G38.3), 0 at the first loss of it
+     * (G38.4/G38.5). Set *tripped and *fraction (0..1 along the move) when
+     * it trips, *at_start when the probe is already in that state at the
+     * start. Called before the move is emitted; NULL: the probe trips at the
+     * end of every probe move (no stock to touch, as `frepmill motions`). */
+    fm_status (*probe)(void *user, const fm_motion *move, int toward_contact, int *tripped,
+                       double *fraction, int *at_start, fm_error *err);
+    void *probe_user;
 } fm_gcode_options;
 
 /* Fill *opt with the defaults above. */

@@ -25,25 +25,52 @@ static int line_reserve(gc_line *ln, size_t n)
     return 1;
 }
 
+/* A (debug,...) or (msg,...) comment: 1 or 2, and where its text starts. */
+static int message_kind(const char *c, size_t n, size_t *skip)
+{
+    static const char *const kinds[2] = {"debug,", "msg,"};
+    for (int k = 0; k < 2; k++) {
+        size_t m = strlen(kinds[k]);
+        if (n < m) continue;
+        size_t i = 0;
+        while (i < m && (c[i] | 0x20) == kinds[k][i]) i++;
+        if (i == m) {
+            *skip = m;
+            return k + 1;
+        }
+    }
+    return 0;
+}
+
 fm_status gc_normalize(gc_interp *g, size_t idx, gc_line *out, int report)
 {
-    size_t a = g->line_start[idx], b = g->line_start[idx + 1];
-    const char *t = g->text;
-    if (!line_reserve(out, b - a + 1))
+    const char *t;
+    size_t len;
+    gc_line_text(g, idx, &t, &len);
+    if (!line_reserve(out, len + 1))
         return fm_error_set(g->err, FM_ERR_LIMIT, "out of memory normalizing line %zu", idx + 1);
-    size_t n = 0;
+    size_t n = 0, comment_at = 0;
     int in_comment = 0, comment_col = 0;
-    for (size_t i = a; i < b; i++) {
+    out->msg_kind = 0;
+    for (size_t i = 0; i < len; i++) {
         unsigned char c = (unsigned char)t[i];
-        int column = (int)(i - a) + 1;
+        int column = (int)i + 1;
         if (c == '\n' || c == '\r') continue;
         if (c == '\0') {
             if (!report) return FM_ERR_INPUT;
             return gc_fail(g, FM_ERR_INPUT, column, "NUL byte in the program; expected text");
         }
         if (in_comment) {
-            if (c == ')') in_comment = 0;
-            else if (c == '(' && report)
+            if (c == ')') {
+                in_comment = 0;
+                size_t skip, clen = i - comment_at;
+                int kind = message_kind(t + comment_at, clen, &skip);
+                if (kind) {
+                    out->msg_kind = kind;
+                    out->msg = t + comment_at + skip;
+                    out->msg_len = clen - skip;
+                }
+            } else if (c == '(' && report)
                 return gc_fail(g, FM_ERR_INPUT, column,
                                "nested comment: '(' inside the comment opened at column %d; "
                                "expected ')' first", comment_col);
@@ -53,6 +80,7 @@ fm_status gc_normalize(gc_interp *g, size_t idx, gc_line *out, int report)
         if (c == '(') {
             in_comment = 1;
             comment_col = column;
+            comment_at = i + 1;
             continue;
         }
         if (c == ';') break;
@@ -68,7 +96,7 @@ fm_status gc_normalize(gc_interp *g, size_t idx, gc_line *out, int report)
                        "unclosed comment: '(' without ')'; expected ')' before the end of the line");
     }
     out->s[n] = '\0';
-    out->col[n] = (int)(b - a) + 1;
+    out->col[n] = (int)len + 1;
     out->n = n;
     return FM_OK;
 }
@@ -103,10 +131,13 @@ gc_group gc_g_group(int code)
         return GC_GROUP_COORD_SYSTEM;
     case GC_G61: case GC_G61_1: case GC_G64: return GC_GROUP_PATH_MODE;
     case GC_G96: case GC_G97: return GC_GROUP_SPINDLE_MODE;
-    case GC_G5: case GC_G5_1: case GC_G5_2: case GC_G5_3: case GC_G7: case GC_G8: case GC_G33:
-    case GC_G33_1: case GC_G38_2: case GC_G38_3: case GC_G38_4: case GC_G38_5: case GC_G43_2:
-    case GC_G52: case GC_G74: case GC_G76: case GC_G17_1: case GC_G18_1: case GC_G19_1:
-    case GC_G28_2: case GC_G30_2:
+    case GC_G5: case GC_G5_1: case GC_G5_2: case GC_G5_3: case GC_G33: case GC_G33_1:
+    case GC_G38_2: case GC_G38_3: case GC_G38_4: case GC_G38_5:
+        return GC_GROUP_MOTION;
+    case GC_G52: return GC_GROUP_NON_MODAL;
+    case GC_G7: case GC_G8: case GC_G43_2: case GC_G74: case GC_G76: case GC_G17_1:
+    case GC_G18_1: case GC_G19_1: case GC_G28_2: case GC_G30_2: case GC_G70: case GC_G71:
+    case GC_G71_1: case GC_G71_2: case GC_G72: case GC_G72_1: case GC_G72_2:
         return GC_GROUP_REFUSED;
     default: return GC_GROUP_UNKNOWN;
     }
@@ -115,18 +146,14 @@ gc_group gc_g_group(int code)
 static const char *refused_g(int code)
 {
     switch (code) {
-    case GC_G41: case GC_G42: case GC_G41_1: case GC_G42_1:
-        return "cutter radius compensation is not supported; give the toolpath of the tool "
-               "centre (G40) instead";
-    case GC_G5: case GC_G5_1: case GC_G5_2: case GC_G5_3:
-        return "splines and NURBS (G5.x) are not supported";
-    case GC_G7: case GC_G8: return "lathe diameter/radius mode is not supported (milling only)";
-    case GC_G33: case GC_G33_1: case GC_G76: case GC_G74:
-        return "spindle-synchronized motion is not supported";
-    case GC_G38_2: case GC_G38_3: case GC_G38_4: case GC_G38_5:
-        return "probing is not supported by a simulation";
+    case GC_G7: case GC_G8:
+        return "lathe diameter/radius mode is for lathes; frepmill simulates milling";
+    case GC_G70: case GC_G71: case GC_G71_1: case GC_G71_2: case GC_G72: case GC_G72_1:
+    case GC_G72_2:
+        return "lathe finishing and roughing cycles are for lathes; frepmill simulates milling";
+    case GC_G76: return "the lathe threading cycle is for lathes; frepmill simulates milling";
+    case GC_G74: return "left-hand tapping (G74) is not supported; use G84 with M4 or G33.1";
     case GC_G43_2: return "G43.2 (additional tool offsets) is not supported; use G43 H or G43.1";
-    case GC_G52: return "G52 local offsets are not supported; use G92";
     case GC_G17_1: case GC_G18_1: case GC_G19_1: return "UVW planes are not supported";
     case GC_G28_2: case GC_G30_2: return "homing (G28.2/G30.2) is not supported";
     case GC_G95: return "G95 (feed per revolution) is not supported; use G94 or G93";
@@ -152,6 +179,7 @@ fm_status gc_parse_block(gc_interp *g, size_t p, gc_block *b)
                 return gc_fail(g, FM_ERR_LIMIT, gc_col(ln, at),
                                "more than %d parameter assignments on one line", GC_MAX_ASSIGN);
             gc_assign *a = &b->assign[b->nassign];
+            a->col = gc_col(ln, at);
             fm_status st = gc_read_param_ref(g, ln, &p, &a->num, a->name);
             if (st) return st;
             if (s[p] != '=')
@@ -171,9 +199,19 @@ fm_status gc_parse_block(gc_interp *g, size_t p, gc_block *b)
             if (c == 'o')
                 return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
                                "O word after other words; expected it at the start of the line");
-            if (c == '@' || c == '^')
-                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
-                               "polar coordinates ('%c') are not supported", c);
+            if (c == '@' || c == '^') {
+                int *has = c == '@' ? &b->has_radius : &b->has_theta;
+                if (*has)
+                    return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
+                                   "second '%c' word on one line; expected one", c);
+                p++;
+                fm_status st = gc_read_real(g, ln, &p, c == '@' ? &b->radius : &b->theta);
+                if (st) return st;
+                *has = 1;
+                if (c == '@') b->radius_col = gc_col(ln, at);
+                else b->theta_col = gc_col(ln, at);
+                continue;
+            }
             return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
                            "unexpected '%c'; expected a word letter (G, M, X, ...) or #parameter", c);
         }
@@ -195,10 +233,16 @@ fm_status gc_parse_block(gc_interp *g, size_t p, gc_block *b)
                 return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at), "%s: unknown G code", name);
             if (grp == GC_GROUP_REFUSED)
                 return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at), "%s: %s", name, refused_g(code));
-            if (grp == GC_GROUP_CUTTER_COMP && code != GC_G40)
-                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at), "%s: %s", name, refused_g(code));
             if (code == GC_G95)
                 return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at), "%s: %s", name, refused_g(code));
+            /* rs274 takes G80 beside another motion code as that code */
+            if (grp == GC_GROUP_MOTION && b->ghas[grp] && (code == GC_G80 || b->gcode[grp] == GC_G80)) {
+                if (code != GC_G80) {
+                    b->gcode[grp] = code;
+                    b->gcol[grp] = gc_col(ln, at);
+                }
+                continue;
+            }
             if (b->ghas[grp]) {
                 char other[32];
                 gc_g_name(b->gcode[grp], other, sizeof other);

@@ -19,7 +19,8 @@ fm_status gc_fail(gc_interp *g, fm_status code, int column, const char *fmt, ...
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    return fm_error_at(g->err, code, g->name, g->lineno, column, "%s", msg);
+    return fm_error_at(g->err, code, g->line_name ? g->line_name : g->name, g->lineno, column,
+                       "%s", msg);
 }
 
 int gc_col(const gc_line *ln, size_t p)
@@ -107,37 +108,114 @@ void gc_table_free(gc_table *t)
 
 /* ---- parameters ---- */
 
-/* Read-only values LinuxCNC computes on demand (a useful subset). */
+/* LinuxCNC's read-only named parameters, computed from the state when read
+ * (the values rs274 2.9 gives; _vmajor/_vminor report that version).
+ * Returns 0 if name is not one of them. */
 static int predefined_named(gc_interp *g, const char *name, double *v)
 {
-    if (!strcmp(name, "_x")) *v = g->pos[0];
-    else if (!strcmp(name, "_y")) *v = g->pos[1];
-    else if (!strcmp(name, "_z")) *v = g->pos[2];
-    else if (!strcmp(name, "_line")) *v = g->lineno;
-    else if (!strcmp(name, "_metric")) *v = g->unit == 1.0;
-    else if (!strcmp(name, "_imperial")) *v = g->unit != 1.0;
-    else if (!strcmp(name, "_absolute")) *v = g->absolute;
-    else if (!strcmp(name, "_incremental")) *v = !g->absolute;
-    else if (!strcmp(name, "_current_tool")) *v = g->tool;
-    else if (!strcmp(name, "_selected_tool")) *v = g->selected_tool;
-    else if (!strcmp(name, "_feed")) *v = g->feed;
-    else if (!strcmp(name, "_rpm")) *v = g->speed;
-    else if (!strcmp(name, "_coord_system")) *v = g->cs == 1 ? 540 : g->cs <= 6 ? 530 + 10 * g->cs : 590 + (g->cs - 6);
-    else return 0;
-    return 1;
+    const char *n = name + 1;
+    switch (n[0]) {
+    case 'a':
+        if (!strcmp(n, "absolute")) *v = g->absolute;
+        else if (!strcmp(n, "adaptive_feed")) *v = 0;
+        else if (!strcmp(n, "a")) *v = 0;
+        else return 0;
+        return 1;
+    case 'b': if (strcmp(n, "b")) return 0; *v = 0; return 1;
+    case 'c':
+        if (!strcmp(n, "c")) *v = 0;
+        else if (!strcmp(n, "ccomp"))
+            *v = g->comp.side == GC_COMP_OFF ? GC_G40 : g->comp.side == GC_COMP_LEFT ? GC_G41 : GC_G42;
+        else if (!strcmp(n, "coord_system"))
+            *v = g->cs <= 6 ? GC_G54 + 10 * (g->cs - 1) : GC_G59 + (g->cs - 6);
+        else if (!strcmp(n, "current_tool") || !strcmp(n, "current_pocket")) *v = g->tool;
+        else if (!strcmp(n, "call_level")) *v = g->depth;
+        else return 0;
+        return 1;
+    case 'f':
+        if (!strcmp(n, "feed")) *v = g->feed;
+        else if (!strcmp(n, "flood")) *v = (g->coolant & 2) != 0;
+        else if (!strcmp(n, "feed_override") || !strcmp(n, "feed_hold")) *v = 1;
+        else return 0;
+        return 1;
+    case 'i':
+        if (!strcmp(n, "imperial")) *v = g->unit != 1.0;
+        else if (!strcmp(n, "incremental")) *v = !g->absolute;
+        else if (!strcmp(n, "inverse_time")) *v = g->inverse_time;
+        else if (!strcmp(n, "ijk_absolute_mode")) *v = g->arc_absolute;
+        else return 0;
+        return 1;
+    case 'l':
+        if (!strcmp(n, "line")) *v = g->lineno;
+        else if (!strcmp(n, "lathe_diameter_mode")) *v = 0;
+        else if (!strcmp(n, "lathe_radius_mode")) *v = 1;
+        else return 0;
+        return 1;
+    case 'm':
+        if (!strcmp(n, "metric")) *v = g->unit == 1.0;
+        else if (!strcmp(n, "motion_mode")) *v = g->motion;
+        else if (!strcmp(n, "mist")) *v = (g->coolant & 1) != 0;
+        else return 0;
+        return 1;
+    case 'p': if (strcmp(n, "plane")) return 0; *v = (double)g->plane * 10; return 1;
+    case 'r':
+        if (!strcmp(n, "rpm")) *v = g->speed;
+        else if (!strcmp(n, "retract_r_plane")) *v = g->retract_r;
+        else if (!strcmp(n, "retract_old_z")) *v = !g->retract_r;
+        else if (!strcmp(n, "remap_level")) *v = 0;
+        else return 0;
+        return 1;
+    case 's':
+        if (!strcmp(n, "selected_tool") || !strcmp(n, "selected_pocket")) *v = g->selected_tool;
+        else if (!strcmp(n, "spindle_on")) *v = g->spindle_dir != 0;
+        else if (!strcmp(n, "spindle_cw")) *v = g->spindle_dir == 1;
+        else if (!strcmp(n, "spindle_rpm_mode")) *v = 1;
+        else if (!strcmp(n, "spindle_css_mode")) *v = 0;
+        else if (!strcmp(n, "speed_override")) *v = 1;
+        else return 0;
+        return 1;
+    case 't':
+        if (!strcmp(n, "tool_offset")) *v = g->tlo[0] != 0 || g->tlo[1] != 0 || g->tlo[2] != 0;
+        else if (!strcmp(n, "task")) *v = 0;
+        else return 0;
+        return 1;
+    case 'u':
+        if (!strcmp(n, "units_per_minute")) *v = !g->inverse_time;
+        else if (!strcmp(n, "units_per_rev")) *v = 0;
+        else if (!strcmp(n, "u")) *v = 0;
+        else return 0;
+        return 1;
+    case 'v':
+        if (!strcmp(n, "value")) *v = g->value;
+        else if (!strcmp(n, "value_returned")) *v = g->value_returned;
+        else if (!strcmp(n, "vmajor")) *v = 2.9;
+        else if (!strcmp(n, "vminor")) *v = 0;
+        else if (!strcmp(n, "v")) *v = 0;
+        else return 0;
+        return 1;
+    case 'w': if (strcmp(n, "w")) return 0; *v = 0; return 1;
+    case 'x': if (n[1]) return 0; *v = g->pos[0]; return 1;
+    case 'y': if (n[1]) return 0; *v = g->pos[1]; return 1;
+    case 'z': if (n[1]) return 0; *v = g->pos[2]; return 1;
+    default: return 0;
+    }
 }
 
 int gc_get_named(gc_interp *g, const char *name, double *v)
 {
     if (name[0] == '_') {
-        if (gc_table_get(&g->globals, name, v)) return 1;
-        return predefined_named(g, name, v);
+        if (predefined_named(g, name, v)) return 1;
+        return gc_table_get(&g->globals, name, v);
     }
     return gc_table_get(&g->frames[g->depth].locals, name, v);
 }
 
 fm_status gc_set_named(gc_interp *g, const char *name, double v)
 {
+    double old;
+    if (name[0] == '_' && predefined_named(g, name, &old))
+        return gc_fail(g, FM_ERR_INPUT, g->assign_col,
+                       "#<%s> is a read-only parameter; expected a name of your own", name);
     gc_table *t = name[0] == '_' ? &g->globals : &g->frames[g->depth].locals;
     if (t->count > 100000)
         return gc_fail(g, FM_ERR_LIMIT, 0, "#<%s>: too many named parameters (limit 100000)", name);
@@ -147,13 +225,15 @@ fm_status gc_set_named(gc_interp *g, const char *name, double v)
 }
 
 /* Parameters whose value LinuxCNC derives from the state when read. */
-static double numbered_value(gc_interp *g, int n)
+double gc_param_value(gc_interp *g, int n)
 {
     switch (n) {
     case 5400: return g->tool;
-    case 5401: return g->tlo[0];
-    case 5402: return g->tlo[1];
-    case 5403: return g->tlo[2];
+    /* the offsets and diameter of the tool M6 last loaded, as LinuxCNC
+     * refreshes them (at M6 and G10 L1/L10/L11, not M61) */
+    case 5401: case 5402: return 0;
+    case 5403: return g->tool_param_z / g->unit;
+    case 5410: return g->tool_param_dia / g->unit;
     case 5420: return g->pos[0];
     case 5421: return g->pos[1];
     case 5422: return g->pos[2];
@@ -492,7 +572,7 @@ fm_status gc_read_real(gc_interp *g, const gc_line *ln, size_t *p, double *out)
                                "#<%s> is not defined; expected a parameter assigned earlier "
                                "(or EXISTS[#<%s>] to test it)", name, name);
         } else {
-            *out = numbered_value(g, num);
+            *out = gc_param_value(g, num);
         }
         return FM_OK;
     }

@@ -6,7 +6,11 @@
  *   gcode_modal.c    executing a block in LinuxCNC's order: modal state, M codes
  *   gcode_motion.c   lines, arcs, dwells and canned cycles -> emitted motions
  *   gcode_offsets.c  coordinate systems (G5x, G10, G92, G53), G43, G28/G30
- *   gcode_oword.c    O-word control flow: subroutines, conditions, loops */
+ *   gcode_oword.c    O-word control flow: subroutines, conditions, loops
+ *   gcode_comp.c     cutter radius compensation (G40-G42.1)
+ *   gcode_spline.c   G5/G5.1/G5.2 curves as exact parametric motions
+ *   gcode_source.c   subroutine files on the subroutine path (o<name> call)
+ *   gcode_state.c    M70-M73 saved modal state, (debug,...) messages */
 #ifndef FM_GCODE_INTERNAL_H
 #define FM_GCODE_INTERNAL_H
 
@@ -35,6 +39,8 @@ typedef enum gc_gcode {
     GC_G54 = 540, GC_G55 = 550, GC_G56 = 560, GC_G57 = 570, GC_G58 = 580, GC_G59 = 590,
     GC_G59_1 = 591, GC_G59_2 = 592, GC_G59_3 = 593,
     GC_G61 = 610, GC_G61_1 = 611, GC_G64 = 640,
+    GC_G70 = 700, GC_G71 = 710, GC_G71_1 = 711, GC_G71_2 = 712, GC_G72 = 720, GC_G72_1 = 721,
+    GC_G72_2 = 722,
     GC_G73 = 730, GC_G74 = 740, GC_G76 = 760,
     GC_G80 = 800, GC_G81 = 810, GC_G82 = 820, GC_G83 = 830, GC_G84 = 840, GC_G85 = 850,
     GC_G86 = 860, GC_G87 = 870, GC_G88 = 880, GC_G89 = 890,
@@ -73,6 +79,7 @@ typedef enum gc_mgroup {
     GC_MGROUP_COOLANT = 8,     /* M7 M8 M9 (M7 and M8 may share a line) */
     GC_MGROUP_OVERRIDE = 9,    /* M48-M53 */
     GC_MGROUP_USER = 10,       /* M100-M199 */
+    GC_MGROUP_STATE = 11,      /* M70-M73 */
     GC_MGROUP_COUNT
 } gc_mgroup;
 
@@ -107,6 +114,17 @@ typedef struct gc_repeat {
     long left;
 } gc_repeat;
 
+/* The modal state M70/M73 save and M72 restores (LinuxCNC's list: units,
+ * plane, distance modes, feed mode, coordinate system, tool length offset,
+ * retract mode, F, S, spindle, coolant). */
+typedef struct gc_modal_state {
+    double unit;
+    int plane, absolute, arc_absolute, inverse_time, cs, retract_r;
+    double tlo[3];
+    double feed, speed;
+    int spindle_dir, coolant;
+} gc_modal_state;
+
 /* One O-word call in progress. */
 typedef struct gc_frame {
     size_t return_line;            /* line index to continue at after return */
@@ -115,7 +133,83 @@ typedef struct gc_frame {
     gc_repeat *repeats;
     int nrepeats, caprepeats;
     char sub[GC_MAX_NAME];
+    gc_modal_state state;          /* saved by M70 or M73 at this call level */
+    int state_valid, state_autorestore;
 } gc_frame;
+
+/* A subroutine file loaded by o<name> call (gcode_source.c); its lines
+ * follow the program's and the files loaded before it. */
+typedef struct gc_source {
+    char *name;          /* path, for messages */
+    char *text;
+    size_t len;
+    size_t *line_start;  /* nlines + 1 offsets into text */
+    size_t nlines;
+    size_t first;        /* index of its first line among all lines */
+} gc_source;
+
+/* Cutter radius compensation (gcode_comp.c). Queued motions wait until the
+ * next programmed element fixes their end point. Coordinates are those of
+ * the compensation plane: u, v in the plane (G18: u = Z, v = X), w along
+ * its normal; program units. */
+typedef enum gc_comp_side { GC_COMP_OFF = 0, GC_COMP_LEFT = 1, GC_COMP_RIGHT = 2 } gc_comp_side;
+typedef enum gc_comp_kind { GC_COMP_RAPID, GC_COMP_LINE, GC_COMP_ARC, GC_COMP_DWELL } gc_comp_kind;
+
+/* The state a queued motion was programmed with. */
+typedef struct gc_comp_snap {
+    int line;
+    long block;
+    double feed;         /* program units per minute (inverse time converted); 0 for rapids */
+    double speed;
+    int spindle_dir, coolant;
+} gc_comp_snap;
+
+typedef struct gc_comp_move {
+    gc_comp_kind kind;
+    double end[3];       /* u v w */
+    double dir[2];       /* lines: the programmed direction (a reversed move would gouge) */
+    double center[2];    /* arcs */
+    int turn;            /* arcs: > 0 counter-clockwise, |turn| - 1 extra circles */
+    double sweep;        /* arcs: the programmed sweep (an arc pulled further would gouge) */
+    double seconds;      /* dwells */
+    gc_comp_snap snap;
+} gc_comp_move;
+
+/* A programmed arc handed to compensation: end point, centre, turn. */
+typedef struct gc_arc_data {
+    double end[3];
+    double center[2];
+    int turn;
+} gc_arc_data;
+
+typedef struct gc_comp {
+    gc_comp_side side;
+    double radius;       /* > 0 when compensating */
+    int orientation;     /* lathe tool orientation (G41.1/G42.1 L in G18); 0 or 9: none */
+    int firstmove;       /* the next move is the entry move */
+    int arc_not_allowed; /* the move after G40 must be straight */
+    double prog[3];      /* the programmed point, u v w */
+    double endpoint[2];  /* start of the queued motions, for the gouge tests */
+    int endpoint_valid;
+    gc_comp_move *q;
+    size_t nq, capq;
+} gc_comp;
+
+/* A curve as rational Bezier segments (gcode_spline.c), machine mm. */
+typedef struct gc_spline {
+    int degree;
+    size_t nseg, cap;
+    double *cp;          /* nseg * (degree + 1) homogeneous points (w x, w y, w) */
+    double t0, t1, z;    /* the motion's time interval and height */
+    fm_path path;
+} gc_spline;
+
+/* A tool table entry changed by G10 L1/L10/L11 (lengths in mm). */
+typedef struct gc_tool_edit {
+    int tool;
+    double length;       /* Z offset */
+    double diameter;
+} gc_tool_edit;
 
 /* A line after LinuxCNC's normalization: lower case, no spaces or tabs,
  * comments removed. col[i] is the 1-based source column of s[i]; col[n] is
@@ -124,6 +218,11 @@ typedef struct gc_line {
     char *s;
     int *col;
     size_t n, cap;
+    /* the last (debug,...) or (msg,...) comment of the line, as written:
+     * msg_kind 1 debug, 2 msg, 0 none */
+    const char *msg;
+    size_t msg_len;
+    int msg_kind;
 } gc_line;
 
 typedef struct gc_interp {
@@ -168,8 +267,31 @@ typedef struct gc_interp {
     double cycle_r, cycle_cc, cycle_p, cycle_q, cycle_i, cycle_j, cycle_k, cycle_il;
     int cycle_il_flag;
     int percent_mode;
+    double rotation;    /* degrees: the active coordinate system's XY rotation (G10 L2 R) */
+    gc_comp comp;
+    gc_tool_edit *tool_edits;
+    int ntool_edits, captool_edits;
+    int assign_col;     /* column of the assignment being made, for its errors */
+    double tool_param_z, tool_param_dia; /* #5403 and #5410 in mm (gc_refresh_tool_params) */
+    double value;       /* #<_value> and #<_value_returned> (read-only) */
+    int value_returned;
+
+    /* splines: G5.2 control points (program units x, y, weight) until G5.3 */
+    double *nurbs;
+    size_t nnurbs, capnurbs;
+    int nurbs_order;
+    gc_spline spline;
+
+    /* subroutine files loaded so far (lines after the program's) */
+    gc_source *sources;
+    int nsources, capsources;
+    size_t nlines_all;
+    const char *line_name; /* the file of the current line, for messages */
 
     /* output */
+    double mpos[3];     /* machine mm where the last motion ended: the next one starts there */
+    double canon[3];    /* the same, not moved by tool length offset changes: where rs274
+                           takes the current point from after a tool change */
     fm_motion_sink sink;
     void *user;
     double t;
@@ -189,6 +311,7 @@ typedef struct gc_assign {
     int num;
     char name[GC_MAX_NAME];
     double v;
+    int col;
 } gc_assign;
 
 typedef struct gc_block {
@@ -200,6 +323,9 @@ typedef struct gc_block {
     unsigned char ghas[GC_GROUP_COUNT];
     int m[8], mcol[8], nm;
     long n;
+    /* polar coordinates: @ radius, ^ angle in degrees (G17) */
+    int has_radius, has_theta, radius_col, theta_col;
+    double radius, theta;
     gc_assign assign[GC_MAX_ASSIGN];
     int nassign;
 } gc_block;
@@ -208,6 +334,78 @@ typedef struct gc_block {
 #define HAS(b, c) ((b)->has[L(c)])
 #define VAL(b, c) ((b)->v[L(c)])
 #define COL(b, c) ((b)->col[L(c)])
+
+/* ---- the extensions (gcode_comp.c, gcode_spline.c, gcode_source.c,
+ * gcode_state.c) ---- */
+
+void gc_comp_to_plane(gc_plane plane, const double xyz[3], double uvw[3]);
+void gc_comp_from_plane(gc_plane plane, const double uvw[3], double xyz[3]);
+int gc_comp_active(const gc_interp *g);
+void gc_comp_free(gc_comp *c);
+fm_status gc_comp_on(gc_interp *g, const gc_block *b, int code, int col);
+fm_status gc_comp_off(gc_interp *g, int col);
+/* Hand every queued motion to the sink (program end). */
+fm_status gc_comp_finish(gc_interp *g);
+/* Where unspecified and incremental axes of a block start from (LinuxCNC's
+ * find_ends: the programmed point while compensating). */
+void gc_comp_base(const gc_interp *g, double base[3]);
+void gc_comp_scale(gc_interp *g, double f);
+fm_status gc_comp_dwell(gc_interp *g, double seconds);
+fm_status gc_comp_straight(gc_interp *g, int rapid, double feed, const double end_xyz[3], int col);
+fm_status gc_comp_arc(gc_interp *g, const gc_arc_data *a, double feed, int col);
+/* Emit a queued motion (gcode_motion.c). */
+fm_status gc_emit_comp_move(gc_interp *g, const gc_comp_move *m);
+
+void gc_spline_free(gc_spline *s);
+fm_status gc_spline_build(gc_spline *s, const double *xyw, size_t npts, int order, fm_error *err);
+void gc_spline_point(const gc_spline *s, double u, double p[2]);
+void gc_spline_box(const gc_spline *s, double ua, double ub, double lo[2], double hi[2]);
+double gc_spline_length(const gc_spline *s);
+void gc_spline_path(gc_spline *s, double t0, double t1, double z);
+
+/* The text of line idx (any source) and its length. */
+void gc_line_text(const gc_interp *g, size_t idx, const char **text, size_t *len);
+/* Make line idx current for messages: g->lineno and g->line_name. */
+void gc_set_line(gc_interp *g, size_t idx);
+/* The line range [*lo, *hi) of the source holding line idx. */
+void gc_source_range(const gc_interp *g, size_t idx, size_t *lo, size_t *hi);
+/* Find <name>.ngc on the subroutine path and append it; *first is its first
+ * line. 0 and no error when there is no such file. */
+fm_status gc_load_subroutine_file(gc_interp *g, const char *name, int col, int *found,
+                                  size_t *first);
+void gc_sources_free(gc_interp *g);
+
+/* G5, G5.1, G5.2 (a control point) and G5.3 (gcode_spline.c); explicit: the
+ * code is on the line (not only the modal motion). */
+fm_status gc_exec_spline(gc_interp *g, const gc_block *b, int code, int explicit_code, int col);
+/* G33, G33.1 and G38.2-G38.5 (gcode_sync.c). */
+fm_status gc_exec_sync(gc_interp *g, const gc_block *b, int code, int col);
+fm_status gc_exec_probe(gc_interp *g, const gc_block *b, int code, int col);
+
+/* M70-M73 (gcode_state.c). */
+fm_status gc_exec_modal_state(gc_interp *g, int m, int col);
+/* Leaving a call level: M73's automatic restore. */
+fm_status gc_leave_level(gc_interp *g);
+/* Hand the line's (debug,...) / (msg,...) text to the message callback. */
+void gc_emit_message(gc_interp *g, const gc_line *ln);
+
+/* Hand a motion to the sink with the modal state's tool, spindle, time and
+ * line (gcode_motion.c); seconds is its duration. */
+fm_status gc_emit_motion(gc_interp *g, fm_motion *m, double seconds);
+/* Duration of a feed move of len_mm at the modal feed; *feed_mm is mm/min. */
+double gc_feed_seconds(gc_interp *g, double len_mm, double *feed_mm);
+/* The plane's first and second axis and its normal, LinuxCNC's order. */
+void gc_plane_axes(gc_plane plane, int *a, int *b, int *c);
+/* Machine mm of program point p, and back (rotation, G5x, G92). */
+void gc_to_machine(const gc_interp *g, const double p[3], double out[3]);
+void gc_from_machine(const gc_interp *g, const double m[3], double p[3]);
+/* The value of numbered parameter n as a program reads it. */
+double gc_param_value(gc_interp *g, int n);
+/* #5403, #5410: the spindle tool's table values, refreshed at M6 and G10. */
+void gc_refresh_tool_params(gc_interp *g);
+/* Tool diameter and length in mm, after G10 L1/L10/L11 edits. */
+double gc_tool_diameter_mm(gc_interp *g, int tool);
+void gc_set_units(gc_interp *g, double unit);
 
 /* Errors at a column of the current line. */
 fm_status gc_fail(gc_interp *g, fm_status code, int column, const char *fmt, ...)
@@ -252,7 +450,10 @@ fm_status gc_move_line(gc_interp *g, int rapid, const double to[3]);
 fm_status gc_dwell(gc_interp *g, double seconds);
 /* The end point of a G0/G1/G2/G3 block in program coordinates; machine
  * coordinates with G53. */
-void gc_find_ends(gc_interp *g, const gc_block *b, int g53, double end[3]);
+fm_status gc_find_ends(gc_interp *g, const gc_block *b, int g53, double end[3]);
+/* G0/G1 (through cutter compensation when it is on). */
+fm_status gc_exec_straight(gc_interp *g, const gc_block *b, int rapid, int g53, int col);
+fm_status gc_move_arc(gc_interp *g, const double to[3], const double center_ab[2], int turns);
 fm_status gc_exec_arc(gc_interp *g, const gc_block *b, int code, int col);
 fm_status gc_exec_cycle(gc_interp *g, const gc_block *b, int code, int col);
 

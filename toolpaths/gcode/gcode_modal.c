@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static void set_units(gc_interp *g, double unit)
+void gc_set_units(gc_interp *g, double unit)
 {
     if (unit == g->unit) return;
     double f = g->unit / unit;
@@ -20,7 +20,16 @@ static void set_units(gc_interp *g, double unit)
         g->g92[i] *= f;
         g->tlo[i] *= f;
     }
+    gc_comp_scale(g, f);
     g->unit = unit;
+}
+
+/* Codes LinuxCNC refuses while cutter radius compensation is on. */
+static fm_status comp_refuses(gc_interp *g, int col, const char *what)
+{
+    if (g->comp.side == GC_COMP_OFF) return FM_OK;
+    return gc_fail(g, FM_ERR_INPUT, col, "%s with cutter radius compensation on; expected G40 first",
+                   what);
 }
 
 fm_status gc_check_tool(gc_interp *g, int tool, int col, const char *word)
@@ -50,11 +59,13 @@ fm_status gc_exec_block(gc_interp *g, gc_block *b)
     for (int i = 0; i < b->nassign; i++) {
         gc_assign *a = &b->assign[i];
         if (a->name[0]) {
+            g->assign_col = a->col;
             if ((st = gc_set_named(g, a->name, a->v))) return st;
         } else {
             g->params[a->num] = a->v;
         }
     }
+    gc_emit_message(g, &g->ln);
     /* M codes: reject unknown ones and conflicting groups before doing anything */
     int mgroups[GC_MGROUP_COUNT] = {0};
     for (int i = 0; i < b->nm; i++) {
@@ -67,9 +78,7 @@ fm_status gc_exec_block(gc_interp *g, gc_block *b)
         case 7: case 8: case 9: grp = GC_MGROUP_COOLANT; break;
         case 48: case 49: case 50: case 51: case 52: case 53: grp = GC_MGROUP_OVERRIDE; break;
         case 62: case 63: case 64: case 65: case 66: case 67: case 68: grp = GC_MGROUP_IO; break;
-        case 70: case 71: case 72: case 73:
-            return gc_fail(g, FM_ERR_INPUT, b->mcol[i],
-                           "M%d: saving and restoring modal state is not supported", m);
+        case 70: case 71: case 72: case 73: grp = GC_MGROUP_STATE; break;
         default:
             if (m >= 100 && m <= 199) { grp = GC_MGROUP_USER; break; }
             return gc_fail(g, FM_ERR_INPUT, b->mcol[i], "M%d: unknown M code", m);
@@ -104,8 +113,10 @@ fm_status gc_exec_block(gc_interp *g, gc_block *b)
         g->selected_tool = t;
     }
     if (gc_block_has_m(b, 6, &col)) {
+        if ((st = comp_refuses(g, col, "M6 (tool change)"))) return st;
         g->tool = g->selected_tool;
         g->spindle_dir = 0; /* LinuxCNC stops the spindle for a tool change */
+        gc_refresh_tool_params(g);
     }
     if (gc_block_has_m(b, 61, &col)) {
         if (!HAS(b, 'q'))
@@ -122,6 +133,8 @@ fm_status gc_exec_block(gc_interp *g, gc_block *b)
     if (gc_block_has_m(b, 7, NULL)) g->coolant |= 1;
     if (gc_block_has_m(b, 8, NULL)) g->coolant |= 2;
     if (gc_block_has_m(b, 9, NULL)) g->coolant = 0;
+    for (int m = 70; m <= 73; m++)
+        if (gc_block_has_m(b, m, &col) && (st = gc_exec_modal_state(g, m, col))) return st;
     /* 8: dwell */
     int nonmodal = gc_block_g(b, GC_GROUP_NON_MODAL, &col);
     int nonmodal_col = col;
@@ -132,20 +145,29 @@ fm_status gc_exec_block(gc_interp *g, gc_block *b)
         if (VAL(b, 'p') < 0)
             return gc_fail(g, FM_ERR_INPUT, COL(b, 'p'), "G4 P%g: expected P >= 0 seconds",
                            VAL(b, 'p'));
-        if ((st = gc_dwell(g, VAL(b, 'p')))) return st;
+        if ((st = gc_comp_dwell(g, VAL(b, 'p')))) return st;
     }
     /* 9-10: plane, units */
-    code = gc_block_g(b, GC_GROUP_PLANE, NULL);
+    code = gc_block_g(b, GC_GROUP_PLANE, &col);
+    if (code != GC_G_NONE && code / 10 != (int)g->plane &&
+        (st = comp_refuses(g, col, "a plane change")))
+        return st;
     if (code != GC_G_NONE) g->plane = (gc_plane)(code / 10);
     code = gc_block_g(b, GC_GROUP_UNITS, NULL);
-    if (code == GC_G20) set_units(g, GC_INCH);
-    else if (code == GC_G21) set_units(g, 1.0);
-    /* 11-12: cutter compensation (only G40 parses), tool length offset */
+    if (code == GC_G20) gc_set_units(g, GC_INCH);
+    else if (code == GC_G21) gc_set_units(g, 1.0);
+    /* 11-12: cutter radius compensation, tool length offset */
+    code = gc_block_g(b, GC_GROUP_CUTTER_COMP, &col);
+    if (code == GC_G40 && (st = gc_comp_off(g, col))) return st;
+    if (code != GC_G_NONE && code != GC_G40 && (st = gc_comp_on(g, b, code, col))) return st;
     int tool_length = gc_block_g(b, GC_GROUP_TOOL_LENGTH, &col);
+    if (tool_length != GC_G_NONE && (st = comp_refuses(g, col, "a tool length offset change")))
+        return st;
     if (tool_length != GC_G_NONE && (st = gc_exec_tool_length(g, b, tool_length, col)))
         return st;
     /* 13-16: coordinate system, path mode (ignored), distance modes, retract */
     code = gc_block_g(b, GC_GROUP_COORD_SYSTEM, &col);
+    if (code != GC_G_NONE && (st = comp_refuses(g, col, "a coordinate system change"))) return st;
     if (code != GC_G_NONE) gc_set_g5x(g, code <= GC_G59 ? (code - GC_G54) / 10 + 1 : 6 + code - GC_G59);
     code = gc_block_g(b, GC_GROUP_DISTANCE, NULL);
     if (code == GC_G90) g->absolute = 1;
@@ -159,10 +181,24 @@ fm_status gc_exec_block(gc_interp *g, gc_block *b)
     /* 17-18: non-modal codes and motion */
     int mcol = 0;
     int mcode = gc_block_g(b, GC_GROUP_MOTION, &mcol);
-    int axes = gc_block_has_axis(b);
+    int axes = gc_block_has_axis(b) || b->has_radius || b->has_theta;
     /* codes whose X Y Z are not a motion's end point */
     int other_uses_axes = nonmodal == GC_G10 || nonmodal == GC_G28 || nonmodal == GC_G30 ||
-                          nonmodal == GC_G92 || tool_length == GC_G43_1;
+                          nonmodal == GC_G92 || nonmodal == GC_G52 || tool_length == GC_G43_1;
+    if (b->has_radius || b->has_theta) {
+        int pcol = b->has_radius ? b->radius_col : b->theta_col;
+        if (g->plane != GC_PLANE_XY)
+            return gc_fail(g, FM_ERR_INPUT, pcol,
+                           "polar coordinates in the G%d plane; expected G17", (int)g->plane);
+        if (HAS(b, 'x') || HAS(b, 'y'))
+            return gc_fail(g, FM_ERR_INPUT, HAS(b, 'x') ? COL(b, 'x') : COL(b, 'y'),
+                           "%c word with polar coordinates; expected @ and ^ or X and Y",
+                           HAS(b, 'x') ? 'X' : 'Y');
+        if (other_uses_axes)
+            return gc_fail(g, FM_ERR_INPUT, pcol,
+                           "polar coordinates with a code that is not a motion; expected them "
+                           "with G0, G1, G2, G3 or a canned cycle");
+    }
     if (mcode != GC_G_NONE && other_uses_axes && axes && mcode != GC_G80) {
         char a1[32], a2[32];
         gc_g_name(mcode, a1, sizeof a1);
@@ -174,10 +210,14 @@ fm_status gc_exec_block(gc_interp *g, gc_block *b)
     switch (nonmodal) {
     case GC_G10: if ((st = gc_exec_g10(g, b, nonmodal_col))) return st; break;
     case GC_G28: case GC_G30:
+        if ((st = comp_refuses(g, nonmodal_col, nonmodal == GC_G28 ? "G28" : "G30"))) return st;
         if ((st = gc_exec_home(g, b, nonmodal))) return st;
         break;
     case GC_G28_1: case GC_G30_1: gc_store_home(g, nonmodal); break;
-    case GC_G92: case GC_G92_1: case GC_G92_2: case GC_G92_3:
+    case GC_G92: case GC_G52:
+        if ((st = comp_refuses(g, nonmodal_col, nonmodal == GC_G92 ? "G92" : "G52"))) return st;
+        /* fall through */
+    case GC_G92_1: case GC_G92_2: case GC_G92_3:
         if ((st = gc_exec_g92(g, b, nonmodal, nonmodal_col))) return st;
         break;
     default: break;
@@ -198,11 +238,13 @@ fm_status gc_exec_block(gc_interp *g, gc_block *b)
                        "G53 in incremental mode (G91); expected G90");
     if (motion != GC_G_NONE && motion != GC_G80) {
         if (mcol == 0) mcol = gc_first_axis_col(b);
+        int has_words = (axes || b->has_radius || b->has_theta) && !other_uses_axes;
         if (motion == GC_G0 || motion == GC_G1 || motion == GC_G2 || motion == GC_G3)
             g->cycle_il_flag = 0;
         if (motion == GC_G0 || motion == GC_G1) {
             g->motion = (gc_gcode)motion;
-            if (axes && !other_uses_axes) {
+            /* a G0 or G1 without axis words still moves, nowhere (rs274) */
+            if (has_words || mcode != GC_G_NONE) {
                 if (motion == GC_G1) {
                     if ((st = gc_check_feed(g, "G1", mcol))) return st;
                     if (g->inverse_time && !HAS(b, 'f'))
@@ -210,9 +252,8 @@ fm_status gc_exec_block(gc_interp *g, gc_block *b)
                                        "G1 in inverse time (G93) without F; expected an F word "
                                        "on every feed line");
                 }
-                double end[3];
-                gc_find_ends(g, b, nonmodal == GC_G53, end);
-                if ((st = gc_move_line(g, motion == GC_G0, end))) return st;
+                if ((st = gc_exec_straight(g, b, motion == GC_G0, nonmodal == GC_G53, mcol)))
+                    return st;
             }
         } else if (motion == GC_G2 || motion == GC_G3) {
             g->motion = (gc_gcode)motion;
@@ -220,18 +261,42 @@ fm_status gc_exec_block(gc_interp *g, gc_block *b)
                 return gc_fail(g, FM_ERR_INPUT, mcol,
                                "G%d in inverse time (G93) without F; expected an F word on every "
                                "feed line", motion / 10);
-            if (axes || HAS(b, 'i') || HAS(b, 'j') || HAS(b, 'k') || HAS(b, 'r'))
+            if (has_words || mcode != GC_G_NONE || HAS(b, 'i') || HAS(b, 'j') || HAS(b, 'k') ||
+                HAS(b, 'r'))
                 if ((st = gc_exec_arc(g, b, motion, mcol))) return st;
+        } else if (motion == GC_G5 || motion == GC_G5_1 || motion == GC_G5_2 ||
+                   motion == GC_G5_3) {
+            if ((st = comp_refuses(g, mcol, "a spline (G5.x)"))) return st;
+            if ((st = gc_exec_spline(g, b, motion, mcode != GC_G_NONE, mcol))) return st;
+        } else if (motion == GC_G33 || motion == GC_G33_1) {
+            if ((st = comp_refuses(g, mcol, motion == GC_G33 ? "G33" : "G33.1"))) return st;
+            g->motion = (gc_gcode)motion;
+            if ((st = gc_exec_sync(g, b, motion, mcol))) return st;
+        } else if (motion == GC_G38_2 || motion == GC_G38_3 || motion == GC_G38_4 ||
+                   motion == GC_G38_5) {
+            if ((st = comp_refuses(g, mcol, "probing (G38.x)"))) return st;
+            g->motion = (gc_gcode)motion;
+            if ((st = gc_exec_probe(g, b, motion, mcol))) return st;
         } else {
+            if ((st = comp_refuses(g, mcol, "a canned cycle"))) return st;
             if ((st = gc_exec_cycle(g, b, motion, mcol))) return st;
         }
-    } else if (axes && !other_uses_axes && g->motion == GC_G80) {
+    } else if ((axes || b->has_radius || b->has_theta) && !other_uses_axes &&
+               g->motion == GC_G80) {
         return gc_fail(g, FM_ERR_INPUT, gc_first_axis_col(b),
                        "axis words without a motion mode; expected G0, G1, G2, G3 or a canned "
                        "cycle");
     }
     /* 19: stops */
+    /* after a tool change rs274 takes the current point back from its canon,
+     * which knows nothing of tool length offsets: an offset changed since the
+     * last motion does not shift the current point */
+    if (gc_block_has_m(b, 6, NULL) || gc_block_has_m(b, 61, NULL)) {
+        gc_from_machine(g, g->canon, g->pos);
+        memcpy(g->mpos, g->canon, sizeof g->mpos);
+    }
     if (gc_block_has_m(b, 2, NULL) || gc_block_has_m(b, 30, NULL)) {
+        if ((st = gc_comp_finish(g))) return st;
         g->ended = 1;
         g->stop = 1;
     }

@@ -10,12 +10,42 @@
 #include <stdlib.h>
 #include <string.h>
 
-static void to_machine(const gc_interp *g, const double p[3], double out[3])
+/* LinuxCNC's canon: machine = G5x + R(rotation) (p + G92), the rotation
+ * (G10 L2 R) turning X and Y about the coordinate system's origin. */
+void gc_to_machine(const gc_interp *g, const double p[3], double out[3])
 {
-    for (int i = 0; i < 3; i++) out[i] = (p[i] + g->g5x[i] + g->g92[i]) * g->unit;
+    double x = p[0] + g->g92[0], y = p[1] + g->g92[1];
+    if (g->rotation != 0) {
+        double t = g->rotation * GC_PI / 180.0, c = cos(t), s = sin(t);
+        double xr = x * c - y * s;
+        y = x * s + y * c;
+        x = xr;
+    }
+    out[0] = (x + g->g5x[0]) * g->unit;
+    out[1] = (y + g->g5x[1]) * g->unit;
+    out[2] = (p[2] + g->g92[2] + g->g5x[2]) * g->unit;
 }
 
-static fm_status emit(gc_interp *g, fm_motion *m, double seconds)
+void gc_from_machine(const gc_interp *g, const double m[3], double p[3])
+{
+    double x = m[0] / g->unit - g->g5x[0], y = m[1] / g->unit - g->g5x[1];
+    if (g->rotation != 0) {
+        double t = -g->rotation * GC_PI / 180.0, c = cos(t), s = sin(t);
+        double xr = x * c - y * s;
+        y = x * s + y * c;
+        x = xr;
+    }
+    p[0] = x - g->g92[0];
+    p[1] = y - g->g92[1];
+    p[2] = m[2] / g->unit - g->g5x[2] - g->g92[2];
+}
+
+#define to_machine gc_to_machine
+
+/* Motions start where the last one ended (g->mpos): after G40 the program's
+ * current point is the programmed one while the tool is still where the
+ * compensated path left it. */
+fm_status gc_emit_motion(gc_interp *g, fm_motion *m, double seconds)
 {
     m->axis_start[0] = m->axis_start[1] = 0;
     m->axis_start[2] = 1;
@@ -32,7 +62,8 @@ static fm_status emit(gc_interp *g, fm_motion *m, double seconds)
     m->line = g->lineno;
     m->block = g->cur_block;
     m->index = g->motion_index++;
-    m->path = NULL;
+    memcpy(g->mpos, m->end, sizeof g->mpos);
+    memcpy(g->canon, m->end, sizeof g->canon);
     if (m->index >= g->opt.skip_motions && g->sink && g->sink(g->user, m)) g->stop = 1;
     return FM_OK;
 }
@@ -46,7 +77,7 @@ fm_status gc_check_feed(gc_interp *g, const char *what, int col)
     return FM_OK;
 }
 
-static double feed_seconds(gc_interp *g, double len_mm, double *feed_mm)
+double gc_feed_seconds(gc_interp *g, double len_mm, double *feed_mm)
 {
     if (g->inverse_time) {
         double sec = 60.0 / g->feed;
@@ -62,7 +93,7 @@ fm_status gc_move_line(gc_interp *g, int rapid, const double to[3])
     fm_motion m;
     memset(&m, 0, sizeof m);
     m.kind = rapid ? FM_MOTION_RAPID : FM_MOTION_LINE;
-    to_machine(g, g->pos, m.start);
+    memcpy(m.start, g->mpos, sizeof m.start);
     to_machine(g, to, m.end);
     double len = sqrt((m.end[0] - m.start[0]) * (m.end[0] - m.start[0]) +
                       (m.end[1] - m.start[1]) * (m.end[1] - m.start[1]) +
@@ -71,10 +102,10 @@ fm_status gc_move_line(gc_interp *g, int rapid, const double to[3])
     if (rapid) {
         sec = len / g->opt.rapid_rate * 60.0;
     } else {
-        sec = feed_seconds(g, len, &m.feed);
+        sec = gc_feed_seconds(g, len, &m.feed);
     }
     memcpy(g->pos, to, sizeof g->pos);
-    return emit(g, &m, sec);
+    return gc_emit_motion(g, &m, sec);
 }
 
 fm_status gc_dwell(gc_interp *g, double seconds)
@@ -82,25 +113,25 @@ fm_status gc_dwell(gc_interp *g, double seconds)
     fm_motion m;
     memset(&m, 0, sizeof m);
     m.kind = FM_MOTION_DWELL;
-    to_machine(g, g->pos, m.start);
+    memcpy(m.start, g->mpos, sizeof m.start);
     memcpy(m.end, m.start, sizeof m.end);
-    return emit(g, &m, seconds > 0 ? seconds : 0);
+    return gc_emit_motion(g, &m, seconds > 0 ? seconds : 0);
 }
 
 /* Plane axes: first and second in-plane axis and the normal, in LinuxCNC's
  * order (G18's first axis is Z), so that ARC_FEED's rotation sign is the
  * counter-clockwise sense about +normal. */
-static void plane_axes(gc_plane plane, int *a, int *b, int *c)
+void gc_plane_axes(gc_plane plane, int *a, int *b, int *c)
 {
     if (plane == GC_PLANE_XZ) { *a = 2; *b = 0; *c = 1; }
     else if (plane == GC_PLANE_YZ) { *a = 1; *b = 2; *c = 0; }
     else { *a = 0; *b = 1; *c = 2; }
 }
 
-static fm_status move_arc(gc_interp *g, const double to[3], const double center_ab[2], int turns)
+fm_status gc_move_arc(gc_interp *g, const double to[3], const double center_ab[2], int turns)
 {
     int a, b, c;
-    plane_axes(g->plane, &a, &b, &c);
+    gc_plane_axes(g->plane, &a, &b, &c);
     fm_motion m;
     memset(&m, 0, sizeof m);
     m.kind = FM_MOTION_ARC;
@@ -108,9 +139,10 @@ static fm_status move_arc(gc_interp *g, const double to[3], const double center_
     cen[a] = center_ab[0];
     cen[b] = center_ab[1];
     cen[c] = g->pos[c];
-    to_machine(g, g->pos, m.start);
+    memcpy(m.start, g->mpos, sizeof m.start);
     to_machine(g, to, m.end);
     to_machine(g, cen, m.center);
+    m.center[c] = m.start[c];
     m.plane_axis = c;
     m.turns = turns;
     double sa = atan2(m.start[b] - m.center[b], m.start[a] - m.center[a]);
@@ -125,65 +157,101 @@ static fm_status move_arc(gc_interp *g, const double to[3], const double center_
     sweep += 2 * GC_PI * (abs(turns) - 1);
     double axial = m.end[c] - m.start[c];
     double len = hypot(0.5 * (r0 + r1) * sweep, axial);
-    double sec = feed_seconds(g, len, &m.feed);
+    double sec = gc_feed_seconds(g, len, &m.feed);
     memcpy(g->pos, to, sizeof g->pos);
-    return emit(g, &m, sec);
+    return gc_emit_motion(g, &m, sec);
 }
 
-/* The end point of a G0/G1/G2/G3 block in program coordinates (LinuxCNC's
- * find_ends): absolute or incremental, or machine coordinates with G53. */
-void gc_find_ends(gc_interp *g, const gc_block *b, int g53, double end[3])
+/* The end point of a motion block in program coordinates (LinuxCNC's
+ * find_ends): absolute or incremental from the current point (the
+ * programmed point while compensating), machine coordinates with G53, and
+ * polar coordinates (@ radius, ^ angle, about the program origin, G17). */
+fm_status gc_find_ends(gc_interp *g, const gc_block *b, int g53, double end[3])
 {
     const char ax[3] = {'x', 'y', 'z'};
+    int polar = b->has_radius || b->has_theta;
+    if (g53) {
+        if (polar)
+            return gc_fail(g, FM_ERR_INPUT, b->has_radius ? b->radius_col : b->theta_col,
+                           "polar coordinates with G53; expected X, Y, Z machine coordinates");
+        double m[3], cur[3];
+        gc_to_machine(g, g->pos, m);
+        for (int i = 0; i < 3; i++) {
+            cur[i] = m[i] / g->unit;
+            if (b->has[L(ax[i])]) cur[i] = b->v[L(ax[i])] - g->tlo[i];
+            cur[i] *= g->unit;
+        }
+        gc_from_machine(g, cur, end);
+        return FM_OK;
+    }
+    double base[3];
+    gc_comp_base(g, base);
     for (int i = 0; i < 3; i++) {
-        if (!b->has[L(ax[i])]) {
-            end[i] = g->pos[i];
-        } else if (g53) {
-            end[i] = b->v[L(ax[i])] - g->g5x[i] - g->g92[i] - g->tlo[i];
-        } else if (g->absolute) {
-            end[i] = b->v[L(ax[i])];
+        if (!b->has[L(ax[i])]) end[i] = base[i];
+        else if (g->absolute) end[i] = b->v[L(ax[i])];
+        else end[i] = base[i] + b->v[L(ax[i])];
+    }
+    if (!polar) return FM_OK;
+    double x = end[0], y = end[1];
+    int col = b->has_radius ? b->radius_col : b->theta_col;
+    if (g->absolute) {
+        if (b->has_radius && b->has_theta) {
+            x = b->radius * cos(b->theta * GC_PI / 180.0);
+            y = b->radius * sin(b->theta * GC_PI / 180.0);
+        } else if (b->has_radius) {
+            if (x == 0 && y == 0)
+                return gc_fail(g, FM_ERR_INPUT, col,
+                               "@ without ^ at the origin; expected an angle ^ there");
+            double th = atan2(y, x);
+            x = b->radius * cos(th);
+            y = b->radius * sin(th);
         } else {
-            end[i] = g->pos[i] + b->v[L(ax[i])];
+            double r = hypot(x, y);
+            x = r * cos(b->theta * GC_PI / 180.0);
+            y = r * sin(b->theta * GC_PI / 180.0);
+        }
+    } else {
+        if (x == 0 && y == 0)
+            return gc_fail(g, FM_ERR_INPUT, col,
+                           "incremental polar motion (G91 %c) at the origin is indeterminate; "
+                           "expected a move away from the origin first", b->has_radius ? '@' : '^');
+        if (b->has_radius) {
+            double th = atan2(y, x), r = hypot(x, y) + b->radius;
+            x = r * cos(th);
+            y = r * sin(th);
+        }
+        if (b->has_theta) {
+            double th = atan2(y, x) + b->theta * GC_PI / 180.0, r = hypot(x, y);
+            x = r * cos(th);
+            y = r * sin(th);
         }
     }
+    end[0] = x;
+    end[1] = y;
+    return FM_OK;
 }
 
-fm_status gc_exec_arc(gc_interp *g, const gc_block *b, int code, int col)
+/* The centre of an arc block starting at `start` (program coordinates),
+ * with LinuxCNC's tolerances (arc_data_r, arc_data_ijk). */
+static fm_status arc_center(gc_interp *g, const gc_block *b, int code, const double start[3],
+                            const double end[3], double cab[2], int col)
 {
     char name[32];
     gc_g_name(code, name, sizeof name);
     int a, bb, c;
-    plane_axes(g->plane, &a, &bb, &c);
-    static const char axl[3] = {'x', 'y', 'z'};
+    gc_plane_axes(g->plane, &a, &bb, &c);
     static const char offl[3] = {'i', 'j', 'k'};
-    char la = axl[a], lb = axl[bb];
     char oa = offl[a], ob = offl[bb], oc = offl[c];
-    if (!HAS(b, la) && !HAS(b, lb) && !HAS(b, axl[c]))
-        return gc_fail(g, FM_ERR_INPUT, col,
-                       "%s: no end point; expected %c or %c words in the G%d plane", name,
-                       la - 32, lb - 32, g->plane);
-    fm_status st = gc_check_feed(g, name, col);
-    if (st) return st;
-    int turns = 1;
-    if (HAS(b, 'p')) {
-        double p = VAL(b, 'p');
-        if (p < 1 || floor(p) != p || p > 1e6)
-            return gc_fail(g, FM_ERR_INPUT, COL(b, 'p'),
-                           "%s P%g: expected a whole number of turns >= 1", name, p);
-        turns = (int)p;
-    }
-    double end[3];
-    gc_find_ends(g, b, 0, end);
     double ca, cb;
     double tol = g->unit == 1.0 ? 0.005 : 0.0005; /* LinuxCNC's TOLERANCE_MM / _INCH */
     if (HAS(b, 'r')) {
         double radius = VAL(b, 'r');
-        if (end[a] == g->pos[a] && end[bb] == g->pos[bb])
+        if (end[a] == start[a] && end[bb] == start[bb])
             return gc_fail(g, FM_ERR_INPUT, COL(b, 'r'),
                            "%s R: the end point equals the start point; a full circle needs "
                            "the centre (I J K), not R", name);
         double ar = fabs(radius);
-        double mid_a = (end[a] + g->pos[a]) / 2.0, mid_b = (end[bb] + g->pos[bb]) / 2.0;
+        double mid_a = (end[a] + start[a]) / 2.0, mid_b = (end[bb] + start[bb]) / 2.0;
         double half = hypot(mid_a - end[a], mid_b - end[bb]);
         if (ar == 0 || half - ar > tol)
             return gc_fail(g, FM_ERR_INPUT, COL(b, 'r'),
@@ -192,9 +260,9 @@ fm_status gc_exec_arc(gc_interp *g, const gc_block *b, int code, int col)
         if (half / ar > 1 - 1e-12) half = ar; /* a semicircle within rounding */
         double theta;
         if ((code == GC_G2 && radius > 0) || (code == GC_G3 && radius < 0))
-            theta = atan2(end[bb] - g->pos[bb], end[a] - g->pos[a]) - GC_PI / 2;
+            theta = atan2(end[bb] - start[bb], end[a] - start[a]) - GC_PI / 2;
         else
-            theta = atan2(end[bb] - g->pos[bb], end[a] - g->pos[a]) + GC_PI / 2;
+            theta = atan2(end[bb] - start[bb], end[a] - start[a]) + GC_PI / 2;
         double turn2 = asin(half / ar);
         double off = ar * cos(turn2);
         ca = mid_a + off * cos(theta);
@@ -209,13 +277,13 @@ fm_status gc_exec_arc(gc_interp *g, const gc_block *b, int code, int col)
                            "%s: no centre; expected %c and/or %c (or R) in the G%d plane", name,
                            oa - 32, ob - 32, g->plane);
         if (g->arc_absolute) {
-            ca = HAS(b, oa) ? VAL(b, oa) : g->pos[a];
-            cb = HAS(b, ob) ? VAL(b, ob) : g->pos[bb];
+            ca = HAS(b, oa) ? VAL(b, oa) : start[a];
+            cb = HAS(b, ob) ? VAL(b, ob) : start[bb];
         } else {
-            ca = g->pos[a] + (HAS(b, oa) ? VAL(b, oa) : 0);
-            cb = g->pos[bb] + (HAS(b, ob) ? VAL(b, ob) : 0);
+            ca = start[a] + (HAS(b, oa) ? VAL(b, oa) : 0);
+            cb = start[bb] + (HAS(b, ob) ? VAL(b, ob) : 0);
         }
-        double r0 = hypot(ca - g->pos[a], cb - g->pos[bb]);
+        double r0 = hypot(ca - start[a], cb - start[bb]);
         double r1 = hypot(ca - end[a], cb - end[bb]);
         if (r0 < tol / 10 || r1 < tol / 10)
             return gc_fail(g, FM_ERR_INPUT, col, "%s: zero-radius arc (centre on an end point)",
@@ -226,8 +294,123 @@ fm_status gc_exec_arc(gc_interp *g, const gc_block *b, int code, int col)
                            "%s: radius to the end point (%.6g) differs from the radius to the "
                            "start point (%.6g); expected the same circle", name, r1, r0);
     }
-    double cab[2] = {ca, cb};
-    return move_arc(g, end, cab, code == GC_G2 ? -turns : turns);
+    cab[0] = ca;
+    cab[1] = cb;
+    return FM_OK;
+}
+
+/* The feed a compensated motion keeps while queued: program units per
+ * minute; in inverse time, the programmed length over the block's time. */
+static double queued_feed(const gc_interp *g, double programmed_len)
+{
+    return g->inverse_time ? g->feed * programmed_len : g->feed;
+}
+
+fm_status gc_exec_arc(gc_interp *g, const gc_block *b, int code, int col)
+{
+    char name[32];
+    gc_g_name(code, name, sizeof name);
+    int a, bb, c;
+    gc_plane_axes(g->plane, &a, &bb, &c);
+    static const char offl[3] = {'i', 'j', 'k'};
+    if (!HAS(b, 'r') && !HAS(b, offl[a]) && !HAS(b, offl[bb]) && !HAS(b, offl[c]))
+        return gc_fail(g, FM_ERR_INPUT, col,
+                       "%s: no centre and no radius; expected I, J, K or R", name);
+    if (g->comp.arc_not_allowed)
+        return gc_fail(g, FM_ERR_INPUT, col,
+                       "%s just after G40; expected a straight move to end cutter compensation",
+                       name);
+    if (g->rotation != 0 && g->plane != GC_PLANE_XY)
+        return gc_fail(g, FM_ERR_INPUT, col,
+                       "%s in the G%d plane of a rotated coordinate system (G10 L2 R%g); "
+                       "expected G17 there", name, (int)g->plane, g->rotation);
+    fm_status st = gc_check_feed(g, name, col);
+    if (st) return st;
+    int turns = 1;
+    if (HAS(b, 'p')) {
+        double p = VAL(b, 'p');
+        if (p < 1 || floor(p) != p || p > 1e6)
+            return gc_fail(g, FM_ERR_INPUT, COL(b, 'p'),
+                           "%s P%g: expected a whole number of turns >= 1", name, p);
+        turns = (int)p;
+    }
+    /* an arc without end point words is a full circle (LinuxCNC 2.9) */
+    double end[3];
+    if ((st = gc_find_ends(g, b, 0, end))) return st;
+    double start[3];
+    gc_comp_base(g, start);
+    if (gc_comp_active(g) && g->comp.firstmove) memcpy(start, g->pos, sizeof start);
+    double cab[2];
+    if ((st = arc_center(g, b, code, start, end, cab, col))) return st;
+    int turn = code == GC_G2 ? -turns : turns;
+    if (!gc_comp_active(g)) return gc_move_arc(g, end, cab, turn);
+    /* compensating: the programmed arc, in the compensation plane */
+    gc_arc_data arc;
+    gc_comp_to_plane(g->plane, end, arc.end);
+    arc.center[0] = cab[0];
+    arc.center[1] = cab[1];
+    arc.turn = turn;
+    double arc_r = hypot(cab[0] - start[a], cab[1] - start[bb]);
+    if (g->comp.firstmove && arc_r < g->comp.radius &&
+        ((g->comp.side == GC_COMP_LEFT && turn > 0) || (g->comp.side == GC_COMP_RIGHT && turn < 0)))
+        return gc_fail(g, FM_ERR_INPUT, col,
+                       "%s: the tool radius %.4f is larger than the radius %.4f of this "
+                       "inside arc; expected a smaller tool", name, g->comp.radius, arc_r);
+    double sweep = fabs(atan2(end[bb] - cab[1], end[a] - cab[0]) - atan2(start[bb] - cab[1], start[a] - cab[0]));
+    return gc_comp_arc(g, &arc, queued_feed(g, arc_r * (sweep > 0 ? sweep : 2 * GC_PI)), col);
+}
+
+fm_status gc_exec_straight(gc_interp *g, const gc_block *b, int rapid, int g53, int col)
+{
+    double end[3];
+    fm_status st = gc_find_ends(g, b, g53, end);
+    if (st) return st;
+    if (gc_comp_active(g)) {
+        if (g53)
+            return gc_fail(g, FM_ERR_INPUT, col,
+                           "G53 with cutter radius compensation on; expected G40 first");
+        double base[3];
+        gc_comp_base(g, base);
+        double len = sqrt((end[0] - base[0]) * (end[0] - base[0]) +
+                          (end[1] - base[1]) * (end[1] - base[1]) +
+                          (end[2] - base[2]) * (end[2] - base[2]));
+        return gc_comp_straight(g, rapid, rapid ? 0 : queued_feed(g, len), end, col);
+    }
+    g->comp.arc_not_allowed = 0;
+    return gc_move_line(g, rapid, end);
+}
+
+fm_status gc_emit_comp_move(gc_interp *g, const gc_comp_move *m)
+{
+    /* the motion carries the state it was programmed with */
+    double feed = g->feed, speed = g->speed;
+    int inverse = g->inverse_time, dir = g->spindle_dir, coolant = g->coolant;
+    int lineno = g->lineno;
+    long block = g->cur_block;
+    g->feed = m->snap.feed;
+    g->inverse_time = 0;
+    g->speed = m->snap.speed;
+    g->spindle_dir = m->snap.spindle_dir;
+    g->coolant = m->snap.coolant;
+    g->lineno = m->snap.line;
+    g->cur_block = m->snap.block;
+    double xyz[3];
+    gc_comp_from_plane(g->plane, m->end, xyz);
+    fm_status st;
+    switch (m->kind) {
+    case GC_COMP_RAPID: st = gc_move_line(g, 1, xyz); break;
+    case GC_COMP_LINE: st = gc_move_line(g, 0, xyz); break;
+    case GC_COMP_ARC: st = gc_move_arc(g, xyz, m->center, m->turn); break;
+    default: st = gc_dwell(g, m->seconds); break;
+    }
+    g->feed = feed;
+    g->inverse_time = inverse;
+    g->speed = speed;
+    g->spindle_dir = dir;
+    g->coolant = coolant;
+    g->lineno = lineno;
+    g->cur_block = block;
+    return st;
 }
 
 /* Canned cycles: LinuxCNC's convert_cycle_xy/yz/zx with aa, bb in the plane
@@ -268,7 +451,7 @@ fm_status gc_exec_cycle(gc_interp *g, const gc_block *b, int code, int col)
         reps = (long)l;
     }
     gc_cyc k;
-    plane_axes(g->plane, &k.a, &k.b, &k.c);
+    gc_plane_axes(g->plane, &k.a, &k.b, &k.c);
     static const char axl[3] = {'x', 'y', 'z'};
     char la = axl[k.a], lb = axl[k.b], lc = axl[k.c];
     if (g->motion != code && !HAS(b, lc))
@@ -283,15 +466,24 @@ fm_status gc_exec_cycle(gc_interp *g, const gc_block *b, int code, int col)
         old_cc = g->cycle_il = current_cc;
         g->cycle_il_flag = 1;
     }
-    double aa, bb, aa_inc = 0, bb_inc = 0, r, cc;
+    double aa, bb, aa_inc = 0, bb_inc = 0, r, cc, radius_inc = 0, theta_inc = 0;
     if (g->absolute) {
         r = r_word;
         cc = c_word;
         aa = HAS(b, la) ? VAL(b, la) : g->pos[k.a];
         bb = HAS(b, lb) ? VAL(b, lb) : g->pos[k.b];
+        if (b->has_radius || b->has_theta) {
+            /* polar (G17 only): about the program origin */
+            double rad = b->has_radius ? b->radius : hypot(g->pos[1], g->pos[0]);
+            double th = b->has_theta ? b->theta * GC_PI / 180.0 : atan2(g->pos[1], g->pos[0]);
+            aa = rad * cos(th);
+            bb = rad * sin(th);
+        }
     } else {
         if (HAS(b, la)) aa_inc = VAL(b, la);
         if (HAS(b, lb)) bb_inc = VAL(b, lb);
+        if (b->has_radius) radius_inc = b->radius;
+        if (b->has_theta) theta_inc = b->theta * GC_PI / 180.0;
         r = r_word + old_cc;
         cc = r + c_word;
         aa = g->pos[k.a];
@@ -328,12 +520,20 @@ fm_status gc_exec_cycle(gc_interp *g, const gc_block *b, int code, int col)
                     return gc_fail(g, FM_ERR_INPUT, col, "%s: %c missing; expected I, J and K",
                                    name, ijk[i] - 32);
         }
-        ci = HAS(b, 'i') ? VAL(b, 'i') : g->cycle_i;
-        cj = HAS(b, 'j') ? VAL(b, 'j') : g->cycle_j;
-        ck = HAS(b, 'k') ? VAL(b, 'k') : g->cycle_k;
-        g->cycle_i = ci;
-        g->cycle_j = cj;
-        g->cycle_k = ck;
+        {
+            double ijk[3];
+            ijk[0] = HAS(b, 'i') ? VAL(b, 'i') : g->cycle_i;
+            ijk[1] = HAS(b, 'j') ? VAL(b, 'j') : g->cycle_j;
+            ijk[2] = HAS(b, 'k') ? VAL(b, 'k') : g->cycle_k;
+            g->cycle_i = ijk[0];
+            g->cycle_j = ijk[1];
+            g->cycle_k = ijk[2];
+            /* the offset words along the plane's axes, the height word
+             * along its normal (G18: K, I and J; G19: J, K and I) */
+            ci = ijk[k.a];
+            cj = ijk[k.b];
+            ck = ijk[k.c];
+        }
         if (!g->absolute) ck = cc + ck;
         break;
     default: break;
@@ -357,8 +557,15 @@ fm_status gc_exec_cycle(gc_interp *g, const gc_block *b, int code, int col)
     /* G83's small rapid back into the hole: 0.010 inch in either unit system */
     double delta = g->unit == 1.0 ? 0.010 * GC_INCH : 0.010;
     for (long rep = reps; rep > 0 && !g->stop; rep--) {
-        aa += aa_inc;
-        bb += bb_inc;
+        if (radius_inc != 0 || theta_inc != 0) {
+            /* G91 polar: each repeat steps the radius and angle about the origin */
+            double rad = hypot(bb, aa) + radius_inc, th = atan2(bb, aa) + theta_inc;
+            aa = rad * cos(th);
+            bb = rad * sin(th);
+        } else {
+            aa += aa_inc;
+            bb += bb_inc;
+        }
         if (rep == reps && current_cc > r) {
             if ((st = cyc_move(g, &k, 1, aa, bb, current_cc))) return st;
             if ((st = cyc_move(g, &k, 1, aa, bb, r))) return st;

@@ -79,8 +79,9 @@ static int parse_oword(gc_interp *g, const gc_line *ln, size_t p, gc_oword *o, i
 /* Quick check on the raw text before normalizing a line during scans. */
 static int maybe_oword(const gc_interp *g, size_t idx)
 {
-    const char *t = g->text;
-    size_t i = g->line_start[idx], e = g->line_start[idx + 1];
+    const char *t;
+    size_t i = 0, e;
+    gc_line_text(g, idx, &t, &e);
     while (i < e && (t[i] == ' ' || t[i] == '\t')) i++;
     if (i < e && t[i] == '/') i++;
     while (i < e && (t[i] == ' ' || t[i] == '\t')) i++;
@@ -103,17 +104,18 @@ static size_t skip_prefix(const gc_line *ln)
     return p;
 }
 
-/* Next (dir +1) or previous (dir -1) line after `from` with an O-word of
- * the given name and a keyword in mask. */
-static size_t scan(gc_interp *g, size_t from, int dir, const char *name, unsigned mask, int *kw)
+/* Next (dir +1) or previous (dir -1) line after `from` in [lo, hi) with an
+ * O-word of the given name and a keyword in mask. */
+static size_t scan_range(gc_interp *g, size_t lo, size_t hi, size_t from, int dir,
+                         const char *name, unsigned mask, int *kw)
 {
     size_t i = from;
     for (;;) {
         if (dir > 0) {
-            if (i + 1 >= g->nlines) return (size_t)-1;
+            if (i + 1 >= hi) return (size_t)-1;
             i++;
         } else {
-            if (i == 0) return (size_t)-1;
+            if (i <= lo) return (size_t)-1;
             i--;
         }
         if (!maybe_oword(g, i)) continue;
@@ -124,6 +126,15 @@ static size_t scan(gc_interp *g, size_t from, int dir, const char *name, unsigne
         if (kw) *kw = o.kw;
         return i;
     }
+}
+
+/* The same within the file of line `from` ((size_t)-1: the program, from
+ * its first line). */
+static size_t scan(gc_interp *g, size_t from, int dir, const char *name, unsigned mask, int *kw)
+{
+    size_t lo = 0, hi = g->nlines;
+    if (from != (size_t)-1) gc_source_range(g, from, &lo, &hi);
+    return scan_range(g, lo, hi, from, dir, name, mask, kw);
 }
 
 static fm_status count_iteration(gc_interp *g, int col)
@@ -164,7 +175,9 @@ static fm_status do_return(gc_interp *g, const gc_oword *o, size_t *next)
         return gc_fail(g, FM_ERR_INPUT, o->col, "o%s %s outside a subroutine call", o->name,
                        kw_names[o->kw]);
     gc_frame *f = &g->frames[g->depth];
-    if (strcmp(f->sub, o->name))
+    /* `return` may carry the label of the block it sits in (LinuxCNC's
+     * retval.ngc returns from inside an if); endsub closes its own sub */
+    if (o->kw == KW_ENDSUB && strcmp(f->sub, o->name))
         return gc_fail(g, FM_ERR_INPUT, o->col, "o%s %s inside subroutine o%s; expected o%s",
                        o->name, kw_names[o->kw], f->sub, f->sub);
     double v = 0;
@@ -174,12 +187,14 @@ static fm_status do_return(gc_interp *g, const gc_oword *o, size_t *next)
         fm_status st = gc_read_real(g, &g->ln, &p, &v);
         if (st) return st;
     }
+    fm_status st = gc_leave_level(g);
+    if (st) return st;
     memcpy(g->params + 1, f->saved, sizeof f->saved);
     *next = f->return_line;
     gc_frame_free(f);
     g->depth--;
-    gc_table_set(&g->globals, "_value_returned", has_value ? 1.0 : 0.0);
-    if (has_value) gc_table_set(&g->globals, "_value", v);
+    g->value_returned = has_value;
+    g->value = v;
     return FM_OK;
 }
 
@@ -192,13 +207,31 @@ static fm_status do_call(gc_interp *g, const gc_oword *o, size_t *next)
     snprintf(key, sizeof key, "o%s", o->name);
     size_t subline;
     if (!gc_table_get(&g->subs, key, &line)) {
-        /* not seen yet: look for the definition anywhere in the file */
+        /* not seen yet: look for the definition anywhere in the program,
+         * then for a file <name>.ngc on the subroutine path */
         int kw;
         subline = scan(g, (size_t)-1, 1, o->name, KWM(KW_SUB), &kw);
+        int named = strspn(o->name, "0123456789") != strlen(o->name);
+        if (subline == (size_t)-1 && named) {
+            int found = 0;
+            size_t first = 0;
+            if ((st = gc_load_subroutine_file(g, o->name, o->col, &found, &first))) return st;
+            if (found) {
+                const gc_source *src = &g->sources[g->nsources - 1];
+                subline = scan_range(g, first, first + src->nlines, first - 1, 1, o->name,
+                                     KWM(KW_SUB), &kw);
+                if (subline == (size_t)-1)
+                    return gc_fail(g, FM_ERR_INPUT, o->col,
+                                   "o<%s> call: %s has no o<%s> sub; expected the subroutine's "
+                                   "definition in its file", o->name, src->name, o->name);
+            }
+        }
         if (subline == (size_t)-1)
             return gc_fail(g, FM_ERR_INPUT, o->col,
-                           "o%s call: no subroutine o%s in this program; expected an "
-                           "o%s sub ... o%s endsub", o->name, o->name, o->name, o->name);
+                           "o%s call: no subroutine o%s in this program%s; expected an "
+                           "o%s sub ... o%s endsub", o->name, o->name,
+                           named ? " or on the subroutine path" : "", o->name, o->name);
+        gc_table_set(&g->subs, key, (double)subline);
     } else {
         subline = (size_t)line;
     }
@@ -261,7 +294,7 @@ static fm_status control(gc_interp *g, gc_oword *o, size_t *next)
             if (kw != KW_ELSEIF) break;
             /* evaluate the elseif condition on its own line */
             g->cur = j;
-            g->lineno = (int)j + 1;
+            gc_set_line(g, j);
             if ((st = gc_normalize(g, j, &g->ln, 1))) return st;
             gc_oword e;
             if (parse_oword(g, &g->ln, skip_prefix(&g->ln), &e, 1) != 1) return g->err->code;
