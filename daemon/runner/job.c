@@ -17,6 +17,7 @@
 #include <time.h>
 
 #include "frep/frep.h"
+#include "probe.h"
 #include "toolpaths/gcode/gcode.h"
 #include "hf/hf.h"
 #include "sweep/sweep.h"
@@ -315,8 +316,11 @@ static fm_program_kind program_kind(const fm_job_spec *spec)
     return FM_PROGRAM_GCODE;
 }
 
+typedef fm_status (*job_probe_fn)(void *user, const fm_motion *move, int toward, int *tripped,
+                                  double *fraction, int *at_start, fm_error *err);
+
 static fm_status run_program(const fm_job_spec *spec, const fm_tool_table *tools,
-                             fm_motion_sink sink, void *user, fm_error *err)
+                             fm_motion_sink sink, void *user, job_probe_fn probe, fm_error *err)
 {
     if (!spec->program_path && !spec->program_text)
         return fm_error_set(err, FM_ERR_INPUT, "no program given");
@@ -333,6 +337,8 @@ static fm_status run_program(const fm_job_spec *spec, const fm_tool_table *tools
     fm_gcode_options_default(&gopt);
     if (spec->rapid_rate > 0) gopt.rapid_rate = spec->rapid_rate;
     gopt.tools = tools;
+    gopt.probe = probe;
+    gopt.probe_user = user;
     if (spec->program_path)
         return fm_gcode_run_file(spec->program_path, &gopt, sink, user, NULL, err);
     return fm_gcode_run_string(spec->program_text, spec->program_length,
@@ -508,6 +514,23 @@ static int cut_sink(void *user, const fm_motion *m)
     return 0;
 }
 
+/* G38.x: the stock as cut so far stops the probe (probe.c), so pending
+ * cuts go in first. */
+static fm_status cut_probe(void *user, const fm_motion *move, int toward, int *tripped,
+                           double *fraction, int *at_start, fm_error *err)
+{
+    cutter *c = user;
+    fm_status st = flush_batch(c);
+    if (st != FM_OK) return st;
+    double a[3], b[3];
+    for (int k = 0; k < 3; k++) {
+        a[k] = move->start[k] + move->tip_offset[k];
+        b[k] = move->end[k] + move->tip_offset[k];
+    }
+    return fm_runner_probe(c->stock, tool_for(c->tools, move->tool), a, b, toward, tripped,
+                           fraction, at_start, err);
+}
+
 /* ---------------------------------------------------------------- run -- */
 
 fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_result *result,
@@ -526,7 +549,7 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     /* First pass: the whole program is checked before anything is cut, and
      * its length gives the progress its denominator. */
     survey sv = {0};
-    st = run_program(spec, tools.use, survey_sink, &sv, err);
+    st = run_program(spec, tools.use, survey_sink, &sv, NULL, err);
     if (st != FM_OK) {
         free_tools(&tools);
         fm_stock_free(spec->resume_stock);
@@ -571,7 +594,7 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     c->progress.program_time_total = sv.time_total;
     c->progress.block = -1;
 
-    st = run_program(spec, tools.use, cut_sink, c, err);
+    st = run_program(spec, tools.use, cut_sink, c, cut_probe, err);
     if (st == FM_OK) st = c->status;
     if (st == FM_OK && !c->stopped) st = flush_batch(c);
     if (st != FM_OK) {
