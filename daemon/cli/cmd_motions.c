@@ -16,8 +16,10 @@ static void usage(FILE *out)
     fprintf(out,
             "usage: frepmill motions PROGRAM [--tools TOOLS] [--format jsonl]\n"
             "                        [--rapid-rate MM_PER_MIN] [--skip N] [--inch]\n"
-            "                        [--block-delete] [--subroutine-path DIRS] [--messages]\n\n"
-            "Interpret a G-code program (LinuxCNC dialect), or a parametric trajectory\n"
+            "                        [--block-delete] [--subroutine-path DIRS] [--messages]\n"
+            "                        [--dialect linuxcnc|fanuc] [--calculator-input]\n\n"
+            "Interpret a G-code program (LinuxCNC dialect, or Fanuc/Haas with --dialect\n"
+            "fanuc; docs/gcode.md), or a parametric trajectory\n"
             "(PROGRAM.json, docs/trajectory.md), and print one motion per line:\n"
             "  {\"line\":12,\"block\":12,\"kind\":\"arc\",\"start\":[x,y,z],\"end\":[x,y,z],\n"
             "   \"center\":[x,y,z],\"axis\":\"z\",\"turns\":-1,\"feed\":500,\"tool\":1,\n"
@@ -25,7 +27,9 @@ static void usage(FILE *out)
             "Positions are machine millimetres (program point + G5x + G92 offsets).\n"
             "TOOLS is a JSON tool table or a LinuxCNC .tbl file. --skip N interprets\n"
             "everything but prints motions from index N on. --subroutine-path lists the\n"
-            "folders (':'-separated) holding NAME.ngc files for o<NAME> call.\n"
+            "folders (':'-separated) holding NAME.ngc files for o<NAME> call (Fanuc:\n"
+            "O1234.nc for M98 P1234). --calculator-input reads Fanuc numbers without a\n"
+            "decimal point as whole mm (X5 = 5 mm, not 0.005).\n"
             "--messages also prints (debug,...) and (msg,...) texts in order as\n"
             "  {\"kind\":\"message\",\"line\":12,\"text\":\"...\"}\n"
             "Exit status: 0 ok, 2 bad input, 3 limit exceeded, 4 I/O error.\n");
@@ -116,6 +120,14 @@ int fm_cmd_motions(int argc, char **argv)
         } else if (!strcmp(a, "--messages")) {
             opt.message = print_message;
             opt.message_user = stdout;
+        } else if (!strcmp(a, "--dialect") && i + 1 < argc) {
+            if (!fm_gcode_dialect_parse(argv[++i], &opt.dialect)) {
+                fprintf(stderr, "frepmill motions: --dialect '%s'; expected linuxcnc or fanuc\n",
+                        argv[i]);
+                return 2;
+            }
+        } else if (!strcmp(a, "--calculator-input")) {
+            opt.calculator_input = 1;
         } else if (a[0] == '-' && a[1]) {
             fprintf(stderr, "frepmill motions: unknown or incomplete option '%s'\n", a);
             usage(stderr);

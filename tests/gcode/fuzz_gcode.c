@@ -1,5 +1,8 @@
 /* fuzz_gcode.c: libFuzzer target for the G-code interpreter: any input must
- * end in FM_OK or a clean error, never a crash, a hang or a leak. */
+ * end in FM_OK or a clean error, never a crash, a hang or a leak. A first
+ * byte 0x01 selects the Fanuc dialect (the program is the rest), 0x00 the
+ * LinuxCNC dialect; any other first byte is the first character of a
+ * LinuxCNC program, so that plain .ngc seeds keep their meaning. */
 #include <stddef.h>
 #include <stdint.h>
 
@@ -26,6 +29,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     opt.max_iterations = 20000; /* keep each run short; the limit itself is what we test */
     opt.max_program_bytes = 1 << 20;
     opt.tools = (size & 1) ? &table : NULL;
+    if (size > 0 && (data[0] == 0 || data[0] == 1)) {
+        opt.dialect = data[0] ? FM_GCODE_FANUC : FM_GCODE_LINUXCNC;
+        data++;
+        size--;
+    }
     long n = 0;
     fm_error err;
     fm_gcode_run_string((const char *)data, size, "fuzz", &opt, count_sink, &n, NULL, &err);

@@ -5,6 +5,7 @@
  * Semantics follow LinuxCNC 2.9's interpreter; comments name the places where
  * that matters. All state is in program units as LinuxCNC keeps it; motions
  * are converted to machine millimetres when emitted. */
+#include "gcode_fanuc.h"
 #include "gcode_internal.h"
 
 #include <errno.h>
@@ -12,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 
 void fm_gcode_options_default(fm_gcode_options *opt)
@@ -21,6 +23,22 @@ void fm_gcode_options_default(fm_gcode_options *opt)
     opt->max_program_bytes = (size_t)256 << 20;
     opt->max_iterations = 10000000L;
     opt->max_call_depth = 64;
+    opt->peck_retract = 1.0;
+    opt->peck_clearance = 1.0;
+}
+
+int fm_gcode_dialect_parse(const char *name, fm_gcode_dialect *out)
+{
+    if (!name) return 0;
+    if (!strcasecmp(name, "linuxcnc")) *out = FM_GCODE_LINUXCNC;
+    else if (!strcasecmp(name, "fanuc")) *out = FM_GCODE_FANUC;
+    else return 0;
+    return 1;
+}
+
+const char *fm_gcode_dialect_name(fm_gcode_dialect dialect)
+{
+    return dialect == FM_GCODE_FANUC ? "fanuc" : "linuxcnc";
 }
 
 /* ------------------------------------------------------------------ */
@@ -28,6 +46,7 @@ void fm_gcode_options_default(fm_gcode_options *opt)
 
 static fm_status run(gc_interp *g)
 {
+    if (g->fanuc) return gc_fanuc_run(g);
     fm_status st;
     gc_block *b = malloc(sizeof *b);
     if (!b) return fm_error_set(g->err, FM_ERR_LIMIT, "out of memory");
@@ -156,11 +175,13 @@ static fm_status interp_init(gc_interp *g, const char *text, size_t len, const c
     g->line_name = g->name;
     g->comp.firstmove = 1;
     g->nurbs_order = 3;
+    if (g->opt.dialect == FM_GCODE_FANUC) return gc_fanuc_init(g);
     return FM_OK;
 }
 
 static void interp_free(gc_interp *g)
 {
+    gc_fanuc_free(g);
     if (g->frames)
         for (int i = 0; i <= g->depth; i++) gc_frame_free(&g->frames[i]);
     free(g->frames);
@@ -178,9 +199,9 @@ static void interp_free(gc_interp *g)
     gc_sources_free(g);
 }
 
-fm_status fm_gcode_run_string(const char *text, size_t len, const char *name,
-                              const fm_gcode_options *opt, fm_motion_sink sink, void *user,
-                              fm_gcode_summary *summary, fm_error *err)
+static fm_status run_text(const char *text, size_t len, const char *name, int is_file,
+                          const fm_gcode_options *opt, fm_motion_sink sink, void *user,
+                          fm_gcode_summary *summary, fm_error *err)
 {
     fm_error local;
     if (!err) err = &local;
@@ -190,6 +211,7 @@ fm_status fm_gcode_run_string(const char *text, size_t len, const char *name,
     gc_interp *g = malloc(sizeof *g);
     if (!g) return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
     fm_status st = interp_init(g, text ? text : "", len, name, opt, sink, user, err);
+    g->program_is_file = is_file;
     if (!st) st = run(g);
     if (summary) {
         summary->motions = g->motion_index;
@@ -201,6 +223,13 @@ fm_status fm_gcode_run_string(const char *text, size_t len, const char *name,
     interp_free(g);
     free(g);
     return st;
+}
+
+fm_status fm_gcode_run_string(const char *text, size_t len, const char *name,
+                              const fm_gcode_options *opt, fm_motion_sink sink, void *user,
+                              fm_gcode_summary *summary, fm_error *err)
+{
+    return run_text(text, len, name, 0, opt, sink, user, summary, err);
 }
 
 fm_status fm_gcode_run_file(const char *path, const fm_gcode_options *opt, fm_motion_sink sink,
@@ -250,7 +279,7 @@ fm_status fm_gcode_run_file(const char *path, const fm_gcode_options *opt, fm_mo
         free(buf);
         return fm_error_at(err, FM_ERR_IO, path, 0, 0, "read error");
     }
-    fm_status st = fm_gcode_run_string(buf, len, path, &o, sink, user, summary, err);
+    fm_status st = run_text(buf, len, path, 1, &o, sink, user, summary, err);
     free(buf);
     return st;
 }

@@ -1,9 +1,11 @@
-/* gcode.h: the RS274NGC (LinuxCNC dialect) front end. It interprets a
- * G-code program and streams the resulting motions (lib/sweep/motion.h) to
- * a callback, one at a time, so that a program of any length never has its
- * motions in memory at once. Semantics follow LinuxCNC's interpreter (rs274);
- * see docs/gcode.md for what is supported, what is refused and how the
- * machine coordinates and tool tip offsets in each motion are defined. */
+/* gcode.h: the G-code front end. It interprets a program in LinuxCNC's
+ * RS274NGC dialect (the default; semantics follow LinuxCNC's interpreter,
+ * rs274) or in the Fanuc/Haas dialect (Fanuc's documented semantics) and
+ * streams the resulting motions (lib/sweep/motion.h) to a callback, one at a
+ * time, so that a program of any length never has its motions in memory at
+ * once. See docs/gcode.md for what each dialect supports, what it refuses
+ * and how the machine coordinates and tool tip offsets in each motion are
+ * defined. */
 #ifndef FM_GCODE_H
 #define FM_GCODE_H
 
@@ -12,6 +14,12 @@
 #include "core/core.h"
 #include "sweep/motion.h"
 #include "tools/tools.h"
+
+/* The family of G-code a program is written in. */
+typedef enum fm_gcode_dialect {
+    FM_GCODE_LINUXCNC = 0, /* RS274NGC as LinuxCNC 2.9 reads it */
+    FM_GCODE_FANUC = 1     /* Fanuc / Haas: O numbers, M98/M97/M99, Macro B, Fanuc cycles */
+} fm_gcode_dialect;
 
 typedef struct fm_gcode_options {
     double rapid_rate;          /* mm/min for G0 and canned-cycle rapids (default 5000) */
@@ -23,8 +31,10 @@ typedef struct fm_gcode_options {
     long skip_motions;          /* interpret everything, but do not emit motions with
                                    index < skip_motions (resume after a restart) */
     int block_delete;           /* 1: skip lines starting with '/' (default 0, as rs274) */
-    /* Folders holding <name>.ngc files for `o<name> call`, ':'-separated, as
-     * LinuxCNC's SUBROUTINE_PATH (NULL or "": none). */
+    /* Folders holding subprogram files, ':'-separated (NULL or "": none).
+     * LinuxCNC: `o<name> call` loads <name>.ngc, as LinuxCNC's
+     * SUBROUTINE_PATH. Fanuc: M98 P1234 / G65 P1234 load O1234.nc, .ngc or
+     * .tap from the program's own folder first, then these. */
     const char *subroutine_path;
     /* (debug, ...) comments, with LinuxCNC's parameter substitution, and
      * (msg, ...) comments, in program order (NULL: dropped). */
@@ -40,10 +50,28 @@ typedef struct fm_gcode_options {
     fm_status (*probe)(void *user, const fm_motion *move, int toward_contact, int *tripped,
                        double *fraction, int *at_start, fm_error *err);
     void *probe_user;
+    fm_gcode_dialect dialect;   /* default FM_GCODE_LINUXCNC */
+    /* Fanuc G28 / G30 P2-P4: the 1st to 4th reference points, machine mm
+     * (default: all at the machine origin). */
+    double reference_points[4][3];
+    /* Fanuc machine parameters (mm): G73's retract after each peck
+     * (parameter 5114) and G83's clearance above the last depth (5115);
+     * default 1 mm each. */
+    double peck_retract;
+    double peck_clearance;
+    /* Fanuc: 1 reads a number without a decimal point as whole units (X5 =
+     * 5 mm: Fanuc's DPI parameter, Haas setting 162); default 0 reads it in
+     * the least input increment (X5 = 0.005 mm, 0.0005 in), as Fanuc and Haas
+     * do out of the box. */
+    int calculator_input;
 } fm_gcode_options;
 
 /* Fill *opt with the defaults above. */
 void fm_gcode_options_default(fm_gcode_options *opt);
+
+/* "linuxcnc" or "fanuc" (any case) -> *out; 0 if the name is neither. */
+int fm_gcode_dialect_parse(const char *name, fm_gcode_dialect *out);
+const char *fm_gcode_dialect_name(fm_gcode_dialect dialect);
 
 /* What a run did, for callers that want totals (may be NULL). */
 typedef struct fm_gcode_summary {

@@ -26,19 +26,20 @@
 typedef enum gc_gcode {
     GC_G_NONE = -1,
     GC_G0 = 0, GC_G1 = 10, GC_G2 = 20, GC_G3 = 30, GC_G4 = 40,
-    GC_G5 = 50, GC_G5_1 = 51, GC_G5_2 = 52, GC_G5_3 = 53, GC_G7 = 70, GC_G8 = 80,
-    GC_G10 = 100,
+    GC_G5 = 50, GC_G5_1 = 51, GC_G5_2 = 52, GC_G5_3 = 53, GC_G7 = 70, GC_G8 = 80, GC_G9 = 90,
+    GC_G10 = 100, GC_G11 = 110, GC_G12 = 120, GC_G13 = 130, GC_G15 = 150, GC_G16 = 160,
     GC_G17 = 170, GC_G17_1 = 171, GC_G18 = 180, GC_G18_1 = 181, GC_G19 = 190, GC_G19_1 = 191,
-    GC_G20 = 200, GC_G21 = 210,
+    GC_G20 = 200, GC_G21 = 210, GC_G22 = 220, GC_G23 = 230, GC_G27 = 270, GC_G29 = 290,
     GC_G28 = 280, GC_G28_1 = 281, GC_G28_2 = 282, GC_G30 = 300, GC_G30_1 = 301, GC_G30_2 = 302,
-    GC_G33 = 330, GC_G33_1 = 331,
+    GC_G31 = 310, GC_G33 = 330, GC_G33_1 = 331, GC_G37 = 370,
     GC_G38_2 = 382, GC_G38_3 = 383, GC_G38_4 = 384, GC_G38_5 = 385,
     GC_G40 = 400, GC_G41 = 410, GC_G41_1 = 411, GC_G42 = 420, GC_G42_1 = 421,
-    GC_G43 = 430, GC_G43_1 = 431, GC_G43_2 = 432, GC_G49 = 490,
-    GC_G52 = 520, GC_G53 = 530,
+    GC_G43 = 430, GC_G43_1 = 431, GC_G43_2 = 432, GC_G44 = 440, GC_G49 = 490,
+    GC_G50 = 500, GC_G50_1 = 501, GC_G51 = 510, GC_G51_1 = 511, GC_G52 = 520, GC_G53 = 530,
     GC_G54 = 540, GC_G55 = 550, GC_G56 = 560, GC_G57 = 570, GC_G58 = 580, GC_G59 = 590,
-    GC_G59_1 = 591, GC_G59_2 = 592, GC_G59_3 = 593,
-    GC_G61 = 610, GC_G61_1 = 611, GC_G64 = 640,
+    GC_G54_1 = 541, GC_G59_1 = 591, GC_G59_2 = 592, GC_G59_3 = 593,
+    GC_G60 = 600, GC_G61 = 610, GC_G61_1 = 611, GC_G62 = 620, GC_G63 = 630, GC_G64 = 640,
+    GC_G65 = 650, GC_G66 = 660, GC_G67 = 670, GC_G68 = 680, GC_G69 = 690,
     GC_G70 = 700, GC_G71 = 710, GC_G71_1 = 711, GC_G71_2 = 712, GC_G72 = 720, GC_G72_1 = 721,
     GC_G72_2 = 722,
     GC_G73 = 730, GC_G74 = 740, GC_G76 = 760,
@@ -47,7 +48,7 @@ typedef enum gc_gcode {
     GC_G90 = 900, GC_G90_1 = 901, GC_G91 = 910, GC_G91_1 = 911,
     GC_G92 = 920, GC_G92_1 = 921, GC_G92_2 = 922, GC_G92_3 = 923,
     GC_G93 = 930, GC_G94 = 940, GC_G95 = 950, GC_G96 = 960, GC_G97 = 970,
-    GC_G98 = 980, GC_G99 = 990
+    GC_G98 = 980, GC_G99 = 990, GC_G103 = 1030, GC_G154 = 1540, GC_G187 = 1870
 } gc_gcode;
 
 /* LinuxCNC's modal groups of G codes (the values are its group numbers). */
@@ -66,7 +67,14 @@ typedef enum gc_group {
     GC_GROUP_COORD_SYSTEM = 12,  /* G54 .. G59.3 */
     GC_GROUP_PATH_MODE = 13,     /* G61 G61.1 G64 */
     GC_GROUP_SPINDLE_MODE = 14,  /* G96 G97 */
-    GC_GROUP_COUNT = 15,
+    /* groups only the Fanuc dialect has (values past LinuxCNC's) */
+    GC_GROUP_POLAR = 15,         /* G15 G16 */
+    GC_GROUP_ROTATION = 16,      /* G68 G69 */
+    GC_GROUP_SCALING = 17,       /* G50 G51 */
+    GC_GROUP_MACRO_MODAL = 18,   /* G66 G67 */
+    GC_GROUP_LOOKAHEAD = 19,     /* G05 G05.1 G08, Haas G103 G187: no effect on the path */
+    GC_GROUP_CYCLE = 20,         /* G73 G74 G76 G80-G89 (Fanuc's group 09; LinuxCNC: motion) */
+    GC_GROUP_COUNT = 21,
     GC_GROUP_REFUSED = 99        /* codes LinuxCNC knows that this interpreter refuses */
 } gc_group;
 
@@ -230,6 +238,7 @@ typedef struct gc_interp {
     const char *text;
     size_t len;
     const char *name;
+    int program_is_file; /* name is the program's path (its folder holds subprograms) */
     size_t *line_start; /* line i is text[line_start[i] .. line_start[i+1]) */
     size_t nlines;
     size_t cur;         /* current line index */
@@ -287,6 +296,7 @@ typedef struct gc_interp {
     int nsources, capsources;
     size_t nlines_all;
     const char *line_name; /* the file of the current line, for messages */
+    struct gc_fanuc *fanuc; /* the Fanuc dialect's state (gcode_fanuc.h); NULL for LinuxCNC */
 
     /* output */
     double mpos[3];     /* machine mm where the last motion ended: the next one starts there */
@@ -447,6 +457,11 @@ fm_status gc_check_tool(gc_interp *g, int tool, int col, const char *word);
 
 fm_status gc_check_feed(gc_interp *g, const char *what, int col);
 fm_status gc_move_line(gc_interp *g, int rapid, const double to[3]);
+/* An arc in the selected plane from the current point to `to` about
+ * (center_ab[0], center_ab[1]) in the plane's axes; turns > 0 counter-clockwise. */
+fm_status gc_move_arc(gc_interp *g, const double to[3], const double center_ab[2], int turns);
+/* The plane's first and second axis and its normal (0 X, 1 Y, 2 Z; G18's first is Z). */
+void gc_plane_axes(gc_plane plane, int *a, int *b, int *c);
 fm_status gc_dwell(gc_interp *g, double seconds);
 /* The end point of a G0/G1/G2/G3 block in program coordinates; machine
  * coordinates with G53. */

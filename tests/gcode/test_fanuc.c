@@ -1,0 +1,723 @@
+/* test_fanuc.c: unit tests of the Fanuc/Haas dialect. There is no Fanuc
+ * interpreter to compare with, so every expected motion is worked out by hand
+ * from Fanuc's documented semantics (the comments show the arithmetic):
+ * reading (%, O numbers, comments, block delete, the decimal point rule),
+ * subprograms (M98 repeats and nesting, M97, M99 P, files on the path), G65
+ * arguments, Macro B expressions and variables, IF/GOTO and WHILE loops,
+ * G68 rotation, G54.1 offsets, every canned cycle, G16 bolt circles, arcs,
+ * tool length offsets, G28/G30, G51, dwells, and every error with its
+ * line:column. Programs that mean the same in both dialects must give the
+ * same motions in both. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "test.h"
+#include "toolpaths/gcode/gcode.h"
+
+#define GC_TEST_PI 3.14159265358979323846
+
+#define MAXM 4000
+
+static fm_motion got[MAXM];
+static int ngot;
+
+static int collect(void *user, const fm_motion *m)
+{
+    (void)user;
+    if (ngot < MAXM) got[ngot++] = *m;
+    return 0;
+}
+
+static fm_gcode_options fanuc(void)
+{
+    fm_gcode_options o;
+    fm_gcode_options_default(&o);
+    o.dialect = FM_GCODE_FANUC;
+    return o;
+}
+
+static fm_status run_opt(const char *text, const fm_gcode_options *opt, fm_error *err)
+{
+    ngot = 0;
+    return fm_gcode_run_string(text, strlen(text), "t.nc", opt, collect, NULL, NULL, err);
+}
+
+static fm_status run(const char *text, fm_error *err)
+{
+    fm_gcode_options o = fanuc();
+    return run_opt(text, &o, err);
+}
+
+/* Expected motions: kind R rapid, L line, A arc, D dwell (x = seconds). */
+typedef struct em {
+    char kind;
+    double x, y, z;
+} em;
+
+static void expect_motions_opt(const char *what, const char *text, const fm_gcode_options *opt,
+                               const em *e, int n)
+{
+    fm_error err;
+    fm_status st = run_opt(text, opt, &err);
+    CHECK(st == FM_OK);
+    if (st) {
+        char buf[700];
+        fprintf(stderr, "  %s: %s\n", what, fm_error_format(&err, buf, sizeof buf));
+        return;
+    }
+    CHECK(ngot == n);
+    if (ngot != n) fprintf(stderr, "  %s: %d motions, expected %d\n", what, ngot, n);
+    for (int i = 0; i < n && i < ngot; i++) {
+        const fm_motion *m = &got[i];
+        char k = m->kind == FM_MOTION_RAPID ? 'R' : m->kind == FM_MOTION_LINE ? 'L'
+                 : m->kind == FM_MOTION_ARC ? 'A' : 'D';
+        int ok = k == e[i].kind;
+        if (k == 'D') {
+            ok = ok && fabs((m->t1 - m->t0) - e[i].x) < 1e-9;
+        } else {
+            ok = ok && fabs(m->end[0] - e[i].x) < 1e-6 && fabs(m->end[1] - e[i].y) < 1e-6 &&
+                 fabs(m->end[2] - e[i].z) < 1e-6;
+        }
+        CHECK(ok);
+        if (!ok)
+            fprintf(stderr, "  %s: motion %d (line %d) is %c %.6f %.6f %.6f (t %.6f), expected "
+                    "%c %.6f %.6f %.6f\n", what, i, m->line, k, m->end[0], m->end[1], m->end[2],
+                    m->t1 - m->t0, e[i].kind, e[i].x, e[i].y, e[i].z);
+    }
+}
+
+static void expect_motions(const char *what, const char *text, const em *e, int n)
+{
+    fm_gcode_options o = fanuc();
+    expect_motions_opt(what, text, &o, e, n);
+}
+
+#define N(a) ((int)(sizeof(a) / sizeof((a)[0])))
+
+static void expect_error(const char *text, int line, int column, const char *fragment)
+{
+    fm_error err;
+    fm_status st = run(text, &err);
+    CHECK(st != FM_OK);
+    CHECK(err.line == line);
+    CHECK(err.column == column);
+    CHECK_STR_CONTAINS(err.message, fragment);
+    if (st == FM_OK || err.line != line || err.column != column || !strstr(err.message, fragment))
+        fprintf(stderr, "  for '%s': got %d:%d %s\n", fragment, err.line, err.column,
+                err.message);
+}
+
+/* ---- reading ---- */
+
+static void test_reading(void)
+{
+    const char *prog = "%\n"
+                       "O0001 (READ TEST)\n"
+                       "N10 G21 G90 G00 X5 Y5. ; X5 is 0.005 mm\n"
+                       "N20 X1.23456 Y-0.0004\n"
+                       "/N30 X100.\n"
+                       "N40 G20 X5 Y0.5\n"
+                       "M30\n"
+                       "%\n"
+                       "G00 X999.\n";
+    /* X5 without a decimal point: 5 x 0.001 mm; X1.23456 rounds to the
+     * least increment 0.001 (1.235), Y-0.0004 to 0; in G20 X5 = 0.0005 in */
+    em e[] = {{'R', 0.005, 5, 0}, {'R', 1.235, 0, 0}, {'R', 100, 0, 0},
+              {'R', 0.0005 * 25.4, 0.5 * 25.4, 0}};
+    expect_motions("reading", prog, e, N(e));
+    fm_gcode_options o = fanuc();
+    o.block_delete = 1;
+    em e2[] = {{'R', 0.005, 5, 0}, {'R', 1.235, 0, 0}, {'R', 0.0005 * 25.4, 0.5 * 25.4, 0}};
+    expect_motions_opt("block delete", prog, &o, e2, N(e2));
+    o = fanuc();
+    o.calculator_input = 1;
+    em e3[] = {{'R', 5, 5, 0}, {'R', 1.235, 0, 0}, {'R', 100, 0, 0}, {'R', 5 * 25.4, 0.5 * 25.4, 0}};
+    expect_motions_opt("calculator input", prog, &o, e3, N(e3));
+    fm_gcode_summary sum;
+    fm_error err;
+    o = fanuc();
+    CHECK(fm_gcode_run_string(prog, strlen(prog), "t.nc", &o, collect, NULL, &sum, &err) == FM_OK);
+    CHECK(sum.ended_by_m2 == 1);
+    /* the closing % ends the tape without M30 */
+    const char *tape = "%\nG00 X1.\n%\nG00 X2.\n";
+    CHECK(fm_gcode_run_string(tape, strlen(tape), "t.nc", &o, collect, NULL, &sum, &err) == FM_OK);
+    CHECK(sum.motions == 1 && sum.ended_by_m2 == 1);
+}
+
+/* ---- subprograms ---- */
+
+static void test_subprograms(void)
+{
+    /* M98 P10 L3: O0010 three times; P20011: O0011 twice (Fanuc's repeat
+     * count in the digits above the four of the program number) */
+    em e[] = {{'R', 0, 0, 0}, {'L', 1, 0, 0}, {'L', 2, 0, 0}, {'L', 3, 0, 0},
+              {'R', 3, 1, 0}, {'R', 3, 2, 0}};
+    expect_motions("M98 repeats",
+                   "O0001\nG90 G00 X0 Y0 Z0\nM98 P0010 L3\nM98 P20011\nM30\n"
+                   "O0010\nG91 G01 X1. F100\nG90\nM99\n"
+                   "O0011\nG91 G00 Y1.\nG90\nM99\n%\n",
+                   e, N(e));
+    /* nesting: 4 levels are allowed */
+    const char *nest4 = "O0100\nG91 G01 F100\nM98 P1\nM30\n"
+                        "O0001\nX1.\nM98 P2\nM99\n"
+                        "O0002\nX1.\nM98 P3\nM99\n"
+                        "O0003\nX1.\nM98 P4\nM99\n"
+                        "O0004\nX1.\nM99\n";
+    em e4[] = {{'L', 1, 0, 0}, {'L', 2, 0, 0}, {'L', 3, 0, 0}, {'L', 4, 0, 0}};
+    expect_motions("nesting 4", nest4, e4, N(e4));
+    /* a fifth level: the error names O0004's M98 (line 19, column 1) */
+    expect_error("O0100\nG91 G01 F100\nM98 P1\nM30\n"
+                 "O0001\nX1.\nM98 P2\nM99\n"
+                 "O0002\nX1.\nM98 P3\nM99\n"
+                 "O0003\nX1.\nM98 P4\nM99\n"
+                 "O0004\nX1.\nM98 P5\nM99\n"
+                 "O0005\nX1.\nM99\n",
+                 19, 1, "subprograms nested deeper than 4 levels");
+    /* Haas M97: a local call to N100 twice */
+    em e97[] = {{'R', 0, 0, 0}, {'L', 5, 0, 0}, {'L', 10, 0, 0}, {'R', 50, 0, 0}};
+    expect_motions("M97", "O0200\nG90 G00 X0 Y0\nM97 P100 L2\nG00 X50.\nM30\n"
+                          "N100 G91 G01 X5. F200\nG90\nM99\n", e97, N(e97));
+    /* M99 P20: back to N20 of the caller, skipping N10 */
+    em e99[] = {{'R', 0, 0, 0}, {'R', 1, 0, 0}, {'R', 20, 0, 0}};
+    expect_motions("M99 P", "O0300\nG90 G00 X0\nM98 P301\nN10 G00 X10.\nN20 G00 X20.\nM30\n"
+                            "O0301\nG00 X1.\nM99 P20\n", e99, N(e99));
+    /* M99 in the main program ends it (a control would repeat it) */
+    em em99[] = {{'R', 1, 0, 0}};
+    expect_motions("M99 main", "G00 X1.\nM99\nG00 X2.\n", em99, N(em99));
+    /* L0: not called */
+    em el0[] = {{'R', 7, 0, 0}};
+    expect_motions("L0", "M98 P10 L0\nG00 X7.\nM30\nO0010\nG00 X1.\nM99\n", el0, N(el0));
+
+    /* subprogram files: O4000.nc on the subroutine path, and in the
+     * program's own folder for a program file */
+    char dir[] = "/tmp/fm_fanuc_XXXXXX";
+    CHECK(mkdtemp(dir) != NULL);
+    char path[256];
+    snprintf(path, sizeof path, "%s/O4000.nc", dir);
+    FILE *f = fopen(path, "w");
+    CHECK(f != NULL);
+    if (!f) return;
+    fputs("%\nO4000 (FROM A FILE)\nG91 G01 X2. F100\nG90\nM99\n%\n", f);
+    fclose(f);
+    fm_gcode_options o = fanuc();
+    o.subroutine_path = dir;
+    em ef[] = {{'R', 1, 0, 0}, {'L', 3, 0, 0}, {'L', 5, 0, 0}};
+    expect_motions_opt("file on the path", "G00 X1.\nM98 P4000 L2\nM30\n", &o, ef, N(ef));
+    char main_path[256];
+    snprintf(main_path, sizeof main_path, "%s/main.nc", dir);
+    f = fopen(main_path, "w");
+    CHECK(f != NULL);
+    if (f) {
+        fputs("O0001\nG00 X1.\nM98 P4000\nM30\n", f);
+        fclose(f);
+        fm_error err;
+        o = fanuc();
+        ngot = 0;
+        CHECK(fm_gcode_run_file(main_path, &o, collect, NULL, NULL, &err) == FM_OK);
+        CHECK(ngot == 2 && fabs(got[1].end[0] - 3) < 1e-9);
+        /* an error in the subprogram file names that file and its line */
+        f = fopen(path, "w");
+        if (f) {
+            fputs("O4000\nG91 G01 X2. F100\nG02 X1.\nM99\n", f);
+            fclose(f);
+        }
+        CHECK(fm_gcode_run_file(main_path, &o, collect, NULL, NULL, &err) != FM_OK);
+        CHECK(strcmp(err.file, path) == 0);
+        CHECK(err.line == 3 && err.column == 1);
+        CHECK_STR_CONTAINS(err.message, "no centre");
+        remove(main_path);
+    }
+    remove(path);
+    rmdir(dir);
+    expect_error("G00 X1.\nM98 P4001\nM30\n", 2, 1, "no program O4001");
+    /* a subprogram that runs into the next program without M99 */
+    expect_error("M98 P10\nM30\nO0010\nG00 X1.\nO0011\nM99\n", 4, 1, "without M99");
+}
+
+/* ---- G65 ---- */
+
+static void test_g65(void)
+{
+    /* argument specification I: A B C I J K D E F H M Q R S T U V W X Y Z ->
+     * #1 #2 #3 #4 #5 #6 #7 #8 #9 #11 #13 #17 .. #26; their sum is
+     * 1+...+9 = 45, + 11 + 13 = 69, + 17 + ... + 26 = 215: 284. The caller's
+     * #1 is back after M99. #10 (no letter) stays vacant. */
+    em e[] = {{'R', 0, 0, 0}, {'R', 24, 25, 26}, {'R', 100, 25, 26}, {'R', 100, 284, 26}};
+    expect_motions("G65 arguments",
+                   "O0001\nG90 G00 X0 Y0 Z0\n#1=100.\n"
+                   "G65 P9000 A1. B2. C3. I4. J5. K6. D7. E8. F9. H11. M13. Q17. R18. S19. T20. "
+                   "U21. V22. W23. X24. Y25. Z26.\n"
+                   "G00 X#1\nG00 Y#100\nM30\n"
+                   "O9000\n"
+                   "#100=#1+#2+#3+#4+#5+#6+#7+#8+#9+#11+#13+#17+#18+#19+#20+#21+#22+#23+#24+#25"
+                   "+#26\n"
+                   "IF [#10 NE #0] GOTO 99\nG00 X#24 Y#25 Z#26\nM99\nN99 #3000=1(NOT VACANT)\n",
+                   e, N(e));
+    /* arguments without a decimal point: X5 -> 0.005 (mm), A5 -> 0.005 (deg),
+     * D5 -> 5 (a whole-number address) */
+    em e2[] = {{'R', 5, 5, 5}};
+    expect_motions("G65 decimal point", "G65 P9001 X5 A5 D5\nM30\nO9001\n"
+                   "G00 X[#24*1000] Y[#1*1000] Z#7\nM99\n", e2, N(e2));
+    /* L repeats the macro */
+    em e3[] = {{'L', 2, 0, 0}, {'L', 4, 0, 0}, {'L', 6, 0, 0}};
+    expect_motions("G65 L", "G65 P9002 L3 A2.\nM30\nO9002\nG91 G01 X#1 F100\nG90\nM99\n", e3,
+                   N(e3));
+    /* macro calls nest 4 levels; the 5th fails at O9100's G65 */
+    expect_error("G65 P9100\nM30\nO9100\nG65 P9100\nM99\n", 4, 1,
+                 "macro calls nested deeper than 4 levels");
+}
+
+/* ---- control flow ---- */
+
+static void test_control(void)
+{
+    /* IF/GOTO loop: X1 X2 X3; nested WHILE: (0,0) (10,0) (0,10) (10,10); IF
+     * THEN: #4 = 7 */
+    em e[] = {{'L', 0, 0, 0}, {'L', 1, 0, 0}, {'L', 2, 0, 0}, {'L', 3, 0, 0}, {'R', 0, 0, 0},
+              {'R', 10, 0, 0}, {'R', 0, 10, 0}, {'R', 10, 10, 0}, {'R', 10, 10, 7}};
+    expect_motions("control",
+                   "O0001\nG90 G01 F100 X0 Y0\n#1=1\n"
+                   "N10 IF [#1 GT 3] GOTO 20\nG01 X#1\n#1=#1+1\nGOTO 10\n"
+                   "N20 #2=0\nWHILE [#2 LT 2] DO1\n#3=0\nWHILE [#3 LT 2] DO2\n"
+                   "G00 X[#3*10] Y[#2*10]\n#3=#3+1\nEND2\n#2=#2+1\nEND1\n"
+                   "IF [#2 EQ 2] THEN #4=7.\nG00 Z#4\nM30\n",
+                   e, N(e));
+    /* a loop that never ends stops at max_iterations */
+    fm_gcode_options o = fanuc();
+    o.max_iterations = 1000;
+    fm_error err;
+    CHECK(run_opt("N1 G00 X1.\nGOTO 1\n", &o, &err) == FM_ERR_LIMIT);
+    CHECK(run_opt("WHILE [1 GT 0] DO1\nEND1\n", &o, &err) == FM_ERR_LIMIT);
+}
+
+/* ---- expressions and variables ---- */
+
+static void test_expressions(void)
+{
+    em e[] = {
+        {'R', 7, 0, 0},      /* 1+2*3 */
+        {'R', 9, 0, 0},      /* [1+2]*3 */
+        {'R', 1, 0, 0},      /* 5 AND 3 = 0101 & 0011 */
+        {'R', 7, 0, 0},      /* 5 OR 3 */
+        {'R', 6, 0, 0},      /* 5 XOR 3 */
+        {'R', 7, 0, 0},      /* 27 MOD 20 */
+        {'R', 225, 0, 0},    /* ATAN[-1]/[-1]: third quadrant, 0..360 */
+        {'R', 45, 0, 0},     /* ATAN[1,1] */
+        {'R', 330, 0, 0},    /* ASIN[-0.5]: Fanuc's range 270..90 */
+        {'R', 180, 0, 0},    /* ACOS[-1] */
+        {'R', -2, 0, 0},     /* ROUND[-1.5]: half away from zero */
+        {'R', -1, 0, 0},     /* FIX[-1.2]: toward zero */
+        {'R', -2, 0, 0},     /* FUP[-1.2]: away from zero */
+        {'R', 18, 0, 0},     /* BCD[12] = 0x12 */
+        {'R', 12, 0, 0},     /* BIN[18] */
+        {'R', 4, 0, 0},      /* SQRT[16] */
+        {'R', 3, 0, 0},      /* ABS[-3] */
+        {'R', 2, 0, 0},      /* LN[EXP[2]] */
+        {'R', 0.5, 0, 0},    /* SIN[30] */
+        {'R', 0.5, 0, 0},    /* COS[60] */
+        {'R', 1, 0, 0},      /* TAN[45] */
+        {'R', 1.235, 0, 0},  /* X[ROUND[1.23456]]: ROUND in an address rounds to 0.001 */
+        {'R', 2.47, 0, 0},   /* X[ROUND[#1]+ROUND[#1]] = 1.235 + 1.235 */
+        {'R', 2.469, 0, 0},  /* X[#1+#1] = 2.46912 rounded to 0.001 */
+    };
+    expect_motions("expressions",
+                   "#1=1+2*3\nG00 X#1\n#1=[1+2]*3\nG00 X#1\n#1=5 AND 3\nG00 X#1\n"
+                   "#1=5 OR 3\nG00 X#1\n#1=5 XOR 3\nG00 X#1\n#1=27 MOD 20\nG00 X#1\n"
+                   "#1=ATAN[-1]/[-1]\nG00 X#1\n#1=ATAN[1,1]\nG00 X#1\n#1=ASIN[-0.5]\nG00 X#1\n"
+                   "#1=ACOS[-1]\nG00 X#1\n#1=ROUND[-1.5]\nG00 X#1\n#1=FIX[-1.2]\nG00 X#1\n"
+                   "#1=FUP[-1.2]\nG00 X#1\n#1=BCD[12]\nG00 X#1\n#1=BIN[18]\nG00 X#1\n"
+                   "#1=SQRT[16]\nG00 X#1\n#1=ABS[-3]\nG00 X#1\n#1=LN[EXP[2]]\nG00 X#1\n"
+                   "#1=SIN[30]\nG00 X#1\n#1=COS[60]\nG00 X#1\n#1=TAN[45]\nG00 X#1\n"
+                   "#1=1.23456\nG00 X[ROUND[#1]]\nG00 X[ROUND[#1]+ROUND[#1]]\nG00 X[#1+#1]\n",
+                   e, N(e));
+    /* vacancy: an address with a vacant variable is left out; #2=#1 stays
+     * vacant; #1*5 is 0; EQ tells vacant from 0; LT treats vacant as 0 */
+    em v[] = {{'R', 0, 4, 0}, {'R', 5, 4, 0}, {'R', 5, 0, 0}, {'R', 1, 3, 0}};
+    expect_motions("vacancy",
+                   "G00 Y4.\n#1=#0\nG00 X5. Y#1\n#2=#1\nG00 Y#2\n#3=#1*5\nG00 Y#3\n"
+                   "IF [#1 EQ #0] THEN #5=1.\nIF [#3 EQ #0] THEN #5=2.\n"
+                   "IF [#1 LT 1] THEN #6=3.\nG00 X#5 Y#6\n",
+                   v, N(v));
+    /* system variables: #4001 (G01), #4003 (G90),
+     * #5001 (the last end point), #4120 (T), #4109 (F) */
+    em s[] = {{'L', 1, 0, 0}, {'R', 1, 90, 0}, {'R', 1, 90, 7}, {'R', 1, 90, 1}, {'R', 100, 90, 1}};
+    expect_motions("system variables",
+                   "G90 G01 X1. F100\n#10=#4001\n#11=#4003\n#12=#5001\nT7\n#13=#4120\n"
+                   "#14=#4109\nG00 Y#11\nZ#13\nZ#10\nX#14\n",
+                   s, N(s));
+    /* commons survive calls; #100 set in a subprogram is seen by the caller */
+    em c[] = {{'R', 42, 0, 0}};
+    expect_motions("commons", "M98 P5\nG00 X#100\nM30\nO0005\n#100=42.\nM99\n", c, N(c));
+    /* #3000: the alarm is an error with its message and position */
+    expect_error("G00 X1.\n#3000=7(TOOL BROKEN)\n", 2, 1, "alarm 3007 (#3000 = 7): TOOL BROKEN");
+}
+
+/* ---- coordinates ---- */
+
+static void test_rotation(void)
+{
+    /* a 10 mm square rotated 30 degrees about the origin: (x, y) ->
+     * (x c - y s, x s + y c), c = cos 30, s = sin 30 */
+    double c = cos(GC_TEST_PI / 6), s = 0.5;
+    em e[] = {{'R', 0, 0, 0}, {'L', 10 * c, 10 * s, 0}, {'L', 10 * c - 10 * s, 10 * s + 10 * c, 0},
+              {'L', -10 * s, 10 * c, 0}, {'L', 0, 0, 0}, {'R', 10, 0, 0}};
+    expect_motions("G68 square",
+                   "G90 G00 X0 Y0\nG68 X0 Y0 R30.\nG01 X10. F100\nY10.\nX0\nY0\nG69\nG00 X10. Y0\n",
+                   e, N(e));
+    /* about (5, 5) by 90 degrees: (10, 5) -> (5, 10); G91 X-5. turns into
+     * (0, -5): (5, 5); an R arc turns with it: G02 from (5,5) to program
+     * (10,5)... the end (5,10), centre program (7.5,5) -> (5, 7.5) */
+    em e2[] = {{'R', 0, 0, 0}, {'L', 5, 10, 0}, {'L', 5, 5, 0}, {'A', 5, 10, 0}};
+    expect_motions("G68 centre",
+                   "G90 G00 X0 Y0\nG68 X5. Y5. R90.\nG01 X10. Y5. F100\nG91 X-5.\nG90\n"
+                   "G02 X10. Y5. R2.5\n",
+                   e2, N(e2));
+    CHECK(ngot == 4 && fabs(got[3].center[0] - 5) < 1e-9 && fabs(got[3].center[1] - 7.5) < 1e-9 &&
+          got[3].turns == -1);
+    /* R without a decimal point is in 0.001 degree */
+    em e3[] = {{'L', 0, 10, 0}};
+    expect_motions("G68 R90000", "G68 R90000\nG01 X10. F100\n", e3, N(e3));
+}
+
+static void test_offsets(void)
+{
+    /* G10 L20 P3 writes G54.1 P3 (#7041 = its X); G91 G10 adds; G10 L2 P2
+     * is G55. Positions are machine coordinates: program + offset. */
+    em e[] = {{'R', 100, 50, -10}, {'R', 200, 50, -10}, {'R', 101, 50, -10},
+              {'R', -5, -5, -10}, {'R', -5, -5, 0}};
+    expect_motions("G54.1",
+                   "G10 L20 P3 X100. Y50. Z-10.\nG54.1 P3\nG00 X0 Y0 Z0\n#1=#7041\nG00 X#1\n"
+                   "G91 G10 L20 P3 X1.\nG90 G00 X0\nG10 L2 P2 X-5. Y-5.\nG55 G00 X0 Y0\nZ0\n",
+                   e, N(e));
+    /* the external offset (G10 L2 P0) adds to every system; G52 shifts the
+     * current one; G92 makes the current point (0, 0) */
+    em e2[] = {{'R', 11, 0, 0}, {'R', 13, 0, 0}, {'R', 10, 0, 0}, {'R', 11, 0, 0}};
+    expect_motions("EXOFS G52 G92",
+                   "G10 L2 P0 X1.\nG10 L2 P1 X10.\nG54 G00 X0\nG52 X2.\nG00 X0\nG52 X0\n"
+                   "G00 X-1.\nG92 X0\nG00 X1.\n",
+                   e2, N(e2));
+    expect_error("G54.1 P49\n", 1, 7, "expected a whole number from 1 to 48");
+}
+
+/* ---- canned cycles ---- */
+
+static void test_cycles(void)
+{
+    /* From (0, 0, 10): the initial level is Z10, R2, bottom Z-5. */
+    em e81[] = {{'R', 0, 0, 10},
+                {'R', 10, 0, 10}, {'R', 10, 0, 2}, {'L', 10, 0, -5}, {'R', 10, 0, 10},  /* G98 */
+                {'R', 20, 0, 10}, {'R', 20, 0, 2}, {'L', 20, 0, -5}, {'R', 20, 0, 2},   /* G99 */
+                {'R', 30, 0, 2}, {'L', 30, 0, -5}, {'R', 30, 0, 2}};
+    expect_motions("G81", "G90 G00 X0 Y0 Z10.\nG98 G81 X10. Y0 Z-5. R2. F100\nG99 X20.\nX30.\nG80\n",
+                   e81, N(e81));
+    /* G82 P1000: one second at the bottom */
+    em e82[] = {{'R', 0, 0, 10}, {'R', 0, 0, 2}, {'L', 0, 0, -5}, {'D', 1, 0, 0}, {'R', 0, 0, 10}};
+    expect_motions("G82", "G00 Z10.\nG98 G82 X0 Y0 Z-5. R2. P1000 F100\n", e82, N(e82));
+    /* G73 Q2, retract d = 1: pecks to 0, -2, -4, then -5 */
+    em e73[] = {{'R', 0, 0, 10}, {'R', 0, 0, 2}, {'L', 0, 0, 0}, {'R', 0, 0, 1}, {'L', 0, 0, -2},
+                {'R', 0, 0, -1}, {'L', 0, 0, -4}, {'R', 0, 0, -3}, {'L', 0, 0, -5}, {'R', 0, 0, 10}};
+    expect_motions("G73", "G00 Z10.\nG98 G73 X0 Y0 Z-5. R2. Q2. F100\n", e73, N(e73));
+    /* G83 Q2, clearance d = 1: back to R after each peck, down to d above */
+    em e83[] = {{'R', 0, 0, 10}, {'R', 0, 0, 2}, {'L', 0, 0, 0}, {'R', 0, 0, 2}, {'R', 0, 0, 1},
+                {'L', 0, 0, -2}, {'R', 0, 0, 2}, {'R', 0, 0, -1}, {'L', 0, 0, -4}, {'R', 0, 0, 2},
+                {'R', 0, 0, -3}, {'L', 0, 0, -5}, {'R', 0, 0, 10}};
+    expect_motions("G83", "G00 Z10.\nG98 G83 X0 Y0 Z-5. R2. Q2. F100\n", e83, N(e83));
+    /* G84 (G99): in at feed with the spindle forward, dwell, out reversed */
+    em e84[] = {{'R', 0, 0, 10}, {'R', 0, 0, 2}, {'L', 0, 0, -5}, {'D', 0.5, 0, 0}, {'L', 0, 0, 2}};
+    expect_motions("G84", "G00 Z10. M03 S500\nG99 G84 X0 Y0 Z-5. R2. P500 F100\n", e84, N(e84));
+    CHECK(ngot == 5 && got[2].spindle_dir == 1 && got[4].spindle_dir == -1);
+    expect_motions("G74", "G00 Z10. M04 S500\nG99 G74 X0 Y0 Z-5. R2. P500 F100\n", e84, N(e84));
+    CHECK(ngot == 5 && got[2].spindle_dir == -1 && got[4].spindle_dir == 1);
+    /* G85: out at feed; G98 then rapids to the initial level */
+    em e85[] = {{'R', 0, 0, 10}, {'R', 0, 0, 2}, {'L', 0, 0, -5}, {'L', 0, 0, 2}, {'R', 0, 0, 10}};
+    expect_motions("G85", "G00 Z10.\nG98 G85 X0 Y0 Z-5. R2. F100\n", e85, N(e85));
+    /* G86: the spindle stops, rapid out */
+    em e86[] = {{'R', 0, 0, 10}, {'R', 0, 0, 2}, {'L', 0, 0, -5}, {'R', 0, 0, 10}};
+    expect_motions("G86", "G00 Z10. M03 S500\nG98 G86 X0 Y0 Z-5. R2. F100\n", e86, N(e86));
+    CHECK(ngot == 4 && got[3].spindle_dir == 0 && got[2].spindle_dir == 1);
+    /* G88: dwell, then the manual retract (a rapid) */
+    em e88[] = {{'R', 0, 0, 10}, {'R', 0, 0, 2}, {'L', 0, 0, -5}, {'D', 0.2, 0, 0}, {'R', 0, 0, 10}};
+    expect_motions("G88", "G00 Z10. M03 S500\nG98 G88 X0 Y0 Z-5. R2. P200 F100\n", e88, N(e88));
+    /* G89: dwell, out at feed */
+    em e89[] = {{'R', 0, 0, 10}, {'R', 0, 0, 2}, {'L', 0, 0, -5}, {'D', 0.2, 0, 0}, {'L', 0, 0, 2},
+                {'R', 0, 0, 10}};
+    expect_motions("G89", "G00 Z10.\nG98 G89 X0 Y0 Z-5. R2. P200 F100\n", e89, N(e89));
+    /* G76 Q1.: dwell, oriented stop, shift +X 1, out, shift back */
+    em e76[] = {{'R', 0, 0, 10}, {'R', 0, 0, 2}, {'L', 0, 0, -5}, {'D', 0.2, 0, 0}, {'R', 1, 0, -5},
+                {'R', 1, 0, 10}, {'R', 0, 0, 10}};
+    expect_motions("G76", "G00 Z10. M03 S500\nG98 G76 X0 Y0 Z-5. R2. Q1. P200 F100\n", e76,
+                   N(e76));
+    /* G87: shift, down to R under the part, shift back, cut up to Z, shift,
+     * up to the initial level, shift back */
+    em e87[] = {{'R', 0, 0, 10}, {'R', 1, 0, 10}, {'R', 1, 0, -8}, {'R', 0, 0, -8}, {'L', 0, 0, -2},
+                {'R', 1, 0, -2}, {'R', 1, 0, 10}, {'R', 0, 0, 10}};
+    expect_motions("G87", "G00 Z10. M03 S500\nG98 G87 X0 Y0 Z-2. R-8. Q1. F100\n", e87, N(e87));
+    /* K repeats in G91: R-8. from the initial level 10 is 2, Z-7. from R is -5 */
+    em ek[] = {{'R', 0, 0, 10},
+               {'R', 10, 0, 10}, {'R', 10, 0, 2}, {'L', 10, 0, -5}, {'R', 10, 0, 10},
+               {'R', 20, 0, 10}, {'R', 20, 0, 2}, {'L', 20, 0, -5}, {'R', 20, 0, 10},
+               {'R', 30, 0, 10}, {'R', 30, 0, 2}, {'L', 30, 0, -5}, {'R', 30, 0, 10}};
+    expect_motions("K", "G90 G00 X0 Y0 Z10.\nG91 G98 G81 X10. Y0 Z-7. R-8. K3 F100\n", ek, N(ek));
+    /* K0 stores the data; the next block drills */
+    em ek0[] = {{'R', 0, 0, 10}, {'R', 5, 0, 10}, {'R', 5, 0, 2}, {'L', 5, 0, -5}, {'R', 5, 0, 10}};
+    expect_motions("K0", "G90 G00 X0 Y0 Z10.\nG98 G81 X1. Z-5. R2. K0 F100\nX5.\n", ek0, N(ek0));
+    /* G80 then axis words: the G00 mode from before the cycle */
+    em e80[] = {{'R', 0, 0, 10}, {'R', 5, 0, 10}, {'R', 5, 0, 2}, {'L', 5, 0, -5}, {'R', 5, 0, 10},
+                {'R', 7, 0, 10}};
+    expect_motions("G80", "G90 G00 X0 Y0 Z10.\nG98 G81 X5. Z-5. R2. F100\nG80 X7.\n", e80,
+                   N(e80));
+}
+
+static void test_polar(void)
+{
+    /* G16 bolt circle of radius 50 at 0, 60 and 120 degrees:
+     * (50, 0), (25, 43.30127), (-25, 43.30127) */
+    double h = 50 * sin(GC_TEST_PI / 3);
+    em e[] = {{'R', 0, 0, 10},
+              {'R', 50, 0, 10}, {'R', 50, 0, 2}, {'L', 50, 0, -5}, {'R', 50, 0, 2},
+              {'R', 25, h, 2}, {'L', 25, h, -5}, {'R', 25, h, 2},
+              {'R', -25, h, 2}, {'L', -25, h, -5}, {'R', -25, h, 2},
+              {'R', 0, 0, 2}};
+    expect_motions("G16 bolt circle",
+                   "G90 G17 G00 X0 Y0 Z10.\nG16\nG99 G81 X50. Y0 Z-5. R2. F100\nY60.\nY120.\n"
+                   "G15 G80\nG00 X0 Y0\n",
+                   e, N(e));
+    /* G91 angles add: six holes 60 degrees apart from one block with K6 */
+    fm_error err;
+    CHECK(run("G90 G00 X0 Y0 Z10.\nG16\nG99 G81 X30. Y0 Z-5. R2. F100\nG91 Y60. K5\n", &err) ==
+          FM_OK);
+    int holes = 0;
+    for (int i = 0; i < ngot; i++)
+        if (got[i].kind == FM_MOTION_LINE) {
+            double a = holes * 60 * GC_TEST_PI / 180;
+            CHECK_NEAR(got[i].end[0], 30 * cos(a), 1e-9);
+            CHECK_NEAR(got[i].end[1], 30 * sin(a), 1e-9);
+            holes++;
+        }
+    CHECK(holes == 6);
+}
+
+static void test_arcs(void)
+{
+    /* G02 (0,0) -> (10,10) R10: centre (10,0), 90 degrees; R-10: centre
+     * (0,10), the 270-degree arc. A full circle cannot be given with R: no
+     * motion. I J: always from the start point; only I: a full circle. */
+    fm_error err;
+    CHECK(run("G90 G00 X0 Y0\nG02 X10. Y10. R10. F100\n", &err) == FM_OK);
+    CHECK(ngot == 2 && fabs(got[1].center[0] - 10) < 1e-9 && fabs(got[1].center[1]) < 1e-9);
+    CHECK_NEAR(got[1].t1 - got[1].t0, GC_TEST_PI * 10 / 2 / 100 * 60, 1e-9);
+    CHECK(run("G90 G00 X0 Y0\nG02 X10. Y10. R-10. F100\n", &err) == FM_OK);
+    CHECK(ngot == 2 && fabs(got[1].center[0]) < 1e-9 && fabs(got[1].center[1] - 10) < 1e-9);
+    CHECK_NEAR(got[1].t1 - got[1].t0, 3 * GC_TEST_PI * 10 / 2 / 100 * 60, 1e-9);
+    CHECK(run("G90 G00 X10. Y0\nG02 X10. Y0 R5. F100\nG00 X1.\n", &err) == FM_OK);
+    CHECK(ngot == 2 && got[1].kind == FM_MOTION_RAPID);
+    CHECK(run("G90 G00 X10. Y0\nG02 I5. F100\n", &err) == FM_OK);
+    CHECK(ngot == 2 && got[1].kind == FM_MOTION_ARC && got[1].turns == -1);
+    CHECK(ngot == 2 && fabs(got[1].center[0] - 15) < 1e-9 && fabs(got[1].end[0] - 10) < 1e-9);
+    CHECK_NEAR(got[1].t1 - got[1].t0, 2 * GC_TEST_PI * 5 / 100 * 60, 1e-9);
+    /* G90 with I J: still incremental from the start (10, 0): centre (10, 5) */
+    CHECK(run("G90 G00 X10. Y0\nG03 X10. Y10. J5. F100\n", &err) == FM_OK);
+    CHECK(ngot == 2 && fabs(got[1].center[0] - 10) < 1e-9 && fabs(got[1].center[1] - 5) < 1e-9);
+}
+
+static void test_tool_length(void)
+{
+    static fm_tool_spec tools[2];
+    static fm_tool_table table = {2, tools};
+    tools[0].number = 1;
+    tools[0].length_offset = 50;
+    tools[1].number = 2;
+    tools[1].length_offset = 20;
+    fm_gcode_options o = fanuc();
+    o.tools = &table;
+    /* T1 (50 mm) without G43: the tip is 50 below the point. G43 H1 alone:
+     * Fanuc moves Z so that the tip is at the programmed Z100 (the motion's
+     * point goes from 100 - 50 to 100, tip offset 0). G44 H2 Z10.: offset
+     * -20, tip offset -20 - 50. G49 alone: the gauge line back to Z10. */
+    em e[] = {{'R', 0, 0, 100}, {'R', 0, 0, 100}, {'L', 0, 0, 5}, {'L', 0, 0, 10}, {'L', 0, 0, 10}};
+    expect_motions_opt("G43 G44 G49",
+                       "T1 M06\nG90 G00 X0 Y0 Z100.\nG43 H1\nG01 Z5. F100\nG44 H2 Z10.\nG49\n", &o,
+                       e, N(e));
+    if (ngot == 5) {
+        CHECK_NEAR(got[0].tip_offset[2], -50, 1e-12);
+        CHECK_NEAR(got[1].start[2], 50, 1e-12);
+        CHECK_NEAR(got[1].tip_offset[2], 0, 1e-12);
+        CHECK_NEAR(got[3].start[2], 75, 1e-12);     /* 5 + (50 - (-20)) */
+        CHECK_NEAR(got[3].tip_offset[2], -70, 1e-12);
+        CHECK_NEAR(got[4].start[2], -10, 1e-12);    /* 10 + (-20 - 0) */
+        CHECK_NEAR(got[4].tip_offset[2], -50, 1e-12);
+    }
+}
+
+static void test_reference(void)
+{
+    fm_gcode_options o = fanuc();
+    o.reference_points[0][0] = 100;
+    o.reference_points[0][1] = 200;
+    o.reference_points[0][2] = 300;
+    o.reference_points[1][0] = -1;
+    /* G91 G28 Z0: through the current point to the reference Z only; G90
+     * G28 X20. Y20.: through (20, 20), then X and Y of the reference point;
+     * G30 P2 X0: through X0 to the second reference point's X */
+    em e[] = {{'R', 10, 10, 10}, {'R', 10, 10, 10}, {'R', 10, 10, 300}, {'R', 20, 20, 300},
+              {'R', 100, 200, 300}, {'R', 0, 200, 300}, {'R', -1, 200, 300}};
+    expect_motions_opt("G28 G30",
+                       "G90 G00 X10. Y10. Z10.\nG91 G28 Z0\nG90 G28 X20. Y20.\nG30 P2 X0\n", &o, e,
+                       N(e));
+}
+
+static void test_scaling_dwell(void)
+{
+    /* G51 P2000: factor 2 about the origin; P1.5 (Haas, decimal): 1.5 */
+    em e[] = {{'L', 20, 10, 0}, {'L', 10, 10, 0}, {'L', 15, 0, 0}};
+    expect_motions("G51", "G51 X0 Y0 Z0 P2000\nG01 X10. Y5. F100\nG50\nX10.\nG51 P1.5 X0 Y0\n"
+                          "G01 X10. Y0\n", e, N(e));
+    expect_error("G51 X0 Y0 I1000 J2000 K1000\n", 1, 17, "per-axis scaling");
+    /* G04 X1.5, X1500 (0.001 s each), P1500 (ms), P1.5 (Haas: seconds) */
+    em d[] = {{'D', 1.5, 0, 0}, {'D', 1.5, 0, 0}, {'D', 1.5, 0, 0}, {'D', 1.5, 0, 0}};
+    expect_motions("G04", "G04 X1.5\nG04 X1500\nG04 P1500\nG04 P1.5\n", d, N(d));
+}
+
+/* ---- the same program in both dialects ---- */
+
+static int keep(const fm_motion *m)
+{
+    /* a zero-length rapid moves nothing (LinuxCNC emits one after G85 in G99) */
+    return !(m->kind == FM_MOTION_RAPID && m->start[0] == m->end[0] && m->start[1] == m->end[1] &&
+             m->start[2] == m->end[2]);
+}
+
+static void same_in_both(const char *what, const char *text)
+{
+    static fm_motion a[MAXM];
+    static fm_tool_spec tools[1];
+    static fm_tool_table table = {1, tools};
+    tools[0].number = 1;
+    tools[0].length_offset = 30;
+    fm_gcode_options lin, fan;
+    fm_gcode_options_default(&lin);
+    lin.tools = &table;
+    fan = lin;
+    fan.dialect = FM_GCODE_FANUC;
+    /* LinuxCNC's G73/G83 use 0.010 inch; give Fanuc the same parameters */
+    fan.peck_retract = fan.peck_clearance = 0.254;
+    fm_error err;
+    CHECK(run_opt(text, &lin, &err) == FM_OK);
+    int na = 0;
+    for (int i = 0; i < ngot; i++)
+        if (keep(&got[i])) a[na++] = got[i];
+    fm_status st = run_opt(text, &fan, &err);
+    CHECK(st == FM_OK);
+    if (st) {
+        char buf[700];
+        fprintf(stderr, "  %s: %s\n", what, fm_error_format(&err, buf, sizeof buf));
+    }
+    int nb = 0, bad = 0;
+    for (int i = 0; i < ngot; i++) {
+        if (!keep(&got[i])) continue;
+        const fm_motion *x = &a[nb], *y = &got[i];
+        if (nb >= na || x->kind != y->kind || x->turns != y->turns ||
+            x->plane_axis != y->plane_axis || fabs(x->t1 - y->t1) > 1e-9 ||
+            fabs(x->tip_offset[2] - y->tip_offset[2]) > 1e-12) {
+            bad++;
+        } else {
+            for (int k = 0; k < 3; k++)
+                if (fabs(x->end[k] - y->end[k]) > 1e-9 || fabs(x->start[k] - y->start[k]) > 1e-9 ||
+                    (x->kind == FM_MOTION_ARC && fabs(x->center[k] - y->center[k]) > 1e-9))
+                    bad++;
+        }
+        if (bad == 1) {
+            fprintf(stderr, "  %s: motion %d (line %d) differs between the dialects\n", what, nb,
+                    y->line);
+            bad++;
+        }
+        nb++;
+    }
+    CHECK(na == nb && na > 0);
+    CHECK(bad == 0);
+    if (na != nb) fprintf(stderr, "  %s: %d motions in LinuxCNC, %d in Fanuc\n", what, na, nb);
+}
+
+static void test_same_meaning(void)
+{
+    same_in_both("lines and arcs",
+                 "G21 G17 G90 G94\nT1 M06\nG00 G54 X0 Y0 S1000 M03\nG43 H1 Z20.\n"
+                 "G01 Z-1. F200\nX10. Y5.\nG02 X20. Y5. R5.\nG03 X20. Y15. I0 J5.\n"
+                 "G02 X20. Y15. I0 J-3.\nG91 G01 X-5. Y-5.\nG03 X-10. Y0 R5.\nG90 G17\n"
+                 "G18 G02 X10. Z-1. I2.5 K0\nG19 G03 Y5. Z-1. J-2.5 K0\nG17\n"
+                 "G02 X0 Y0 Z-4. I-5. J-2.5\nG00 Z20.\nM05\nM30\n");
+    same_in_both("offsets",
+                 "G21 G90\nG10 L2 P1 X10. Y20. Z-5.\nG10 L2 P2 X-30. Y0 Z0\nG54 G00 X0 Y0 Z10.\n"
+                 "G55 G00 X5. Y5.\nG92 X0 Y0\nG00 X2. Y3.\nG54 G01 X1. F500\n"
+                 "G53 G00 Z0\nG91 G28 Z0.\nG90 G00 X0 Y0\nM30\n");
+    same_in_both("cycles",
+                 "G21 G17 G90 G94 F150\nT1 M06\nG00 G43 H1 Z30. S800 M03\nG00 X0 Y0 Z30.\n"
+                 "G98 G81 X10. Y10. Z-5. R2.\nX20.\nG99 X30. Y15.\nG80\nG00 Z30.\n"
+                 "G98 G83 X40. Y0 Z-9. R3. Q2.5\nG99 X50.\nG80\nG00 Z30.\n"
+                 "G99 G73 X60. Y0 Z-7. R1. Q1.5\nX70.\nG80\nG00 Z30.\n"
+                 "G99 G85 X0 Y30. Z-4. R2.\nX10.\nG80\nG00 Z30.\n"
+                 "G91 G98 G81 X5. Y0 Z-10. R-25. L3\nG90 G80\n"
+                 "G18 G00 X0 Y30. Z0\nG99 G81 X10. Y-5. Z5. R25.\nG80 G17\nM30\n");
+    same_in_both("expressions",
+                 "G21 G90 G00 X[1.5 + 2 * 3] Y[[1 + 2] * 3 - 0.25]\n#1=60.\n"
+                 "G01 X[10. * COS[#1]] Y[10. * SIN[#1 - 30.]] F300\n#2=[#1 + 15.]\n"
+                 "G00 X#2 Y[SQRT[16.]]\nG00 X[ABS[-2.5]] Y[FIX[2.4]]\nM30\n");
+}
+
+/* ---- errors ---- */
+
+static void test_errors(void)
+{
+    expect_error("G90\nG41 D1 X1.\n", 2, 1, "cutter radius compensation is not supported");
+    expect_error("WHILE [1 LT 2] DO4\nEND4\n", 1, 18, "loop number 4");
+    expect_error("G00 X1.\nEND1\n", 2, 1, "END 1 without a matching DO 1");
+    expect_error("WHILE [#1 GT 0] DO1\nG00 X1.\n", 1, 1, "WHILE [..] DO 1 without a matching END 1");
+    expect_error("G00 X1.\nGOTO 50\n", 2, 1, "no sequence number N50");
+    expect_error("#0=1.\n", 1, 1, "#0 is always vacant");
+    expect_error("#1=SQRT[-1]\n", 1, 4, "square root of a negative number");
+    expect_error("#1=1/0\n", 1, 5, "division by zero");
+    expect_error("G01 X#1+1. F100\n", 1, 8, "unexpected '+'");
+    expect_error("G02 X10. Y0 F100\n", 1, 1, "no centre");
+    expect_error("G00 Z10.\nG99 G87 X0 Y0 Z-2. R-8. Q1. F100\n", 2, 5, "G87 in G99 mode");
+    expect_error("G81 X1. Y1. F100\n", 1, 1, "hole bottom and R missing");
+    expect_error("O0001 G00 X1.\n", 1, 7, "text after the program number");
+    expect_error("IF [#1 EQ 1] X1.\n", 1, 14, "expected GOTO n or THEN");
+    expect_error("G65 P1 A1. G00\n", 1, 12, "after G65");
+    expect_error("#1=ATAN[1]\n", 1, 4, "ATAN with one argument");
+    expect_error("#1=ASIN[2]\n", 1, 4, "argument out of range");
+    expect_error("#1=#1001\n", 1, 4, "interface signals");
+    expect_error("#5001=1.\n", 1, 1, "is read-only");
+    expect_error("G00 X1. #1=2\n", 1, 9, "variable assignment after other words");
+    expect_error("G10 L10 P1 R5.\n", 1, 5, "tool offsets come from the tool table");
+    expect_error("G68 X0 Y0\n", 1, 1, "R missing");
+    expect_error("G95 G01 X1.\n", 1, 1, "feed per revolution");
+    expect_error("G12 I5.\n", 1, 1, "circular pocket");
+    expect_error("M98\n", 1, 1, "P missing");
+    expect_error("N10 G00 X1.\nM97 P20\n", 2, 1, "no sequence number N20");
+    expect_error("G73 X0 Y0 Z-5. R2. F100\n", 1, 1, "peck depth Q missing");
+    expect_error("G01 X1.\n", 1, 1, "feed rate is zero");
+    expect_error("G00 X1.\nG02 X10. Y0 R2. F100\n", 2, 13, "radius too small");
+}
+
+int main(void)
+{
+    test_reading();
+    test_subprograms();
+    test_g65();
+    test_control();
+    test_expressions();
+    test_rotation();
+    test_offsets();
+    test_cycles();
+    test_polar();
+    test_arcs();
+    test_tool_length();
+    test_reference();
+    test_scaling_dwell();
+    test_same_meaning();
+    test_errors();
+    return test_summary("test_fanuc");
+}

@@ -1,0 +1,192 @@
+/* gcode_fanuc.h: the Fanuc/Haas dialect's state and the functions its files
+ * share. Private to toolpaths/gcode. The dialect reuses the interpreter's
+ * motion output, line normalization and error helpers (gcode_internal.h) and
+ * has its own reading of blocks, Macro B values, control flow and block
+ * execution:
+ *   gcode_fanuc.c        programs (%, O numbers, files on the search path), the
+ *                        line loop, IF/GOTO/WHILE/DO/END, M98/M97/G65 calls, M99
+ *   gcode_fanuc_expr.c   Macro B: numbers, [expressions], functions, variables
+ *                        (#0 vacant, locals per call level, commons, system)
+ *   gcode_fanuc_block.c  words of a block, Fanuc's G-code groups, the decimal
+ *                        point and rounding rules of addresses
+ *   gcode_fanuc_exec.c   executing a block: modal state, offsets, G68/G51/G16,
+ *                        lines, arcs, dwells, G28/G30/G53
+ *   gcode_fanuc_cycle.c  canned cycles G73 G74 G76 G81-G89 */
+#ifndef FM_GCODE_FANUC_H
+#define FM_GCODE_FANUC_H
+
+#include "gcode_internal.h"
+
+#define GC_FANUC_LEVELS 5      /* local variable levels: main program 0, G65 calls 1-4 */
+#define GC_FANUC_MACRO_DEPTH 4 /* G65 calls nested (Fanuc's limit) */
+#define GC_FANUC_SUB_DEPTH 4   /* M98/M97 subprogram calls nested (Fanuc's limit) */
+#define GC_FANUC_FRAMES (GC_FANUC_MACRO_DEPTH + GC_FANUC_SUB_DEPTH)
+#define GC_FANUC_LOCALS 34     /* #1 .. #33 */
+#define GC_FANUC_COMMON_LO 100 /* #100 .. #999 */
+#define GC_FANUC_COMMON_HI 999
+#define GC_FANUC_EXT_OFFSETS 48 /* G54.1 P1 .. P48 */
+#define GC_FANUC_MAX_TEXTS 64  /* the program and the subprogram files it loads */
+
+/* A vacant (null) variable is stored as NaN: no computed value is NaN, since
+ * every operation's result is checked to be finite. */
+#define GC_VACANT NAN
+
+/* One text: the program file or a subprogram file loaded from the path. */
+typedef struct gc_fanuc_text {
+    char *name;          /* for messages */
+    const char *text;
+    size_t len;
+    size_t *line_start;  /* nlines + 1 offsets */
+    size_t nlines;
+    char *owned;         /* the text, when loaded here */
+} gc_fanuc_text;
+
+/* A program of a text: from its O line (or the text's start) to the next O
+ * line or '%'. */
+typedef struct gc_fanuc_program {
+    long number;         /* -1: the text before any O number */
+    int text;
+    size_t first, end;   /* lines [first, end) */
+    long *seq;           /* sorted (N number, line) pairs, built at the first jump */
+    size_t nseq;
+    int seq_built;
+} gc_fanuc_program;
+
+typedef enum gc_call_kind { GC_CALL_M98, GC_CALL_M97, GC_CALL_G65 } gc_call_kind;
+
+/* A subprogram or macro call in progress. */
+typedef struct gc_fanuc_frame {
+    gc_call_kind kind;
+    int caller_program;  /* index into programs */
+    size_t return_line;  /* the line after the call, in the caller's text */
+    int program;         /* the called program */
+    size_t start_line;   /* first line of the body, for repeats */
+    long repeats_left;
+    int col;             /* column of the call, for messages */
+} gc_fanuc_frame;
+
+typedef struct gc_fanuc {
+    gc_fanuc_text texts[GC_FANUC_MAX_TEXTS];
+    int ntexts;
+    gc_fanuc_program *programs;
+    int nprograms, capprograms;
+    int cur_program;     /* the program running now */
+    int jumped;          /* the line just run set g->cur (jump, call, return) */
+    size_t loaded_bytes; /* all texts, against max_program_bytes */
+
+    gc_fanuc_frame frames[GC_FANUC_FRAMES];
+    int nframes;
+    int sub_depth;       /* M98/M97 calls in progress */
+    int level;           /* local variable level: G65 calls in progress */
+
+    /* variables (GC_VACANT when vacant) */
+    double locals[GC_FANUC_LEVELS][GC_FANUC_LOCALS];
+    double common[GC_FANUC_COMMON_HI + 1 - GC_FANUC_COMMON_LO];
+    double ext_offsets[GC_FANUC_EXT_OFFSETS][3]; /* #7001.. (20 per P), program units */
+    double timer_base_ms, timer_base_h;          /* #3001, #3002 set by the program */
+    double sys3003, sys3004, parts[2];           /* #3003 #3004 #3901 #3902 */
+
+    /* modal state Fanuc has beyond LinuxCNC's */
+    int group1;          /* 0 1 2 3: G00-G03, the motion after G80 */
+    int cycle_data;      /* canned cycle Z/R valid (cleared by G80 and G00-G03) */
+    int tool_length_mode; /* GC_G43, GC_G44 or GC_G49 */
+    int h;               /* the offset number in use (modal H) */
+    int d;               /* modal D (read only by #4107) */
+    int last_m;          /* #4113 */
+    long sequence;       /* #4114 */
+    int ext_cs;          /* G54.1 P number in use, 0 for G54-G59 */
+    double local_offset[3]; /* G52, program units */
+    double prog[3];      /* the programmed point: before polar, scaling and rotation */
+    int polar;           /* G16 */
+    double polar_radius, polar_angle, polar_origin[2];
+    int rotation;        /* G68 */
+    double rot_center[2], rot_angle, rot_cos, rot_sin;
+    gc_plane rot_plane;
+    int scaling;         /* G51 */
+    double scale_center[3], scale;
+    /* hole data: R and Z as written until the first hole turns them into
+     * levels (G91: from the initial level and from R), Q, P (seconds) */
+    double cycle_z, cycle_r, cycle_q, cycle_p;
+    int cycle_z_word, cycle_r_word, cycle_z_abs, cycle_r_abs; /* pending words and their mode */
+    double level_r, level_z;
+    double block_end[3]; /* #5001-#5003: where the previous block ended */
+
+    /* the current block */
+    int in_address;      /* evaluating an address: ROUND rounds to its increment */
+    double address_increment;
+    const char *alarm_text; /* #3000's message, found in the raw line */
+} gc_fanuc;
+
+/* ---- gcode_fanuc.c ---- */
+fm_status gc_fanuc_run(gc_interp *g);
+fm_status gc_fanuc_init(gc_interp *g);
+void gc_fanuc_free(gc_interp *g);
+/* Subprogram and macro calls from a block (M98, M97, G65) and M99. */
+fm_status gc_fanuc_call(gc_interp *g, gc_call_kind kind, long number, long repeats,
+                        const double args[GC_FANUC_LOCALS], int col);
+fm_status gc_fanuc_return(gc_interp *g, int has_p, long p, int col);
+/* The raw text of the current line (comments kept), for #3000's message. */
+void gc_fanuc_raw_line(const gc_interp *g, const char **text, size_t *len);
+
+/* ---- gcode_fanuc_expr.c ---- */
+
+/* How an address's number was written: the decimal point rule and the
+ * dwell units depend on it. */
+typedef enum gc_number_form {
+    GC_FORM_EXPRESSION = 0, /* a variable or [expression]: a value with its decimals */
+    GC_FORM_INTEGER = 1,    /* digits without a decimal point: the least input increment */
+    GC_FORM_DECIMAL = 2     /* a number with a decimal point */
+} gc_number_form;
+
+/* A value read where an address or an argument expects one. */
+typedef struct gc_fanuc_value {
+    double v;
+    int vacant;          /* a lone vacant variable: the address is ignored */
+    gc_number_form form;
+} gc_fanuc_value;
+
+fm_status gc_fanuc_read_value(gc_interp *g, const gc_line *ln, size_t *p, gc_fanuc_value *out);
+/* A whole expression (assignment right-hand sides, conditions). */
+fm_status gc_fanuc_read_expr(gc_interp *g, const gc_line *ln, size_t *p, double *out);
+/* '#' at s[*p]: the variable number. */
+fm_status gc_fanuc_read_var_ref(gc_interp *g, const gc_line *ln, size_t *p, long *num);
+fm_status gc_fanuc_get_var(gc_interp *g, long num, int col, double *out);
+fm_status gc_fanuc_set_var(gc_interp *g, long num, double v, int col);
+/* Fanuc's rounding: half away from zero. */
+double gc_fanuc_round(double v);
+
+/* ---- gcode_fanuc_block.c ---- */
+
+typedef struct gc_fanuc_block {
+    gc_block b;
+    unsigned char form[26];  /* gc_number_form of each word */
+    int g65;             /* G65 on the line: every word after it is an argument */
+    int g65_col;
+    double args[GC_FANUC_LOCALS]; /* G65 arguments (argument specification I) */
+} gc_fanuc_block;
+
+fm_status gc_fanuc_parse_block(gc_interp *g, size_t p, gc_fanuc_block *fb);
+gc_group gc_fanuc_g_group(int code);
+
+/* ---- gcode_fanuc_exec.c ---- */
+fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb);
+/* Word c as a length in program units (the decimal point rule, rounded to
+ * the least input increment), or as an angle in degrees. */
+double gc_fanuc_length(const gc_interp *g, const gc_fanuc_block *fb, char c);
+double gc_fanuc_angle(const gc_interp *g, const gc_fanuc_block *fb, char c);
+/* P or X of a dwell: seconds. */
+double gc_fanuc_dwell_seconds(const gc_interp *g, const gc_fanuc_block *fb, char c);
+/* The block's end point in the program frame (G90/G91, G16), and that
+ * point in work coordinates (G51 scaling, G68 rotation). */
+void gc_fanuc_target(gc_interp *g, const gc_fanuc_block *fb, double prog_end[3]);
+void gc_fanuc_to_work(const gc_interp *g, const double prog[3], double work[3]);
+void gc_fanuc_from_work(const gc_interp *g, const double work[3], double prog[3]);
+fm_status gc_fanuc_move(gc_interp *g, int rapid, const double prog_end[3]);
+/* The work offset in use (G54-G59 or G54.1 P, plus the external offset and
+ * G52) into g->g5x; the current point keeps its machine position. */
+void gc_fanuc_apply_work_offset(gc_interp *g);
+
+/* ---- gcode_fanuc_cycle.c ---- */
+fm_status gc_fanuc_exec_cycle(gc_interp *g, const gc_fanuc_block *fb, int code, int col);
+
+#endif

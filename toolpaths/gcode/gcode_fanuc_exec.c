@@ -1,0 +1,837 @@
+/* gcode_fanuc_exec.c: executing a Fanuc block: feed, speed, tool and M
+ * codes, plane and units, tool length (G43/G44 H with Fanuc's move of the
+ * offset), work offsets (G54-G59, G54.1 P, G52, G92, G10 L2/L20), the
+ * programmed-point transforms (G16 polar, G51 uniform scaling, G68
+ * rotation), dwells (X seconds, P milliseconds), G27/G28/G30/G53, lines and
+ * arcs (I J K always incremental; R, and Fanuc's rule that a full circle
+ * cannot be given with R). The interpreter's motion output (gcode_motion.c)
+ * turns the work coordinates into machine millimetres.
+ *
+ * Two points are kept: g->pos, where the tool is in work coordinates (as in
+ * the LinuxCNC dialect, shifted by a new tool length offset until the next
+ * move), and fanuc->prog, the programmed point before polar coordinates,
+ * scaling and rotation, from which the next absolute or incremental end point
+ * is computed. */
+#include "gcode_fanuc.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+static double length_increment(const gc_interp *g) { return g->unit == 1.0 ? 0.001 : 0.0001; }
+
+/* Round to the least increment, half away from zero, leaving numbers that
+ * are already on it unchanged (so that 12.345 stays the double it was). */
+static double to_increment(double v, double inc)
+{
+    double r = gc_fanuc_round(v / inc) * inc;
+    return fabs(r - v) <= 1e-9 * inc ? v : r;
+}
+
+double gc_fanuc_length(const gc_interp *g, const gc_fanuc_block *fb, char c)
+{
+    double inc = length_increment(g);
+    double v = fb->b.v[L(c)];
+    if (fb->form[L(c)] == GC_FORM_INTEGER && !g->opt.calculator_input) v *= inc;
+    return to_increment(v, inc);
+}
+
+double gc_fanuc_angle(const gc_interp *g, const gc_fanuc_block *fb, char c)
+{
+    double v = fb->b.v[L(c)];
+    if (fb->form[L(c)] == GC_FORM_INTEGER && !g->opt.calculator_input) v *= 0.001;
+    return to_increment(v, 0.001);
+}
+
+double gc_fanuc_dwell_seconds(const gc_interp *g, const gc_fanuc_block *fb, char c)
+{
+    double v = fb->b.v[L(c)];
+    gc_number_form form = (gc_number_form)fb->form[L(c)];
+    if (c == 'p')
+        /* P is milliseconds (Fanuc); Haas reads P with a decimal point as seconds */
+        return form == GC_FORM_DECIMAL ? v : gc_fanuc_round(v) / 1000.0;
+    /* X: seconds; without a decimal point in the least increment, 1 ms */
+    if (form == GC_FORM_INTEGER && !g->opt.calculator_input) v *= 0.001;
+    return v;
+}
+
+/* ---- transforms: program frame <-> work coordinates ---- */
+
+static void scale_point(const gc_fanuc *f, double p[3])
+{
+    for (int i = 0; i < 3; i++) p[i] = f->scale_center[i] + f->scale * (p[i] - f->scale_center[i]);
+}
+
+void gc_fanuc_to_work(const gc_interp *g, const double prog[3], double work[3])
+{
+    const gc_fanuc *f = g->fanuc;
+    memcpy(work, prog, 3 * sizeof *work);
+    if (!f->scaling && !f->rotation) return;
+    if (f->scaling) scale_point(f, work);
+    if (f->rotation) {
+        int a, b, c;
+        gc_plane_axes(f->rot_plane, &a, &b, &c);
+        double ca = f->rot_center[0], cb = f->rot_center[1];
+        if (f->scaling) {
+            ca = f->scale_center[a] + f->scale * (ca - f->scale_center[a]);
+            cb = f->scale_center[b] + f->scale * (cb - f->scale_center[b]);
+        }
+        double da = work[a] - ca, db = work[b] - cb;
+        work[a] = ca + f->rot_cos * da - f->rot_sin * db;
+        work[b] = cb + f->rot_sin * da + f->rot_cos * db;
+    }
+}
+
+void gc_fanuc_from_work(const gc_interp *g, const double work[3], double prog[3])
+{
+    const gc_fanuc *f = g->fanuc;
+    memcpy(prog, work, 3 * sizeof *prog);
+    if (!f->scaling && !f->rotation) return;
+    if (f->rotation) {
+        int a, b, c;
+        gc_plane_axes(f->rot_plane, &a, &b, &c);
+        double ca = f->rot_center[0], cb = f->rot_center[1];
+        if (f->scaling) {
+            ca = f->scale_center[a] + f->scale * (ca - f->scale_center[a]);
+            cb = f->scale_center[b] + f->scale * (cb - f->scale_center[b]);
+        }
+        double da = prog[a] - ca, db = prog[b] - cb;
+        prog[a] = ca + f->rot_cos * da + f->rot_sin * db;
+        prog[b] = cb - f->rot_sin * da + f->rot_cos * db;
+    }
+    if (f->scaling)
+        for (int i = 0; i < 3; i++)
+            prog[i] = f->scale_center[i] + (prog[i] - f->scale_center[i]) / f->scale;
+}
+
+/* The current point in the program frame after a coordinate change that
+ * does not move the machine (work offsets, G92, G68, G51, units). */
+static void reprogram(gc_interp *g) { gc_fanuc_from_work(g, g->pos, g->fanuc->prog); }
+
+void gc_fanuc_apply_work_offset(gc_interp *g)
+{
+    gc_fanuc *f = g->fanuc;
+    double work[3];
+    gc_fanuc_to_work(g, f->prog, work);
+    for (int i = 0; i < 3; i++) {
+        double table = f->ext_cs ? f->ext_offsets[f->ext_cs - 1][i]
+                                 : g->params[5201 + 20 * g->cs + i];
+        double w = table + g->params[5201 + i] + f->local_offset[i];
+        double shift = g->g5x[i] - w;
+        g->pos[i] += shift;
+        work[i] += shift;
+        g->g5x[i] = w;
+    }
+    /* a pending tool length move stays pending: shift the programmed point
+     * by the same amount rather than recomputing it from pos */
+    gc_fanuc_from_work(g, work, f->prog);
+}
+
+/* ---- end points and moves ---- */
+
+static const char axis_letter[3] = {'x', 'y', 'z'};
+
+void gc_fanuc_target(gc_interp *g, const gc_fanuc_block *fb, double end[3])
+{
+    gc_fanuc *f = g->fanuc;
+    const gc_block *b = &fb->b;
+    int a, bb, c;
+    gc_plane_axes(g->plane, &a, &bb, &c);
+    for (int i = 0; i < 3; i++) {
+        char l = axis_letter[i];
+        if (f->polar && (i == a || i == bb)) continue;
+        if (!b->has[L(l)]) end[i] = f->prog[i];
+        else if (g->absolute) end[i] = gc_fanuc_length(g, fb, l);
+        else end[i] = f->prog[i] + gc_fanuc_length(g, fb, l);
+    }
+    if (f->polar) {
+        char la = axis_letter[a], lb = axis_letter[bb];
+        if (!b->has[L(la)] && !b->has[L(lb)]) {
+            end[a] = f->prog[a];
+            end[bb] = f->prog[bb];
+            return;
+        }
+        /* Fanuc G16: a radius given in G90 is measured from the work zero,
+         * in G91 from the current point; without a radius the last radius
+         * and origin stay. The angle is absolute in G90, added to the last
+         * one in G91. */
+        if (b->has[L(la)]) {
+            f->polar_radius = gc_fanuc_length(g, fb, la);
+            f->polar_origin[0] = g->absolute ? 0.0 : f->prog[a];
+            f->polar_origin[1] = g->absolute ? 0.0 : f->prog[bb];
+        }
+        if (b->has[L(lb)])
+            f->polar_angle = (g->absolute ? 0.0 : f->polar_angle) + gc_fanuc_angle(g, fb, lb);
+        double r = f->polar_radius, ang = f->polar_angle * GC_PI / 180.0;
+        end[a] = f->polar_origin[0] + r * cos(ang);
+        end[bb] = f->polar_origin[1] + r * sin(ang);
+    }
+}
+
+fm_status gc_fanuc_move(gc_interp *g, int rapid, const double prog_end[3])
+{
+    double work[3];
+    gc_fanuc_to_work(g, prog_end, work);
+    memcpy(g->fanuc->prog, prog_end, sizeof g->fanuc->prog);
+    return gc_move_line(g, rapid, work);
+}
+
+static int has_plane_word(const gc_block *b)
+{
+    return b->has[L('x')] || b->has[L('y')] || b->has[L('z')];
+}
+
+/* ---- arcs ---- */
+
+static fm_status exec_arc(gc_interp *g, const gc_fanuc_block *fb, int code, int col)
+{
+    gc_fanuc *f = g->fanuc;
+    const gc_block *b = &fb->b;
+    char name[8];
+    gc_g_name(code, name, sizeof name);
+    int a, bb, c;
+    gc_plane_axes(g->plane, &a, &bb, &c);
+    static const char offl[3] = {'i', 'j', 'k'};
+    char oa = offl[a], ob = offl[bb], oc = offl[c];
+    fm_status st = gc_check_feed(g, name, col);
+    if (st) return st;
+    double end[3], cen[3];
+    gc_fanuc_target(g, fb, end);
+    const double *s = f->prog;
+    double tol = g->unit == 1.0 ? 0.005 : 0.0005; /* as LinuxCNC; Fanuc's is a parameter (3410) */
+    double ca, cb;
+    if (b->has[L('r')]) {
+        /* R wins over I J K (Fanuc) */
+        double radius = gc_fanuc_length(g, fb, 'r');
+        double chord = hypot(end[a] - s[a], end[bb] - s[bb]);
+        if (chord <= 1e-9 * (1 + fabs(radius))) {
+            /* Fanuc: a full circle cannot be given with R; start = end is an
+             * arc of 0 degrees and the tool does not move in the plane */
+            if (end[c] != s[c]) return gc_fanuc_move(g, 0, end);
+            memcpy(f->prog, end, sizeof f->prog);
+            return FM_OK;
+        }
+        double ar = fabs(radius), half = chord / 2;
+        if (ar == 0 || half - ar > tol)
+            return gc_fail(g, FM_ERR_INPUT, b->col[L('r')],
+                           "%s R%g: radius too small to reach the end point; expected |R| >= %.6g",
+                           name, radius, half);
+        if (half > ar) half = ar;
+        double mid_a = (end[a] + s[a]) / 2, mid_b = (end[bb] + s[bb]) / 2;
+        /* positive R: the arc of at most 180 degrees; negative: the longer one */
+        double theta = atan2(end[bb] - s[bb], end[a] - s[a]) +
+                       (((code == GC_G2) == (radius > 0)) ? -GC_PI / 2 : GC_PI / 2);
+        double off = sqrt(ar * ar - half * half);
+        ca = mid_a + off * cos(theta);
+        cb = mid_b + off * sin(theta);
+    } else {
+        if (b->has[L(oc)])
+            return gc_fail(g, FM_ERR_INPUT, b->col[L(oc)],
+                           "%s: %c word in the G%d plane; expected %c and %c for the centre", name,
+                           oc - 32, g->plane, oa - 32, ob - 32);
+        if (!b->has[L(oa)] && !b->has[L(ob)])
+            return gc_fail(g, FM_ERR_INPUT, col,
+                           "%s: no centre; expected %c and/or %c (or R) in the G%d plane", name,
+                           oa - 32, ob - 32, g->plane);
+        /* I J K: from the start point, in G90 and G91 alike */
+        ca = s[a] + (b->has[L(oa)] ? gc_fanuc_length(g, fb, oa) : 0);
+        cb = s[bb] + (b->has[L(ob)] ? gc_fanuc_length(g, fb, ob) : 0);
+        double r0 = hypot(ca - s[a], cb - s[bb]), r1 = hypot(ca - end[a], cb - end[bb]);
+        if (r0 < tol / 10)
+            return gc_fail(g, FM_ERR_INPUT, col, "%s: zero-radius arc (centre on the start point)",
+                           name);
+        double err = fabs(r0 - r1);
+        if (err > tol * 20 || (err > tol && err / fmax(r0, r1) > 0.001))
+            return gc_fail(g, FM_ERR_INPUT, col,
+                           "%s: radius to the end point (%.6g) differs from the radius to the "
+                           "start point (%.6g); expected the same circle", name, r1, r0);
+    }
+    cen[a] = ca;
+    cen[bb] = cb;
+    cen[c] = s[c];
+    double wend[3], wcen[3];
+    gc_fanuc_to_work(g, end, wend);
+    gc_fanuc_to_work(g, cen, wcen);
+    double cab[2] = {wcen[a], wcen[bb]};
+    memcpy(f->prog, end, sizeof f->prog);
+    return gc_move_arc(g, wend, cab, code == GC_G2 ? -1 : 1);
+}
+
+/* ---- modal state ---- */
+
+static void set_units(gc_interp *g, double unit)
+{
+    gc_fanuc *f = g->fanuc;
+    if (unit == g->unit) return;
+    double k = g->unit / unit;
+    for (int i = 0; i < 3; i++) {
+        g->pos[i] *= k;
+        g->g5x[i] *= k;
+        g->g92[i] *= k;
+        g->tlo[i] *= k;
+        f->prog[i] *= k;
+        f->local_offset[i] *= k;
+        f->scale_center[i] *= k;
+    }
+    f->rot_center[0] *= k;
+    f->rot_center[1] *= k;
+    f->polar_radius *= k;
+    f->cycle_z *= k;
+    f->cycle_r *= k;
+    f->level_z *= k;
+    f->level_r *= k;
+    f->polar_origin[0] *= k;
+    f->polar_origin[1] *= k;
+    f->cycle_q *= k;
+    g->cycle_il *= k;
+    g->unit = unit;
+}
+
+static fm_status whole_word(gc_interp *g, const gc_block *b, char c, long lo, long hi, long *out)
+{
+    double v = b->v[L(c)];
+    *out = 0;
+    if (floor(v) != v || v < lo || v > hi)
+        return gc_fail(g, FM_ERR_INPUT, b->col[L(c)], "%c%g: expected a whole number from %ld to %ld",
+                       c - 32, v, lo, hi);
+    *out = (long)v;
+    return FM_OK;
+}
+
+static fm_status tool_length(gc_interp *g, const gc_fanuc_block *fb, int code, int col, int *changed)
+{
+    gc_fanuc *f = g->fanuc;
+    const gc_block *b = &fb->b;
+    fm_status st;
+    *changed = 0;
+    if (b->has[L('h')]) {
+        long h;
+        if ((st = whole_word(g, b, 'h', 0, 999999, &h))) return st;
+        if ((st = gc_check_tool(g, (int)h, b->col[L('h')], "H"))) return st;
+        f->h = (int)h;
+    }
+    if (code != GC_G_NONE) f->tool_length_mode = code;
+    if (code == GC_G_NONE && !b->has[L('h')]) return FM_OK;
+    double len = f->h ? gc_tool_length_mm(g, f->h) / g->unit : 0.0;
+    double nv[3] = {0, 0, 0};
+    if (f->tool_length_mode == GC_G43) nv[2] = len;
+    else if (f->tool_length_mode == GC_G44) nv[2] = -len;
+    (void)col;
+    if (nv[2] != g->tlo[2]) *changed = 1;
+    gc_set_tlo(g, nv);
+    return FM_OK;
+}
+
+static fm_status select_work_offset(gc_interp *g, const gc_fanuc_block *fb, int code, int col)
+{
+    gc_fanuc *f = g->fanuc;
+    const gc_block *b = &fb->b;
+    if (code == GC_G54_1) {
+        long pn;
+        if (!b->has[L('p')])
+            return gc_fail(g, FM_ERR_INPUT, col, "G54.1: P missing; expected G54.1 P1 to P%d",
+                           GC_FANUC_EXT_OFFSETS);
+        fm_status st = whole_word(g, b, 'p', 1, GC_FANUC_EXT_OFFSETS, &pn);
+        if (st) return st;
+        f->ext_cs = (int)pn;
+    } else {
+        f->ext_cs = 0;
+        g->cs = (code - GC_G54) / 10 + 1;
+    }
+    gc_fanuc_apply_work_offset(g);
+    return FM_OK;
+}
+
+static fm_status exec_g10(gc_interp *g, const gc_fanuc_block *fb, int col)
+{
+    gc_fanuc *f = g->fanuc;
+    const gc_block *b = &fb->b;
+    long l, pn;
+    fm_status st;
+    if (!b->has[L('l')])
+        return gc_fail(g, FM_ERR_INPUT, col, "G10: L missing; expected L2 (G54-G59) or L20 (G54.1)");
+    if ((st = whole_word(g, b, 'l', 0, 1000, &l))) return st;
+    if (l >= 10 && l <= 13)
+        return gc_fail(g, FM_ERR_INPUT, b->col[L('l')],
+                       "G10 L%ld: tool offsets come from the tool table (--tools); remove the "
+                       "G10 L%ld block", l, l);
+    if (l != 2 && l != 20)
+        return gc_fail(g, FM_ERR_INPUT, b->col[L('l')],
+                       "G10 L%ld: expected L2 (G54-G59, P0 the external offset) or L20 (G54.1 P)",
+                       l);
+    if (!b->has[L('p')])
+        return gc_fail(g, FM_ERR_INPUT, col, "G10 L%ld: P missing", l);
+    if ((st = whole_word(g, b, 'p', l == 2 ? 0 : 1, l == 2 ? 6 : GC_FANUC_EXT_OFFSETS, &pn)))
+        return st;
+    for (int i = 0; i < 3; i++) {
+        char c = axis_letter[i];
+        if (!b->has[L(c)]) continue;
+        double v = gc_fanuc_length(g, fb, c);
+        double *slot = l == 2 ? &g->params[5201 + 20 * pn + i] : &f->ext_offsets[pn - 1][i];
+        /* G90 sets the offset, G91 adds to it */
+        *slot = g->absolute ? v : *slot + v;
+    }
+    gc_fanuc_apply_work_offset(g);
+    return FM_OK;
+}
+
+static fm_status exec_g92(gc_interp *g, const gc_fanuc_block *fb, int col)
+{
+    const gc_block *b = &fb->b;
+    if (!has_plane_word(b))
+        return gc_fail(g, FM_ERR_INPUT, col, "G92: no axis words; expected X, Y or Z values");
+    if (g->fanuc->rotation || g->fanuc->scaling)
+        return gc_fail(g, FM_ERR_INPUT, col, "G92 in G68 or G51 mode; cancel them first");
+    for (int i = 0; i < 3; i++) {
+        char c = axis_letter[i];
+        if (!b->has[L(c)]) continue;
+        double w = gc_fanuc_length(g, fb, c);
+        g->g92[i] = g->pos[i] + g->g92[i] - w;
+        g->pos[i] = w;
+    }
+    reprogram(g);
+    return FM_OK;
+}
+
+/* G28 / G30: through the intermediate point (the axes given) to the
+ * reference point of those axes; the others stay. */
+static fm_status exec_reference(gc_interp *g, const gc_fanuc_block *fb, int code, int col)
+{
+    gc_fanuc *f = g->fanuc;
+    const gc_block *b = &fb->b;
+    int ref = 0;
+    fm_status st;
+    if (code == GC_G30) {
+        long pn = 2;
+        if (b->has[L('p')] && (st = whole_word(g, b, 'p', 2, 4, &pn))) return st;
+        ref = (int)pn - 1;
+    } else if (b->has[L('p')]) {
+        return gc_fail(g, FM_ERR_INPUT, b->col[L('p')], "G28 P: expected G30 P2-P4 for other "
+                       "reference points");
+    }
+    if (!has_plane_word(b)) return FM_OK; /* no axis: nothing moves */
+    (void)col;
+    double mid[3];
+    gc_fanuc_target(g, fb, mid);
+    if ((st = gc_fanuc_move(g, 1, mid))) return st;
+    double to[3];
+    for (int i = 0; i < 3; i++) {
+        if (b->has[L(axis_letter[i])])
+            to[i] = g->opt.reference_points[ref][i] / g->unit - g->g5x[i] - g->g92[i] - g->tlo[i];
+        else
+            to[i] = g->pos[i];
+    }
+    if ((st = gc_move_line(g, 1, to))) return st;
+    reprogram(g);
+    (void)f;
+    return FM_OK;
+}
+
+static fm_status exec_g53(gc_interp *g, const gc_fanuc_block *fb, int col)
+{
+    const gc_block *b = &fb->b;
+    if (!g->absolute)
+        return gc_fail(g, FM_ERR_INPUT, col, "G53 in incremental mode (G91); expected G90");
+    double to[3];
+    for (int i = 0; i < 3; i++) {
+        char c = axis_letter[i];
+        to[i] = b->has[L(c)] ? gc_fanuc_length(g, fb, c) - g->g5x[i] - g->g92[i] - g->tlo[i]
+                             : g->pos[i];
+    }
+    fm_status st = gc_move_line(g, 1, to); /* G53 positions at rapid traverse */
+    if (st) return st;
+    reprogram(g);
+    return FM_OK;
+}
+
+static fm_status exec_rotation(gc_interp *g, const gc_fanuc_block *fb, int col)
+{
+    gc_fanuc *f = g->fanuc;
+    const gc_block *b = &fb->b;
+    int a, bb, c;
+    gc_plane_axes(g->plane, &a, &bb, &c);
+    if (!b->has[L('r')])
+        return gc_fail(g, FM_ERR_INPUT, col, "G68: R missing; expected the angle R in degrees");
+    double cen[2];
+    int ax[2] = {a, bb};
+    for (int k = 0; k < 2; k++) {
+        char l = axis_letter[ax[k]];
+        if (!b->has[L(l)]) cen[k] = f->prog[ax[k]];
+        else if (g->absolute) cen[k] = gc_fanuc_length(g, fb, l);
+        else cen[k] = f->prog[ax[k]] + gc_fanuc_length(g, fb, l);
+    }
+    f->rotation = 1;
+    f->rot_plane = g->plane;
+    f->rot_center[0] = cen[0];
+    f->rot_center[1] = cen[1];
+    f->rot_angle = gc_fanuc_angle(g, fb, 'r');
+    f->rot_cos = cos(f->rot_angle * GC_PI / 180.0);
+    f->rot_sin = sin(f->rot_angle * GC_PI / 180.0);
+    reprogram(g);
+    return FM_OK;
+}
+
+static fm_status exec_scaling(gc_interp *g, const gc_fanuc_block *fb, int col)
+{
+    gc_fanuc *f = g->fanuc;
+    const gc_block *b = &fb->b;
+    double k = 0;
+    int have = 0;
+    if (b->has[L('i')] || b->has[L('j')] || b->has[L('k')]) {
+        /* per-axis factors: only accepted when they are all the same */
+        const char *ijk = "ijk";
+        for (int i = 0; i < 3; i++) {
+            if (!b->has[L(ijk[i])])
+                return gc_fail(g, FM_ERR_INPUT, col,
+                               "G51 with I J K: per-axis scaling is not supported; expected one "
+                               "factor P (or I, J and K all equal)");
+            double v = b->v[L(ijk[i])];
+            if (fb->form[L(ijk[i])] != GC_FORM_DECIMAL) v *= 0.001;
+            if (have && v != k)
+                return gc_fail(g, FM_ERR_INPUT, b->col[L(ijk[i])],
+                               "G51 I J K differ: per-axis scaling is not supported; expected one "
+                               "factor P");
+            k = v;
+            have = 1;
+        }
+    }
+    if (b->has[L('p')]) {
+        double v = b->v[L('p')];
+        /* P without a decimal point counts 0.001 (Fanuc's default unit) */
+        if (fb->form[L('p')] != GC_FORM_DECIMAL) v *= 0.001;
+        if (have && v != k)
+            return gc_fail(g, FM_ERR_INPUT, b->col[L('p')], "G51: P and I J K differ");
+        k = v;
+        have = 1;
+    }
+    if (!have)
+        return gc_fail(g, FM_ERR_INPUT, col, "G51: scaling factor missing; expected P");
+    if (!(k > 0) || k > 1e6)
+        return gc_fail(g, FM_ERR_INPUT, col,
+                       "G51: factor %g; expected a positive factor (mirroring is not supported)", k);
+    if (g->motion >= GC_G73)
+        return gc_fail(g, FM_ERR_INPUT, col, "G51 in a canned cycle mode; cancel it (G80) first");
+    if (f->rotation)
+        return gc_fail(g, FM_ERR_INPUT, col, "G51 in G68 mode; Fanuc scales first: give G51 "
+                       "before G68");
+    for (int i = 0; i < 3; i++) {
+        char l = axis_letter[i];
+        if (!b->has[L(l)]) f->scale_center[i] = f->prog[i];
+        else if (g->absolute) f->scale_center[i] = gc_fanuc_length(g, fb, l);
+        else f->scale_center[i] = f->prog[i] + gc_fanuc_length(g, fb, l);
+    }
+    f->scale = k;
+    f->scaling = 1;
+    reprogram(g);
+    return FM_OK;
+}
+
+/* ---- M codes ---- */
+
+typedef struct mcodes {
+    int call;            /* 97, 98 or 0 */
+    int call_col;
+    int ret, ret_col;    /* M99 */
+    int end;             /* M2 / M30 */
+} mcodes;
+
+static fm_status scan_m(gc_interp *g, const gc_block *b, mcodes *mc)
+{
+    gc_fanuc *f = g->fanuc;
+    memset(mc, 0, sizeof *mc);
+    for (int i = 0; i < b->nm; i++) {
+        int m = b->m[i];
+        f->last_m = m;
+        switch (m) {
+        case 97: case 98:
+            if (mc->call || mc->ret)
+                return gc_fail(g, FM_ERR_INPUT, b->mcol[i],
+                               "M%d with another call or return on this line; expected one", m);
+            mc->call = m;
+            mc->call_col = b->mcol[i];
+            break;
+        case 99:
+            if (mc->call)
+                return gc_fail(g, FM_ERR_INPUT, b->mcol[i],
+                               "M99 with M97/M98 on this line; expected one");
+            mc->ret = 1;
+            mc->ret_col = b->mcol[i];
+            break;
+        case 2: case 30: mc->end = 1; break;
+        case 198:
+            return gc_fail(g, FM_ERR_INPUT, b->mcol[i],
+                           "M198: calling a program from external memory is not supported; use "
+                           "M98 with the file on the subroutine path");
+        default: break;
+        }
+    }
+    return FM_OK;
+}
+
+static int has_m(const gc_block *b, int m)
+{
+    for (int i = 0; i < b->nm; i++)
+        if (b->m[i] == m) return 1;
+    return 0;
+}
+
+/* ---- the block ---- */
+
+fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
+{
+    gc_fanuc *f = g->fanuc;
+    gc_block *b = &fb->b;
+    fm_status st;
+    int col = 0, code;
+    mcodes mc;
+    if ((st = scan_m(g, b, &mc))) return st;
+
+    if (fb->g65) {
+        /* G65 P<program> L<repeats> arguments: a macro call, nothing else */
+        long pn, reps = 1;
+        if (!b->has[L('p')])
+            return gc_fail(g, FM_ERR_INPUT, fb->g65_col, "G65: P missing; expected G65 P<program>");
+        if ((st = whole_word(g, b, 'p', 0, 99999999, &pn))) return st;
+        if (b->has[L('l')] && (st = whole_word(g, b, 'l', 0, 999999999, &reps))) return st;
+        return gc_fanuc_call(g, GC_CALL_G65, pn, reps, fb->args, fb->g65_col);
+    }
+
+    /* feed mode, feed, speed, tool, tool change, spindle, coolant */
+    code = gc_block_g(b, GC_GROUP_FEED_MODE, NULL);
+    if (code == GC_G93) g->inverse_time = 1;
+    else if (code == GC_G94) g->inverse_time = 0;
+    if (b->has[L('f')]) {
+        if (b->v[L('f')] < 0)
+            return gc_fail(g, FM_ERR_INPUT, b->col[L('f')], "F%g: expected a feed rate >= 0",
+                           b->v[L('f')]);
+        g->feed = b->v[L('f')];
+    }
+    if (b->has[L('s')]) {
+        if (b->v[L('s')] < 0)
+            return gc_fail(g, FM_ERR_INPUT, b->col[L('s')], "S%g: expected a speed >= 0",
+                           b->v[L('s')]);
+        g->speed = b->v[L('s')];
+    }
+    if (b->has[L('d')]) {
+        long d;
+        if ((st = whole_word(g, b, 'd', 0, 999999, &d))) return st;
+        f->d = (int)d;
+    }
+    if (b->has[L('t')]) {
+        long t;
+        if ((st = whole_word(g, b, 't', 0, 99999999, &t))) return st;
+        if ((st = gc_check_tool(g, (int)t, b->col[L('t')], "T"))) return st;
+        g->selected_tool = (int)t;
+    }
+    if (has_m(b, 6)) {
+        g->tool = g->selected_tool;
+        g->spindle_dir = 0; /* the spindle stops for a tool change */
+    }
+    if (has_m(b, 3)) g->spindle_dir = 1;
+    if (has_m(b, 4)) g->spindle_dir = -1;
+    if (has_m(b, 5) || has_m(b, 19)) g->spindle_dir = 0;
+    if (has_m(b, 7)) g->coolant |= 1;
+    if (has_m(b, 8)) g->coolant |= 2;
+    if (has_m(b, 9)) g->coolant = 0;
+
+    /* plane, units */
+    code = gc_block_g(b, GC_GROUP_PLANE, &col);
+    if (code != GC_G_NONE) {
+        if (f->rotation && code / 10 != (int)f->rot_plane)
+            return gc_fail(g, FM_ERR_INPUT, col, "plane change in G68 mode; cancel G68 first");
+        g->plane = (gc_plane)(code / 10);
+    }
+    code = gc_block_g(b, GC_GROUP_UNITS, NULL);
+    if (code == GC_G20) set_units(g, GC_INCH);
+    else if (code == GC_G21) set_units(g, 1.0);
+
+    /* distance mode, return mode, polar coordinates */
+    code = gc_block_g(b, GC_GROUP_DISTANCE, NULL);
+    if (code == GC_G90) g->absolute = 1;
+    else if (code == GC_G91) g->absolute = 0;
+    code = gc_block_g(b, GC_GROUP_RETURN_MODE, NULL);
+    if (code == GC_G98) g->retract_r = 0;
+    else if (code == GC_G99) g->retract_r = 1;
+    code = gc_block_g(b, GC_GROUP_POLAR, NULL);
+    if (code == GC_G16 && !f->polar) {
+        int a, bb, c;
+        gc_plane_axes(g->plane, &a, &bb, &c);
+        f->polar = 1;
+        f->polar_radius = hypot(f->prog[a], f->prog[bb]);
+        f->polar_angle = atan2(f->prog[bb], f->prog[a]) * 180.0 / GC_PI;
+        f->polar_origin[0] = f->polar_origin[1] = 0;
+    } else if (code == GC_G15) {
+        f->polar = 0;
+    }
+
+    /* dwell */
+    int nonmodal = gc_block_g(b, GC_GROUP_NON_MODAL, &col);
+    int nonmodal_col = col;
+    if (nonmodal == GC_G4) {
+        double sec = 0;
+        if (b->has[L('p')] && b->has[L('x')])
+            return gc_fail(g, FM_ERR_INPUT, nonmodal_col, "G04 with both X and P; expected one");
+        if (b->has[L('p')]) sec = gc_fanuc_dwell_seconds(g, fb, 'p');
+        else if (b->has[L('x')]) sec = gc_fanuc_dwell_seconds(g, fb, 'x');
+        else if (b->has[L('u')]) sec = b->v[L('u')];
+        if (sec < 0)
+            return gc_fail(g, FM_ERR_INPUT, nonmodal_col, "G04: negative dwell time %g s", sec);
+        if ((st = gc_dwell(g, sec))) return st;
+    }
+
+    /* motion mode of this block */
+    int mcode = gc_block_g(b, GC_GROUP_MOTION, &col);
+    int mcol = col;
+    int ccode = gc_block_g(b, GC_GROUP_CYCLE, &col);
+    int ccol = col;
+    if (mcode != GC_G_NONE && ccode != GC_G_NONE && ccode != GC_G80) {
+        char a1[8], a2[8];
+        gc_g_name(mcode, a1, sizeof a1);
+        gc_g_name(ccode, a2, sizeof a2);
+        return gc_fail(g, FM_ERR_INPUT, ccol, "%s and %s on one line; expected one motion", a1, a2);
+    }
+    int rotation = gc_block_g(b, GC_GROUP_ROTATION, &col);
+    int rotation_col = col;
+    int scaling = gc_block_g(b, GC_GROUP_SCALING, &col);
+    int scaling_col = col;
+    /* codes whose X Y Z are not this block's end point */
+    int other_uses_axes = nonmodal == GC_G4 || nonmodal == GC_G10 || nonmodal == GC_G27 ||
+                          nonmodal == GC_G28 || nonmodal == GC_G30 || nonmodal == GC_G52 ||
+                          nonmodal == GC_G53 || nonmodal == GC_G92 || rotation == GC_G68 ||
+                          scaling == GC_G51;
+    if (mcode != GC_G_NONE) {
+        f->group1 = mcode / 10;
+        g->motion = (gc_gcode)mcode;
+        f->cycle_data = 0;
+        g->cycle_il_flag = 0;
+    }
+    if (ccode == GC_G80) {
+        g->motion = (gc_gcode)(f->group1 * 10);
+        f->cycle_data = 0;
+        g->cycle_il_flag = 0;
+    } else if (ccode != GC_G_NONE) {
+        if (f->scaling)
+            return gc_fail(g, FM_ERR_INPUT, ccol,
+                           "canned cycle in G51 scaling mode is not supported; cancel G51 first");
+    }
+    int axes = has_plane_word(b);
+    int motion = ccode != GC_G_NONE && ccode != GC_G80 ? ccode : (int)g->motion;
+    int is_arc = motion == GC_G2 || motion == GC_G3;
+    int will_move = !other_uses_axes &&
+                    (axes || (is_arc && (b->has[L('i')] || b->has[L('j')] || b->has[L('k')] ||
+                                         b->has[L('r')])) ||
+                     (motion >= GC_G73 && b->has[L('r')]));
+
+    /* tool length: Fanuc moves the axis by the new offset in this block */
+    int tl_code = gc_block_g(b, GC_GROUP_TOOL_LENGTH, &col), tl_changed = 0;
+    if ((st = tool_length(g, fb, tl_code, col, &tl_changed))) return st;
+    if (tl_changed && !will_move) {
+        int rapid = f->group1 == 0 || motion >= GC_G73;
+        if (!rapid && (st = gc_check_feed(g, "tool length offset move", col))) return st;
+        if ((st = gc_fanuc_move(g, rapid, f->prog))) return st;
+    }
+
+    /* work offsets */
+    code = gc_block_g(b, GC_GROUP_COORD_SYSTEM, &col);
+    if (code != GC_G_NONE && (st = select_work_offset(g, fb, code, col))) return st;
+
+    /* scaling and rotation (their axis words are centres) */
+    if (scaling == GC_G50) {
+        f->scaling = 0;
+        reprogram(g);
+    } else if (scaling == GC_G51 && (st = exec_scaling(g, fb, scaling_col))) {
+        return st;
+    }
+    if (rotation == GC_G69) {
+        f->rotation = 0;
+        reprogram(g);
+    } else if (rotation == GC_G68 && (st = exec_rotation(g, fb, rotation_col))) {
+        return st;
+    }
+
+    /* non-modal codes */
+    switch (nonmodal) {
+    case GC_G10: if ((st = exec_g10(g, fb, nonmodal_col))) return st; break;
+    case GC_G27: {
+        double to[3];
+        gc_fanuc_target(g, fb, to);
+        if ((st = gc_fanuc_move(g, 1, to))) return st;
+        break;
+    }
+    case GC_G28: case GC_G30:
+        if ((st = exec_reference(g, fb, nonmodal, nonmodal_col))) return st;
+        break;
+    case GC_G52:
+        for (int i = 0; i < 3; i++)
+            if (b->has[L(axis_letter[i])])
+                f->local_offset[i] = gc_fanuc_length(g, fb, axis_letter[i]);
+        gc_fanuc_apply_work_offset(g);
+        break;
+    case GC_G53: if ((st = exec_g53(g, fb, nonmodal_col))) return st; break;
+    case GC_G92: if ((st = exec_g92(g, fb, nonmodal_col))) return st; break;
+    default: break;
+    }
+
+    /* motion */
+    if (will_move) {
+        if (mcol == 0) mcol = ccode != GC_G_NONE ? ccol : 0;
+        if (!mcol) {
+            int best = 0;
+            for (int i = 0; i < 26; i++)
+                if (b->has[i] && (!best || b->col[i] < best)) best = b->col[i];
+            mcol = best;
+        }
+        if (motion == GC_G0 || motion == GC_G1) {
+            if (motion == GC_G1) {
+                if ((st = gc_check_feed(g, "G01", mcol))) return st;
+                if (g->inverse_time && !b->has[L('f')])
+                    return gc_fail(g, FM_ERR_INPUT, mcol,
+                                   "G01 in inverse time (G93) without F; expected an F word on "
+                                   "every feed line");
+            }
+            double end[3];
+            gc_fanuc_target(g, fb, end);
+            if ((st = gc_fanuc_move(g, motion == GC_G0, end))) return st;
+        } else if (is_arc) {
+            if (g->inverse_time && !b->has[L('f')])
+                return gc_fail(g, FM_ERR_INPUT, mcol,
+                               "G0%d in inverse time (G93) without F; expected an F word on every "
+                               "feed line", motion / 10);
+            if ((st = exec_arc(g, fb, motion, mcol))) return st;
+        } else if (motion >= GC_G73 && motion != GC_G80) {
+            if ((st = gc_fanuc_exec_cycle(g, fb, motion, mcol))) return st;
+        }
+    } else if (ccode != GC_G_NONE && ccode != GC_G80) {
+        /* a cycle code without a position: its data are kept for later blocks */
+        if ((st = gc_fanuc_exec_cycle(g, fb, ccode, ccol))) return st;
+    }
+    for (int i = 0; i < 3; i++) f->block_end[i] = g->pos[i];
+
+    /* calls, returns, stops */
+    if (mc.call) {
+        long pn, reps = 1;
+        if (!b->has[L('p')])
+            return gc_fail(g, FM_ERR_INPUT, mc.call_col, "M%d: P missing; expected M%d P<%s>",
+                           mc.call, mc.call, mc.call == 98 ? "program" : "sequence number");
+        if ((st = whole_word(g, b, 'p', 0, 99999999, &pn))) return st;
+        if (b->has[L('l')]) {
+            if ((st = whole_word(g, b, 'l', 0, 9999, &reps))) return st;
+        } else if (mc.call == 98 && pn > 9999) {
+            /* Fanuc: M98 P<repeats><4-digit program>, e.g. P30010 = O0010 three times */
+            reps = pn / 10000;
+            pn %= 10000;
+        }
+        return gc_fanuc_call(g, mc.call == 98 ? GC_CALL_M98 : GC_CALL_M97, pn, reps, NULL,
+                             mc.call_col);
+    }
+    if (mc.ret) {
+        long pn = 0;
+        if (b->has[L('p')] && (st = whole_word(g, b, 'p', 0, 99999999, &pn))) return st;
+        return gc_fanuc_return(g, b->has[L('p')], pn, mc.ret_col);
+    }
+    if (mc.end) {
+        g->ended = 1;
+        g->stop = 1;
+    }
+    return FM_OK;
+}
