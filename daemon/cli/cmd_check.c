@@ -15,6 +15,7 @@
 #include "check/check.h"
 #include "runner/check_pass.h"
 #include "commands.h"
+#include "toolpaths/gcode/gcode.h"
 #include "runner/findings_json.h"
 #include "runner/job.h"
 
@@ -28,6 +29,8 @@ static void usage(FILE *out)
             "                      [--machine FILE.json] [--clearance MM] [--report FILE]\n"
             "                      [--voxel MM] [--tolerance MM] [--rapid-clearance MM]\n"
             "                      [--max-ramp DEG] [--rapid-rate MM_PER_MIN]\n"
+            "                      [--dialect linuxcnc|fanuc] [--subroutine-path DIRS]\n"
+            "                      [--calculator-input]\n"
             "\n"
             "PROGRAM      G-code, or a parametric trajectory (.json)\n"
             "SPEC         box:X0,Y0,Z0,X1,Y1,Z1 | cylinder:X,Y,Z0,Z1,R | FILE.hf | FILE.stl | FILE.vdb\n"
@@ -41,6 +44,9 @@ static void usage(FILE *out)
             "--max-ramp   steepest descent for tools that cannot cut at the centre (default 3 deg)\n"
             "--voxel      the check's voxel edge (default %.1f mm)\n"
             "--report     findings JSON to this file instead of standard output\n"
+            "--dialect    the G-code's dialect (default linuxcnc; docs/gcode.md)\n"
+            "--subroutine-path  ':'-separated folders of subprogram files (Fanuc O1234.nc)\n"
+            "--calculator-input Fanuc: X5 is 5 mm, not 0.005 (DPI / Haas setting 162)\n"
             "Exit status: 0 clean, 1 findings, 2 bad input, 3 resource limit, 4 I/O error.\n",
             CHECK_DEFAULT_VOXEL);
 }
@@ -117,6 +123,9 @@ int fm_cmd_check(int argc, char **argv)
             }
             spec.program_path = a;
             continue;
+        } else if (!strcmp(a, "--calculator-input")) {
+            spec.calculator_input = 1;
+            continue;
         }
         if (!v) {
             fprintf(stderr, "frepmill check: %s needs a value\n", a);
@@ -141,6 +150,15 @@ int fm_cmd_check(int argc, char **argv)
             machine_path = v;
         } else if (!strcmp(a, "--report")) {
             report_path = v;
+        } else if (!strcmp(a, "--dialect")) {
+            fm_gcode_dialect dialect;
+            if (!fm_gcode_dialect_parse(v, &dialect)) {
+                fprintf(stderr, "frepmill check: --dialect %s: expected linuxcnc or fanuc\n", v);
+                return 2;
+            }
+            spec.dialect = v;
+        } else if (!strcmp(a, "--subroutine-path")) {
+            spec.subroutine_path = v;
         } else if (!strcmp(a, "--clearance") && parse_double(v, &d) && d >= 0) {
             opt.clearance_mm[FM_CHECK_PART_SHANK] = d;
             opt.clearance_mm[FM_CHECK_PART_HOLDER] = d;
@@ -183,6 +201,7 @@ int fm_cmd_check(int argc, char **argv)
             return 2;
         }
         if (opt.machine.rapid_rate > 0) spec.rapid_rate = opt.machine.rapid_rate;
+        memcpy(spec.reference_points, opt.machine.reference_points, sizeof spec.reference_points);
     }
     if (rapid_rate > 0) spec.rapid_rate = rapid_rate;
 

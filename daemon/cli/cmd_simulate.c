@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "commands.h"
+#include "toolpaths/gcode/gcode.h"
 #include "runner/job.h"
 #include "runner/report_json.h"
 #include "runner/outputs.h"
@@ -27,6 +28,8 @@ static void usage(FILE *out)
             "                         [--rapid-rate MM_PER_MIN] [--batch DIAMETERS]\n"
             "                         [--check [--fixture FILE]... [--machine FILE.json]]\n"
             "                         [--png FILE] [--png-size WxH] [--color depth|tool|none]\n"
+            "                         [--dialect linuxcnc|fanuc] [--subroutine-path DIRS]\n"
+            "                         [--calculator-input]\n"
             "\n"
             "PROGRAM   G-code, or a parametric trajectory (.json)\n"
             "SPEC      box:X0,Y0,Z0,X1,Y1,Z1 | cylinder:X,Y,Z0,Z1,R | FILE.hf | FILE.stl | FILE.vdb\n"
@@ -39,6 +42,10 @@ static void usage(FILE *out)
             "--png     a shaded isometric picture with the toolpath (same as --out FILE.png)\n"
             "--color   mesh and picture colours: depth below the stock top (default), the tool\n"
             "          that cut last, or none\n"
+            "--dialect the G-code's dialect (default linuxcnc; docs/gcode.md)\n"
+            "--subroutine-path  ':'-separated folders of subprogram files (Fanuc O1234.nc)\n"
+            "--calculator-input Fanuc: X5 is 5 mm, not 0.005 (DPI / Haas setting 162)\n"
+            "--machine's reference_points are Fanuc's G28/G30 reference points\n"
             "Exit status: 0 success, 2 bad input, 3 resource limit, 4 I/O error.\n",
             fm_output_formats());
 }
@@ -138,6 +145,9 @@ int fm_cmd_simulate(int argc, char **argv)
         } else if (!strcmp(a, "--check")) {
             want_check = 1;
             continue;
+        } else if (!strcmp(a, "--calculator-input")) {
+            spec.calculator_input = 1;
+            continue;
         } else if (a[0] != '-' || !a[1]) {
             if (spec.program_path) {
                 fprintf(stderr, "frepmill simulate: more than one program given ('%s' and '%s')\n",
@@ -198,6 +208,15 @@ int fm_cmd_simulate(int argc, char **argv)
             fixtures[fixture_count++] = v;
         } else if (!strcmp(a, "--machine")) {
             machine_path = v;
+        } else if (!strcmp(a, "--dialect")) {
+            fm_gcode_dialect dialect;
+            if (!fm_gcode_dialect_parse(v, &dialect)) {
+                fprintf(stderr, "frepmill simulate: --dialect %s: expected linuxcnc or fanuc\n", v);
+                return 2;
+            }
+            spec.dialect = v;
+        } else if (!strcmp(a, "--subroutine-path")) {
+            spec.subroutine_path = v;
         } else if (!strcmp(a, "--voxel") && parse_double(v, &d) && d > 0) {
             spec.stock.voxel_mm = d;
         } else if (!strcmp(a, "--band") && parse_double(v, &d) && d >= 2 && d <= 32) {
@@ -251,6 +270,12 @@ int fm_cmd_simulate(int argc, char **argv)
             cst = fm_check_machine_load(machine_path, &in.options.machine, &cerr);
             if (cst == FM_OK && in.options.machine.rapid_rate > 0 && spec.rapid_rate <= 0)
                 in.spec.rapid_rate = in.options.machine.rapid_rate;
+            if (cst == FM_OK) {
+                memcpy(spec.reference_points, in.options.machine.reference_points,
+                       sizeof spec.reference_points);
+                memcpy(in.spec.reference_points, spec.reference_points,
+                       sizeof spec.reference_points);
+            }
         }
         fm_check *check = NULL;
         if (cst == FM_OK) cst = fm_check_pass_run(&in, &check, NULL, &cerr);

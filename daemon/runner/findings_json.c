@@ -114,10 +114,27 @@ fm_status fm_check_machine_from_json(json_t *root, const char *path, fm_check_ma
                 st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "start: expected [x, y, z] in mm");
                 goto done;
             }
+        } else if (!strcmp(key, "reference_points")) {
+            size_t n = json_is_array(val) ? json_array_size(val) : 0;
+            int ok = n >= 1 && n <= 4;
+            for (size_t i = 0; ok && i < n; i++) {
+                json_t *p = json_array_get(val, i);
+                ok = json_is_array(p) && json_array_size(p) == 3 &&
+                     number(json_array_get(p, 0), &m->reference_points[i][0]) &&
+                     number(json_array_get(p, 1), &m->reference_points[i][1]) &&
+                     number(json_array_get(p, 2), &m->reference_points[i][2]);
+            }
+            if (!ok) {
+                st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                 "reference_points: expected 1 to 4 points [x, y, z] in mm (G28, "
+                                 "then G30 P2-P4)");
+                goto done;
+            }
+            m->reference_point_count = (int)n;
         } else if (strcmp(key, "units") && strcmp(key, "name") && strcmp(key, "comment")) {
             st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
-                             "unknown member \"%s\" (limits, rapid_rate, start, units, name, "
-                             "comment)",
+                             "unknown member \"%s\" (limits, rapid_rate, start, reference_points, "
+                             "units, name, comment)",
                              key);
             goto done;
         }

@@ -339,6 +339,12 @@ static fm_status run_program(const fm_job_spec *spec, const fm_tool_table *tools
     gopt.tools = tools;
     gopt.probe = probe;
     gopt.probe_user = user;
+    if (spec->dialect && !fm_gcode_dialect_parse(spec->dialect, &gopt.dialect))
+        return fm_error_set(err, FM_ERR_INPUT, "dialect '%s': expected linuxcnc or fanuc",
+                            spec->dialect);
+    gopt.subroutine_path = spec->subroutine_path;
+    memcpy(gopt.reference_points, spec->reference_points, sizeof gopt.reference_points);
+    gopt.calculator_input = spec->calculator_input;
     if (spec->program_path)
         return fm_gcode_run_file(spec->program_path, &gopt, sink, user, NULL, err);
     return fm_gcode_run_string(spec->program_text, spec->program_length,

@@ -50,6 +50,14 @@ typedef struct fm_job_spec {
      * interpreted from the start, so modal state is right). */
     fm_stock *resume_stock;
     long skip_motions;
+
+    /* G-code: "linuxcnc" (NULL: the default) or "fanuc" (docs/gcode.md),
+     * the folders of subprogram files (':'-separated), and Fanuc's
+     * reference points for G28/G30 (machine mm; all zero: the origin). */
+    const char *dialect;
+    const char *subroutine_path;
+    double reference_points[4][3];
+    int calculator_input;     /* Fanuc: X5 is 5 mm, not 0.005 */
 } fm_job_spec;
 
 void fm_job_spec_default(fm_job_spec *spec);

@@ -52,6 +52,10 @@ typedef struct fm_check_machine {
     double limit_lo[3], limit_hi[3];
     double start[3];         /* default: the machine origin */
     double rapid_rate;       /* mm/min; 0: not given (for the caller's job spec) */
+    /* Fanuc G28/G30's 1st-4th reference points (mm; not given: the origin),
+     * for the caller's job spec; the check itself does not use them. */
+    double reference_points[4][3];
+    int reference_point_count;
 } fm_check_machine;
 
 typedef struct fm_check_options {

@@ -26,7 +26,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     tools[1].length_offset = -3;
     fm_gcode_options opt;
     fm_gcode_options_default(&opt);
-    opt.max_iterations = 20000; /* keep each run short; the limit itself is what we test */
+    opt.max_iterations = 5000; /* keep each run short; the limit itself is what we test */
     opt.max_program_bytes = 1 << 20;
     opt.tools = (size & 1) ? &table : NULL;
     if (size > 0 && (data[0] == 0 || data[0] == 1)) {

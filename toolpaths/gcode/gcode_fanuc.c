@@ -23,6 +23,7 @@
 static void use_text(gc_interp *g, int t)
 {
     const gc_fanuc_text *x = &g->fanuc->texts[t];
+    g->fanuc->cur_text = t;
     g->text = x->text;
     g->len = x->len;
     g->line_start = x->line_start;
@@ -476,6 +477,45 @@ static int loop_statement(gc_interp *g, size_t idx, int *m)
     return kind;
 }
 
+/* Where the loop statement on the current line jumps: dir +1 (a WHILE
+ * whose condition fails) past its END m, dir -1 (an END m) to its DO m. The
+ * scan runs once per line; later turns of the loop read the answer. */
+static fm_status loop_target(gc_interp *g, int m, int dir, int col, size_t *to)
+{
+    gc_fanuc *f = g->fanuc;
+    gc_fanuc_text *x = &f->texts[f->cur_text];
+    if (!x->loop_jump) {
+        x->loop_jump = calloc(x->nlines + 1, sizeof *x->loop_jump);
+        if (!x->loop_jump) return fm_error_set(g->err, FM_ERR_LIMIT, "out of memory");
+    }
+    size_t cur = g->cur;
+    if (x->loop_jump[cur]) {
+        *to = x->loop_jump[cur] - 1;
+        return FM_OK;
+    }
+    const gc_fanuc_program *pr = &f->programs[f->cur_program];
+    if (dir > 0) {
+        for (size_t i = cur + 1; i < pr->end; i++) {
+            int mm;
+            if (loop_statement(g, i, &mm) == LOOP_END && mm == m) {
+                *to = i + 1;
+                x->loop_jump[cur] = *to + 1;
+                return FM_OK;
+            }
+        }
+        return gc_fail(g, FM_ERR_INPUT, col, "WHILE [..] DO %d without a matching END %d", m, m);
+    }
+    for (size_t i = cur; i-- > pr->first;) {
+        int mm;
+        if (loop_statement(g, i, &mm) == LOOP_DO && mm == m) {
+            *to = i;
+            x->loop_jump[cur] = *to + 1;
+            return FM_OK;
+        }
+    }
+    return gc_fail(g, FM_ERR_INPUT, col, "END %d without a matching DO %d before it", m, m);
+}
+
 static fm_status loop_id(gc_interp *g, size_t *p, int *m)
 {
     const char *s = g->ln.s;
@@ -549,7 +589,6 @@ static fm_status condition(gc_interp *g, size_t *p, int *truth)
  * *st set), 0 if the line is an NC block. */
 static int macro_statement(gc_interp *g, size_t p, fm_status *st)
 {
-    gc_fanuc *f = g->fanuc;
     const char *s = g->ln.s;
     int col = gc_col(&g->ln, p);
     int truth = 0, m = 0;
@@ -599,15 +638,8 @@ static int macro_statement(gc_interp *g, size_t p, fm_status *st)
         if ((*st = loop_id(g, &p, &m))) return 1;
         if (!truth) {
             /* past the matching END m */
-            const gc_fanuc_program *pr = &f->programs[f->cur_program];
-            for (size_t i = g->cur + 1; i < pr->end; i++) {
-                int mm;
-                if (loop_statement(g, i, &mm) == LOOP_END && mm == m) {
-                    jump(g, i + 1);
-                    return 1;
-                }
-            }
-            *st = gc_fail(g, FM_ERR_INPUT, col, "WHILE [..] DO %d without a matching END %d", m, m);
+            size_t to;
+            if (!(*st = loop_target(g, m, +1, col, &to))) jump(g, to);
         }
         return 1;
     }
@@ -619,16 +651,10 @@ static int macro_statement(gc_interp *g, size_t p, fm_status *st)
     if (!strncmp(s + p, "end", 3) && s[p + 3] >= '0' && s[p + 3] <= '9') {
         p += 3;
         if ((*st = loop_id(g, &p, &m))) return 1;
-        const gc_fanuc_program *pr = &f->programs[f->cur_program];
-        for (size_t i = g->cur; i-- > pr->first;) {
-            int mm;
-            if (loop_statement(g, i, &mm) == LOOP_DO && mm == m) {
-                if ((*st = count_iteration(g, col))) return 1;
-                jump(g, i);
-                return 1;
-            }
-        }
-        *st = gc_fail(g, FM_ERR_INPUT, col, "END %d without a matching DO %d before it", m, m);
+        size_t to;
+        if ((*st = loop_target(g, m, -1, col, &to))) return 1;
+        if ((*st = count_iteration(g, col))) return 1;
+        jump(g, to);
         return 1;
     }
     return 0;
@@ -771,10 +797,12 @@ void gc_fanuc_free(gc_interp *g)
 {
     gc_fanuc *f = g->fanuc;
     if (!f) return;
+    free(f->texts[0].loop_jump);
     for (int i = 1; i < f->ntexts; i++) {
         free(f->texts[i].name);
         free(f->texts[i].owned);
         free(f->texts[i].line_start);
+        free(f->texts[i].loop_jump);
     }
     for (int i = 0; i < f->nprograms; i++) free(f->programs[i].seq);
     free(f->programs);

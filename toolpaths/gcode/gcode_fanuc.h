@@ -39,6 +39,9 @@ typedef struct gc_fanuc_text {
     size_t *line_start;  /* nlines + 1 offsets */
     size_t nlines;
     char *owned;         /* the text, when loaded here */
+    /* the line a loop statement jumps to, found once by scanning: END m ->
+     * its DO m, WHILE [..] DO m -> past its END m (0: not looked up yet) */
+    size_t *loop_jump;
 } gc_fanuc_text;
 
 /* A program of a text: from its O line (or the text's start) to the next O
@@ -71,6 +74,7 @@ typedef struct gc_fanuc {
     gc_fanuc_program *programs;
     int nprograms, capprograms;
     int cur_program;     /* the program running now */
+    int cur_text;        /* the text of that program */
     int jumped;          /* the line just run set g->cur (jump, call, return) */
     size_t loaded_bytes; /* all texts, against max_program_bytes */
 
