@@ -567,6 +567,8 @@ static void test_reference(void)
     expect_motions_opt("G28 G30",
                        "G90 G00 X10. Y10. Z10.\nG91 G28 Z0\nG90 G28 X20. Y20.\nG30 P2 X0\n", &o, e,
                        N(e));
+    /* the program starts where the machine is after its reference return */
+    CHECK(ngot > 0 && got[0].start[0] == 100 && got[0].start[1] == 200 && got[0].start[2] == 300);
 }
 
 static void test_scaling_dwell(void)

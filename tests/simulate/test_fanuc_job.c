@@ -1,0 +1,127 @@
+/* test_fanuc_job.c: a realistic Haas-style program (O number, comments, N
+ * numbers, tool changes with G43 H and tool lengths in the table, G54, a
+ * pocket cut by an M98 subprogram with L repeats, a slot by an M97 local
+ * call, G81 and G83 drilling, G91 G28 Z0. to the reference point, M30)
+ * through the job runner in the Fanuc dialect. The removed volume must equal
+ * the closed form computed here from the geometry (within 0.5% at 0.1 mm
+ * voxels, the tolerance test_simulate uses). A forgotten tool length offset
+ * would put the tips 75 or 90 mm lower, so the volume also proves G43 H. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "job.h"
+#include "test.h"
+#include "toolpaths/tooltable/tooltable.h"
+
+#define PI 3.14159265358979323846
+
+static const char *tool_json =
+    "{\"units\": \"mm\", \"tools\": ["
+    "{\"number\": 1, \"shape\": \"flat\", \"diameter\": 10, \"flute_length\": 25, \"length\": 75,"
+    " \"length_offset\": 75},"
+    "{\"number\": 2, \"shape\": \"drill\", \"diameter\": 6, \"point_angle\": 118,"
+    " \"flute_length\": 30, \"length\": 90, \"length_offset\": 90}]}";
+
+/* The pocket (O2000, three 2 mm layers) traces the rectangle (15,15)-(35,25)
+ * with a 10 mm tool; the slot (N1000) runs from (55,15) to (85,15), 3 deep. */
+static const char *program =
+    "%\n"
+    "O01234 (FANUC DIALECT JOB TEST)\n"
+    "(T1 10MM FLAT, T2 6MM DRILL)\n"
+    "N10 G21 G17 G40 G49 G80 G90\n"
+    "N20 T1 M06 (10MM FLAT END MILL)\n"
+    "N30 G00 G90 G54 X15. Y15. S8000 M03\n"
+    "N40 G43 H01 Z25. M08\n"
+    "N50 G01 Z0. F300.\n"
+    "N60 M98 P2000 L3 (POCKET, 3 X 2MM)\n"
+    "N70 G00 Z25.\n"
+    "N80 M97 P1000 (SLOT)\n"
+    "N90 G00 Z100. M09\n"
+    "N100 G91 G28 Z0.\n"
+    "N110 M05\n"
+    "N120 T2 M06 (6MM DRILL)\n"
+    "N130 G00 G90 G54 X20. Y45. S3000 M03\n"
+    "N140 G43 H02 Z25. M08\n"
+    "N150 G98 G81 Z-10. R2. F150.\n"
+    "N160 X35.\n"
+    "N170 G83 X60. Z-15. R2. Q4. F120.\n"
+    "N180 X80.\n"
+    "N190 G80 G00 Z100. M09\n"
+    "N200 G91 G28 Z0.\n"
+    "N210 G90 M05\n"
+    "N220 M30\n"
+    "N1000 G00 X55. Y15.\n"
+    "N1010 G01 Z-3. F300.\n"
+    "N1020 X85. F600.\n"
+    "N1030 G00 Z25.\n"
+    "N1040 M99\n"
+    "O02000 (POCKET LAYER)\n"
+    "G91 G01 Z-2. F200.\n"
+    "G90 G01 X35. F600.\n"
+    "Y25.\n"
+    "X15.\n"
+    "Y15.\n"
+    "M99\n"
+    "%\n";
+
+int main(void)
+{
+    fm_tool_table tools;
+    fm_error err;
+    char buf[700];
+    if (fm_tooltable_parse_json(tool_json, strlen(tool_json), "tools.json", &tools, &err)) {
+        fprintf(stderr, "tool table: %s\n", fm_error_format(&err, buf, sizeof buf));
+        return 1;
+    }
+    /* Pocket: the points within 5 mm of a 20 x 10 rectangle's outline: the
+     * whole rectangle (no point inside is farther than 5 from a long side)
+     * plus the outer band with round corners: a b + 2 r (a + b) + pi r^2. */
+    double a = 20, b = 10, r = 5;
+    double pocket = (a * b + 2 * r * (a + b) + PI * r * r) * 6;
+    /* Slot: 30 mm long, 10 wide, round ends, 3 deep. */
+    double slot = (30 * 10 + PI * r * r) * 3;
+    /* Drills: radius 3, point 118 degrees: a cone of height 3 / tan 59
+     * under a cylinder, to tip depths 10 (two G81 holes) and 15 (two G83). */
+    double rd = 3, cone = rd / tan(59 * PI / 180);
+    double hole10 = PI * rd * rd * (10 - cone) + PI * rd * rd * cone / 3;
+    double hole15 = PI * rd * rd * (15 - cone) + PI * rd * rd * cone / 3;
+    double exact = pocket + slot + 2 * hole10 + 2 * hole15;
+
+    fm_job_spec spec;
+    fm_job_spec_default(&spec);
+    spec.program_text = program;
+    spec.program_length = strlen(program);
+    spec.program_name = "O01234.nc";
+    spec.stock_spec = "box:0,0,-30,100,60,0";
+    spec.tools = &tools;
+    spec.stock.voxel_mm = 0.1;
+    spec.dialect = "fanuc";
+    /* the machine's reference point: the gauge line 200 mm above Z0 */
+    spec.reference_points[0][2] = 200;
+    fm_job_result result;
+    fm_status st = fm_job_run(&spec, NULL, &result, &err);
+    CHECK(st == FM_OK);
+    if (st) {
+        fprintf(stderr, "job failed: %s\n", fm_error_format(&err, buf, sizeof buf));
+        fm_tool_table_free(&tools);
+        return test_summary("test_fanuc_job");
+    }
+    double v = result.removed_volume_mm3;
+    double rel = fabs(v - exact) / exact;
+    printf("Haas-style program, fanuc dialect, voxel 0.10: removed %.3f mm3, closed form %.3f "
+           "mm3, error %.3f%%, %ld motions\n", v, exact, 100 * rel, result.motions);
+    CHECK(rel <= 0.005);
+    fm_stock_free(result.stock);
+
+    /* The same text in the LinuxCNC dialect is not the same program: the
+     * O number line is an O-word error there. */
+    spec.dialect = NULL;
+    CHECK(fm_job_run(&spec, NULL, &result, &err) != FM_OK);
+    spec.dialect = "haas";
+    CHECK(fm_job_run(&spec, NULL, &result, &err) == FM_ERR_INPUT);
+    CHECK_STR_CONTAINS(err.message, "expected linuxcnc or fanuc");
+    fm_tool_table_free(&tools);
+    return test_summary("test_fanuc_job");
+}
