@@ -264,10 +264,10 @@ def compare(ref, got, ref_msgs, got_msgs):
 
 
 def inch_table(tbl_mm, tmpdir):
-    """rs274's tool table is in its machine unit, inches."""
-    out = os.path.join(tmpdir, os.path.basename(tbl_mm) + ".inch.tbl")
-    if os.path.exists(out):
-        return out
+    """rs274's tool table is in its machine unit, inches. A fresh copy for
+    every run: rs274 writes the table back after G10 L1 and tool changes."""
+    fd, out = tempfile.mkstemp(suffix=".tbl", dir=tmpdir)
+    os.close(fd)
     with open(tbl_mm) as f, open(out, "w") as o:
         for line in f:
             body, sep, comment = line.partition(";")

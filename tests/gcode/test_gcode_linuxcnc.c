@@ -100,6 +100,18 @@ static void test_comp_errors(void)
     expect_error_opt(COMP("G41 G1 X10\nG3 X12 Y2 R2\n"), &o, 5, 1,
                      "larger than the radius 2.0000 of this inside arc");
     expect_error_opt(COMP("G41 G1 X10\nG40\nG2 X20 R5\n"), &o, 6, 1, "just after G40");
+    expect_error_opt(COMP("G0 X-10\nG41 G3 X0 Y0 R2\n"), &o, 5, 5,
+                     "larger than the radius 2.0000 of this inside arc");
+    expect_error_opt(COMP("G0 X-2\nG41 G2 X0 Y0 R1\n"), &o, 5, 5,
+                     "entry arc: its end is nearer than the tool radius");
+    expect_error_opt(COMP("G41 G1 X10 Y0\nG3 X20 Y0 R5\nG2 X10 Y0 R5\n"), &o, 6, 1,
+                     "this arc and the arc of line 5 have the same centre");
+    expect_error_opt(COMP("G42 G1 X10 Y0\nG2 X20 Y0 R5\nG1 X15 Y4\n"), &o, 6, 1,
+                     "the corner from the arc of line 5 to this line is too tight");
+    expect_error_opt(COMP("G41 G1 X10 Y0\nG1 X20 Y0\nG3 X18 Y4 R3.1\n"), &o, 6, 1,
+                     "this arc in a concave corner cannot be reached by the tool without gouging");
+    expect_error_opt(COMP("G42 G1 X10 Y0\nG2 X20 Y0 R5\nG3 X19 Y1 R4\n"), &o, 6, 1,
+                     "the corner from the arc of line 5 to this arc is too tight");
     expect_error_opt(COMP("G41 G1 X10\nT1 M6\n"), &o, 5, 4, "M6 (tool change) with cutter radius compensation on");
     expect_error_opt(COMP("G41 G1 X10\nG55\n"), &o, 5, 1, "coordinate system change with cutter");
     expect_error_opt(COMP("G41 G1 X10\nG43 H1\n"), &o, 5, 1, "tool length offset change with cutter");

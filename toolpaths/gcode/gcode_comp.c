@@ -168,7 +168,7 @@ static fm_status move_endpoint_and_flush(gc_interp *g, double u, double v, int c
             double r2 = hypot(u - m->center[0], v - m->center[1]);
             double swept = arc_sweep(c->endpoint[0], c->endpoint[1], m->center[0], m->center[1],
                                      m->turn, u, v);
-            if (fabs(r1 - r2) > 0.01)
+            if (fabs(r1 - r2) > 0.01) /* defensive: corners meet on the circle */
                 return gc_fail(g, FM_ERR_INPUT, col,
                                "cutter compensation made an arc with mismatched radii (%.4f and "
                                "%.4f); the corner cannot be compensated", r1, r2);
@@ -410,12 +410,9 @@ static fm_status straight_next(gc_interp *g, int rapid, double feed, const doubl
         } else if (concave) {
             double meet[2];
             if (!front_arc) {
-                /* line to line: pull the previous end back along its path */
+                /* line to line: pull the previous end back along its path (beta
+                 * >= -pi/2 by construction, so half the corner is >= pi/4) */
                 double halfcorner = (beta + GC_PI) / 2;
-                if (halfcorner == 0)
-                    return gc_fail(g, FM_ERR_INPUT, col,
-                                   "cutter compensation: a zero-degree inside corner cannot be "
-                                   "compensated");
                 double retreat = r / tan(halfcorner);
                 meet[0] = cur[0] + retreat * cos(theta + gamma);
                 meet[1] = cur[1] + retreat * sin(theta + gamma);

@@ -340,6 +340,14 @@ fm_status gc_exec_arc(gc_interp *g, const gc_block *b, int code, int col)
     double start[3];
     gc_comp_base(g, start);
     if (gc_comp_active(g) && g->comp.firstmove) memcpy(start, g->pos, sizeof start);
+    int inside = (g->comp.side == GC_COMP_LEFT && code == GC_G3) ||
+                 (g->comp.side == GC_COMP_RIGHT && code == GC_G2);
+    /* LinuxCNC checks an entry arc's R against the tool before the arc itself */
+    if (gc_comp_active(g) && g->comp.firstmove && HAS(b, 'r') && inside &&
+        fabs(VAL(b, 'r')) < g->comp.radius)
+        return gc_fail(g, FM_ERR_INPUT, col,
+                       "%s: the tool radius %.4f is larger than the radius %.4f of this inside "
+                       "arc; expected a smaller tool", name, g->comp.radius, fabs(VAL(b, 'r')));
     double cab[2];
     if ((st = arc_center(g, b, code, start, end, cab, col))) return st;
     int turn = code == GC_G2 ? -turns : turns;
@@ -351,8 +359,7 @@ fm_status gc_exec_arc(gc_interp *g, const gc_block *b, int code, int col)
     arc.center[1] = cab[1];
     arc.turn = turn;
     double arc_r = hypot(cab[0] - start[a], cab[1] - start[bb]);
-    if (g->comp.firstmove && arc_r < g->comp.radius &&
-        ((g->comp.side == GC_COMP_LEFT && turn > 0) || (g->comp.side == GC_COMP_RIGHT && turn < 0)))
+    if (g->comp.firstmove && arc_r < g->comp.radius && inside)
         return gc_fail(g, FM_ERR_INPUT, col,
                        "%s: the tool radius %.4f is larger than the radius %.4f of this "
                        "inside arc; expected a smaller tool", name, g->comp.radius, arc_r);
