@@ -45,7 +45,7 @@ static void usage(FILE *out)
             "--voxel      the check's voxel edge (default %.1f mm)\n"
             "--report     findings JSON to this file instead of standard output\n"
             "--dialect    the G-code's dialect (default linuxcnc; docs/gcode.md)\n"
-            "--subroutine-path  ':'-separated folders of subprogram files (Fanuc O1234.nc)\n"
+            "--subroutine-path  ':'-separated folders of subroutine files (NAME.ngc, Fanuc O1234.nc)\n"
             "--calculator-input Fanuc: X5 is 5 mm, not 0.005 (DPI / Haas setting 162)\n"
             "Exit status: 0 clean, 1 findings, 2 bad input, 3 resource limit, 4 I/O error.\n",
             CHECK_DEFAULT_VOXEL);

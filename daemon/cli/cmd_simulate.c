@@ -43,7 +43,7 @@ static void usage(FILE *out)
             "--color   mesh and picture colours: depth below the stock top (default), the tool\n"
             "          that cut last, or none\n"
             "--dialect the G-code's dialect (default linuxcnc; docs/gcode.md)\n"
-            "--subroutine-path  ':'-separated folders of subprogram files (Fanuc O1234.nc)\n"
+            "--subroutine-path  ':'-separated folders of subroutine files (NAME.ngc, Fanuc O1234.nc)\n"
             "--calculator-input Fanuc: X5 is 5 mm, not 0.005 (DPI / Haas setting 162)\n"
             "--machine's reference_points are Fanuc's G28/G30 reference points\n"
             "Exit status: 0 success, 2 bad input, 3 resource limit, 4 I/O error.\n",
