@@ -749,6 +749,7 @@ fm_status gc_fanuc_run(gc_interp *g)
         }
         if (!macro_statement(g, p, &st)) {
             memset(fb, 0, offsetof(gc_fanuc_block, args));
+            memset(&fb->b, 0, offsetof(gc_block, assign));
             for (int i = 0; i < GC_FANUC_LOCALS; i++) fb->args[i] = GC_VACANT;
             fb->b.n = g->cur_block;
             if ((st = gc_fanuc_parse_block(g, p, fb))) goto out;

@@ -162,11 +162,11 @@ double gc_fanuc_round(double v);
 /* ---- gcode_fanuc_block.c ---- */
 
 typedef struct gc_fanuc_block {
-    gc_block b;
     unsigned char form[26];  /* gc_number_form of each word */
     int g65;             /* G65 on the line: every word after it is an argument */
     int g65_col;
     double args[GC_FANUC_LOCALS]; /* G65 arguments (argument specification I) */
+    gc_block b;          /* last: only its head up to the assignments is cleared per line */
 } gc_fanuc_block;
 
 fm_status gc_fanuc_parse_block(gc_interp *g, size_t p, gc_fanuc_block *fb);
