@@ -213,6 +213,43 @@ fm_stock *fm_stock_new_from_field(const fm_field *field, const fm_stock_options 
     return fm_stock_wrap(v, &opt, err);
 }
 
+fm_stock *fm_stock_new_from_zero_set(const fm_field *field, const fm_stock_options *opt_in,
+                                     fm_error *err)
+{
+    fm_stock_options opt;
+    if (fm_stock_options_resolve(opt_in, &opt, err)) return NULL;
+    if (!field) {
+        fm_error_set(err, FM_ERR_INPUT, "no field given");
+        return NULL;
+    }
+    const double origin[3] = {0, 0, 0};
+    fm_vdb *raw = fm_vdb_new(opt.voxel_mm, opt.band_voxels, origin, opt.threads, err);
+    if (!raw) return NULL;
+    float *points = NULL;
+    uint32_t *tris = NULL;
+    size_t npoints = 0, ntris = 0;
+    fm_vdb *v = NULL;
+    if (fm_vdb_rasterize(raw, field, opt.memory_budget, err) == FM_OK &&
+        fm_vdb_zero_set_mesh(raw, &points, &npoints, &tris, &ntris, err) == FM_OK) {
+        v = fm_vdb_new(opt.voxel_mm, opt.band_voxels, origin, opt.threads, err);
+        if (v && fm_vdb_from_mesh(v, points, npoints, tris, ntris, err) != FM_OK) {
+            fm_vdb_free(v);
+            v = NULL;
+        }
+    }
+    free(points);
+    free(tris);
+    fm_vdb_free(raw);
+    if (!v) return NULL;
+    if (fm_vdb_memory(v) > opt.memory_budget) {
+        fm_error_set(err, FM_ERR_LIMIT, "the grid needs %.0f MB but the memory budget is %.0f MB",
+                     (double)fm_vdb_memory(v) / MB, (double)opt.memory_budget / MB);
+        fm_vdb_free(v);
+        return NULL;
+    }
+    return fm_stock_wrap(v, &opt, err);
+}
+
 /* ------------------------------------------------------------ tables -- */
 
 static uint64_t chunk_hash(const int32_t k[3]) { return fm_stock_hash3(k); }
@@ -627,6 +664,14 @@ fm_status fm_stock_active_bounds(const fm_stock *s, int32_t lo[3], int32_t hi[3]
 }
 
 double fm_stock_sample(const fm_stock *s, const double p[3]) { return -fm_vdb_sample(s->vdb, p); }
+
+fm_status fm_stock_visit(const fm_stock *s, const int32_t lo[3], const int32_t hi[3],
+                         int (*prune)(void *user, const int32_t lo[3], const int32_t hi[3]),
+                         int (*visit)(void *user, const fm_stock_region *region), void *user,
+                         fm_error *err)
+{
+    return fm_vdb_visit(s->vdb, lo, hi, prune, visit, user, err);
+}
 
 const char *fm_stock_resume_string(const fm_stock *s) { return s->resume ? s->resume : ""; }
 

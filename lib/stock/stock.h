@@ -165,6 +165,39 @@ fm_status fm_stock_active_bounds(const fm_stock *stock, int32_t lo[3], int32_t h
  * +-band far from the surface. */
 double fm_stock_sample(const fm_stock *stock, const double p[3]);
 
+/* ------------------------------------------------------------ queries -- */
+
+/* A region of the grid as fm_stock_visit meets it: an 8^3 leaf with its
+ * voxel values, or a tile, a uniform block beyond the band. Values are the
+ * grid's own (F-rep sign: positive inside, mm), clamped to +-band. */
+typedef struct fm_stock_region {
+    int32_t lo[3], hi[3];  /* inclusive index box of the region */
+    /* leaf: 512 values, voxel lo + (x, y, z) at 64 x + 8 y + z (valid
+     * during the callback only); NULL for a tile */
+    const float *values;
+    float value;           /* tile: +band (inside the stock) or -band (outside) */
+} fm_stock_region;
+
+/* Walk the regions that meet the index box [lo, hi] (inclusive), in
+ * aligned blocks from 4096^3 down to 8^3 voxels: a block that is one tile
+ * goes to visit whole (not clipped); before a block holding leaves is
+ * opened, prune(user, block_lo, block_hi) (may be NULL) is asked and skips
+ * it when non-zero; visit gets each leaf met and stops the walk when it
+ * returns non-zero. Costs the blocks opened, not the grid: no accessor per
+ * voxel. Read-only; do not cut the stock during the walk. */
+fm_status fm_stock_visit(const fm_stock *stock, const int32_t lo[3], const int32_t hi[3],
+                         int (*prune)(void *user, const int32_t lo[3], const int32_t hi[3]),
+                         int (*visit)(void *user, const fm_stock_region *region), void *user,
+                         fm_error *err);
+
+/* A grid whose surface is the zero set of a field that need not be a
+ * distance (a HyperFun model with any gradient, positive inside): the field
+ * is rasterized like fm_stock_new_from_field, its zero set meshed and the
+ * band rebuilt from that mesh, so that values near the surface are true
+ * distances in millimetres whatever the field's scale. */
+fm_stock *fm_stock_new_from_zero_set(const fm_field *field, const fm_stock_options *opt,
+                                     fm_error *err);
+
 /* ---------------------------------------------------------- snapshots -- */
 
 /* Write a snapshot crash-safe: temporary file in the same folder, fsync,

@@ -70,6 +70,16 @@ double fm_vdb_sample(const fm_vdb *v, const double p[3]);
 /* Call touch for the index box of every leaf (initial chunk marking). */
 void fm_vdb_for_each_leaf(const fm_vdb *v, fm_vdb_touch_fn touch, void *user);
 
+/* fm_stock_visit's walk (vdb_query.cpp). */
+fm_status fm_vdb_visit(const fm_vdb *v, const int32_t lo[3], const int32_t hi[3],
+                       int (*prune)(void *user, const int32_t lo[3], const int32_t hi[3]),
+                       int (*visit)(void *user, const fm_stock_region *region), void *user,
+                       fm_error *err);
+/* The zero set of the grid as triangles (world mm; malloc'd, the caller
+ * frees both). FM_ERR_INPUT when there is no surface. */
+fm_status fm_vdb_zero_set_mesh(const fm_vdb *v, float **points, size_t *npoints, uint32_t **tris,
+                               size_t *ntris, fm_error *err);
+
 /* Serialize to a malloc'd buffer (OpenVDB stream, Blosc when available). */
 fm_status fm_vdb_write(const fm_vdb *v, unsigned char **buf, size_t *len, fm_error *err);
 /* Parse bytes already verified by the snapshot wrapper. */
