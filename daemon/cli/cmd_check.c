@@ -102,7 +102,7 @@ int fm_cmd_check(int argc, char **argv)
     fm_check_pass_input_default(&in);
     fm_job_spec spec = in.spec;
     spec.stock.voxel_mm = CHECK_DEFAULT_VOXEL;
-    fm_check_options opt = in.options;
+    fm_check_options opt = in.check.options;
     const char *fixtures[CHECK_MAX_FIXTURES];
     int fixture_count = 0;
     const char *report_path = NULL, *machine_path = NULL;
@@ -206,10 +206,10 @@ int fm_cmd_check(int argc, char **argv)
     if (rapid_rate > 0) spec.rapid_rate = rapid_rate;
 
     in.spec = spec;
-    in.check_voxel_mm = spec.stock.voxel_mm;
-    in.options = opt;
-    for (int i = 0; i < fixture_count; i++) in.fixtures[i] = fixtures[i];
-    in.fixture_count = fixture_count;
+    in.check.voxel_mm = spec.stock.voxel_mm;
+    in.check.options = opt;
+    for (int i = 0; i < fixture_count; i++) in.check.fixtures[i] = fixtures[i];
+    in.check.fixture_count = fixture_count;
     check_run run = {0};
     fm_job_result result;
     fm_status st = fm_check_pass_run(&in, &run.check, &result, &err);

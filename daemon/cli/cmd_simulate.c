@@ -37,8 +37,9 @@ static void usage(FILE *out)
             "--voxel   voxel edge in mm (default 0.1)\n"
             "--out     final stock; format by extension: %s (may be given several times)\n"
             "--report  JSON report (default: none; `-` for standard output)\n"
-            "--check   also run the collision check (the pass of `frepmill check`, at its own\n"
-            "          0.5 mm voxel, before the simulation); the report gets its \"findings\"\n"
+            "--check   also run the collision check in the same pass (at the check's own\n"
+            "          0.5 mm voxel, as `frepmill check`); the report gets its \"findings\"\n"
+            "--machine travel limits, start and rapid rate (the rapid rate times the whole job)\n"
             "--png     a shaded isometric picture with the toolpath (same as --out FILE.png)\n"
             "--color   mesh and picture colours: depth below the stock top (default), the tool\n"
             "          that cut last, or none\n"
@@ -131,6 +132,7 @@ int fm_cmd_simulate(int argc, char **argv)
     fm_output_options out_opt;
     fm_output_options_default(&out_opt);
     int want_png = 0;
+    int rapid_rate_given = 0;
 
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -227,6 +229,7 @@ int fm_cmd_simulate(int argc, char **argv)
             spec.stock.threads = (int)d;
         } else if (!strcmp(a, "--rapid-rate") && parse_double(v, &d) && d > 0) {
             spec.rapid_rate = d;
+            rapid_rate_given = 1;
         } else if (!strcmp(a, "--batch") && parse_double(v, &d)) {
             spec.batch_diameters = d;
         } else if (!strcmp(a, "--voxel") || !strcmp(a, "--band") || !strcmp(a, "--memory-budget") ||
@@ -252,44 +255,28 @@ int fm_cmd_simulate(int argc, char **argv)
         fprintf(stderr, "frepmill simulate: --fixture and --machine need --check\n");
         return 2;
     }
-    /* The check is its own coarse pass (check_pass.h) rather than work in
-     * this run's before_motion hook: relating every motion to the fine
-     * stock would cost more than cutting it, and the coarse pass gives
-     * exactly the findings of `frepmill check` (docs/check.md). */
-    json_t *findings = NULL;
+    /* The check runs in the simulation's own pass on a grid of its own
+     * voxel (job.h), so its findings are those of `frepmill check`. */
+    fm_job_check check;
+    fm_job_check_default(&check);
     if (want_check) {
-        fm_check_pass_input in;
-        fm_check_pass_input_default(&in);
-        in.spec = spec;
-        for (int i = 0; i < fixture_count; i++) in.fixtures[i] = fixtures[i];
-        in.fixture_count = fixture_count;
-        fm_error cerr;
-        fm_error_clear(&cerr);
-        fm_status cst = FM_OK;
+        for (int i = 0; i < fixture_count; i++) check.fixtures[i] = fixtures[i];
+        check.fixture_count = fixture_count;
         if (machine_path) {
-            cst = fm_check_machine_load(machine_path, &in.options.machine, &cerr);
-            if (cst == FM_OK && in.options.machine.rapid_rate > 0 && spec.rapid_rate <= 0)
-                in.spec.rapid_rate = in.options.machine.rapid_rate;
-            if (cst == FM_OK) {
-                memcpy(spec.reference_points, in.options.machine.reference_points,
-                       sizeof spec.reference_points);
-                memcpy(in.spec.reference_points, spec.reference_points,
-                       sizeof spec.reference_points);
+            fm_error cerr;
+            fm_error_clear(&cerr);
+            if (fm_check_machine_load(machine_path, &check.options.machine, &cerr) != FM_OK) {
+                char buf[1024];
+                fprintf(stderr, "frepmill simulate: %s\n", fm_error_format(&cerr, buf, sizeof buf));
+                return 2;
             }
+            /* the machine's rapid rate times the job, as in `frepmill check` */
+            if (check.options.machine.rapid_rate > 0 && !rapid_rate_given)
+                spec.rapid_rate = check.options.machine.rapid_rate;
+            memcpy(spec.reference_points, check.options.machine.reference_points,
+                   sizeof spec.reference_points);
         }
-        fm_check *check = NULL;
-        if (cst == FM_OK) cst = fm_check_pass_run(&in, &check, NULL, &cerr);
-        if (cst != FM_OK) {
-            char buf[1024];
-            fprintf(stderr, "frepmill simulate: check: %s\n",
-                    fm_error_format(&cerr, buf, sizeof buf));
-            return exit_status(cst);
-        }
-        findings = fm_findings_json_array(check);
-        fprintf(stderr, "frepmill simulate: check: %zu errors, %zu warnings\n",
-                fm_check_count_severity(check, FM_CHECK_ERROR),
-                fm_check_count_severity(check, FM_CHECK_WARNING));
-        fm_check_free(check);
+        spec.check = &check;
     }
 
     progress_bar bar = {0};
@@ -312,7 +299,6 @@ int fm_cmd_simulate(int argc, char **argv)
         char buf[1024];
         fprintf(stderr, "frepmill simulate: %s\n", fm_error_format(&err, buf, sizeof buf));
         fm_toolpath_free(bar.toolpath);
-        json_decref(findings);
         return exit_status(st);
     }
 
@@ -335,10 +321,13 @@ int fm_cmd_simulate(int argc, char **argv)
             result.motions, result.program_time_s, result.removed_volume_mm3,
             result.initial_volume_mm3, result.wall_time_s,
             (double)result.peak_memory_bytes / (1024.0 * 1024.0));
+    if (result.check)
+        fprintf(stderr, "frepmill simulate: check: %zu errors, %zu warnings (%.2f s)\n",
+                fm_check_count_severity(result.check, FM_CHECK_ERROR),
+                fm_check_count_severity(result.check, FM_CHECK_WARNING), result.check_time_s);
 
     if (report_path && status == 0) {
         json_t *report = fm_job_report_json(&result);
-        if (findings) json_object_set(report, "findings", findings);
         int rc = !strcmp(report_path, "-")
                      ? json_dumpf(report, stdout, JSON_INDENT(2) | JSON_REAL_PRECISION(10))
                      : json_dump_file(report, report_path, JSON_INDENT(2) | JSON_REAL_PRECISION(10));
@@ -350,7 +339,7 @@ int fm_cmd_simulate(int argc, char **argv)
             status = 4;
         }
     }
-    json_decref(findings);
+    fm_check_free(result.check);
     fm_stock_free(result.stock);
     fm_toolpath_free(bar.toolpath);
     return status;

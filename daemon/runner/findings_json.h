@@ -9,6 +9,8 @@
 
 #include "check/check.h"
 
+/* One finding (new reference); an uncertain one carries "points". */
+json_t *fm_finding_json(const fm_check_finding *finding);
 /* The array of findings (new reference). */
 json_t *fm_findings_json_array(const fm_check *check);
 /* {"findings": [...], "errors": n, "warnings": n} (new reference). */

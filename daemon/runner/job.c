@@ -29,6 +29,13 @@
 #define JOB_MODEL_SEARCH_MM 2000.0
 #define JOB_MODEL_MAX_BOXES 4000000u
 
+void fm_job_check_default(fm_job_check *check)
+{
+    memset(check, 0, sizeof *check);
+    fm_check_options_default(&check->options);
+    check->voxel_mm = FM_JOB_CHECK_VOXEL;
+}
+
 void fm_job_spec_default(fm_job_spec *spec)
 {
     memset(spec, 0, sizeof *spec);
@@ -358,7 +365,18 @@ typedef struct survey {
     long motions;
     double time_total;
     int max_line;
+    int any_tip;
+    double tip_lo[3], tip_hi[3]; /* box of the tool tip over the program */
 } survey;
+
+static void grow_box(survey *s, const double lo[3], const double hi[3])
+{
+    for (int a = 0; a < 3; a++) {
+        if (!s->any_tip || lo[a] < s->tip_lo[a]) s->tip_lo[a] = lo[a];
+        if (!s->any_tip || hi[a] > s->tip_hi[a]) s->tip_hi[a] = hi[a];
+    }
+    s->any_tip = 1;
+}
 
 static int survey_sink(void *user, const fm_motion *m)
 {
@@ -366,6 +384,35 @@ static int survey_sink(void *user, const fm_motion *m)
     s->motions++;
     if (m->t1 > s->time_total) s->time_total = m->t1;
     if (m->line > s->max_line) s->max_line = m->line;
+    /* where the tip goes: both ends, an arc's whole circle, a path's bounds */
+    double lo[3], hi[3];
+    for (int a = 0; a < 3; a++) {
+        lo[a] = fmin(m->start[a], m->end[a]) + m->tip_offset[a];
+        hi[a] = fmax(m->start[a], m->end[a]) + m->tip_offset[a];
+    }
+    if (m->kind == FM_MOTION_ARC) {
+        double r2 = 0;
+        for (int a = 0; a < 3; a++)
+            if (a != m->plane_axis) r2 += (m->start[a] - m->center[a]) * (m->start[a] - m->center[a]);
+        double r = sqrt(r2);
+        double e2 = 0;
+        for (int a = 0; a < 3; a++)
+            if (a != m->plane_axis) e2 += (m->end[a] - m->center[a]) * (m->end[a] - m->center[a]);
+        r = fmax(r, sqrt(e2));
+        for (int a = 0; a < 3; a++)
+            if (a != m->plane_axis) {
+                lo[a] = fmin(lo[a], m->center[a] + m->tip_offset[a] - r);
+                hi[a] = fmax(hi[a], m->center[a] + m->tip_offset[a] + r);
+            }
+    } else if (m->kind == FM_MOTION_PARAM && m->path && m->path->pose_bounds) {
+        double plo[3], phi[3], alo[3], ahi[3];
+        m->path->pose_bounds(m->path->ctx, m->t0, m->t1, plo, phi, alo, ahi);
+        for (int a = 0; a < 3; a++) {
+            lo[a] = fmin(lo[a], plo[a] + m->tip_offset[a]);
+            hi[a] = fmax(hi[a], phi[a] + m->tip_offset[a]);
+        }
+    }
+    grow_box(s, lo, hi);
     return 0;
 }
 
@@ -392,6 +439,14 @@ typedef struct cutter {
     long blocks;
     fm_stock_cut_stats stats; /* summed over cuts */
     long cuts;
+
+    /* the collision check and its grid (c->stock itself, or a grid of its
+     * own cut alongside) */
+    fm_check *check;
+    fm_stock *check_grid;
+    int check_twin;
+    size_t findings_seen;
+    double check_time;
 } cutter;
 
 double fm_job_motion_length(const fm_motion *m)
@@ -445,7 +500,9 @@ static fm_status flush_batch(cutter *c)
                             .t1 = last->t1};
         fm_stock_cut_stats cs;
         st = fm_stock_subtract(c->stock, &field, &cut, &cs, c->err);
+        if (st == FM_OK && c->check_twin) st = fm_stock_subtract(c->check_grid, &field, &cut, NULL, c->err);
         fm_field_release(&field);
+        if (st == FM_OK && c->check) fm_check_stock_cut(c->check);
         if (st == FM_OK) {
             c->stats.removed_mm3 += cs.removed_mm3;
             c->stats.intervals += cs.intervals;
@@ -483,12 +540,51 @@ static fm_status flush_batch(cutter *c)
     return FM_OK;
 }
 
+/* Relate the motion to the check's grid (all earlier motions cut from it
+ * or still pending in the check) and report the findings it opened. */
+static fm_status check_motion(cutter *c, const fm_motion *m, const fm_tool *tool)
+{
+    double t0 = now_s();
+    fm_status st = fm_check_motion(c->check, m, tool, c->check_grid, c->err);
+    c->check_time += now_s() - t0;
+    if (st != FM_OK) {
+        if (c->err && c->err->line == 0) c->err->line = m->line;
+        return st;
+    }
+    size_t n = fm_check_count(c->check);
+    for (; c->findings_seen < n; c->findings_seen++)
+        if (c->hooks && c->hooks->on_finding)
+            c->hooks->on_finding(c->hooks->user, c->check, c->findings_seen);
+    return FM_OK;
+}
+
+/* Resuming: a motion cut before the snapshot is still checked, and cut
+ * from the check's own grid alone. */
+static fm_status check_skipped(cutter *c, const fm_motion *m)
+{
+    const fm_tool *tool = tool_for(c->tools, m->tool);
+    fm_status st = check_motion(c, m, tool);
+    if (st != FM_OK || !tool || m->kind == FM_MOTION_DWELL) return st;
+    fm_field field;
+    st = fm_sweep_field(&field, m, &tool->flutes, c->err);
+    if (st != FM_OK) return st;
+    fm_stock_cut cut = {.tool = tool->spec.number, .block = m->line, .t0 = m->t0, .t1 = m->t1};
+    st = fm_stock_subtract(c->check_grid, &field, &cut, NULL, c->err);
+    fm_field_release(&field);
+    if (st == FM_OK) fm_check_stock_cut(c->check);
+    return st;
+}
+
 static int cut_sink(void *user, const fm_motion *m)
 {
     cutter *c = user;
     c->progress.motions_done++;
     if (c->hooks && c->hooks->on_motion) c->hooks->on_motion(c->hooks->user, m);
-    if (m->index < c->spec->skip_motions) return 0; /* cut before the snapshot we resume from */
+    if (m->index < c->spec->skip_motions) {
+        /* cut before the snapshot we resume from */
+        if (c->check && (c->status = check_skipped(c, m)) != FM_OK) return 1;
+        return 0;
+    }
     if (c->hooks && c->hooks->before_motion) {
         /* The hook must see the stock as it is when this motion starts. */
         if ((c->status = flush_batch(c)) != FM_OK) return 1;
@@ -499,15 +595,21 @@ static int cut_sink(void *user, const fm_motion *m)
             return 1;
         }
     }
-    if (m->kind == FM_MOTION_DWELL) return 0;
     const fm_tool *tool = tool_for(c->tools, m->tool);
-    if (!tool) return 0; /* no tool in the spindle: nothing cuts */
+    if (m->kind == FM_MOTION_DWELL || !tool) {
+        /* nothing cuts; the check still sees where the machine goes */
+        if (c->check && (c->status = check_motion(c, m, tool)) != FM_OK) return 1;
+        return 0;
+    }
     double length = fm_job_motion_length(m);
     double limit = c->spec->batch_diameters * tool->spec.diameter;
     int fits = c->spec->batch_diameters >= 0 && c->batch_count > 0 && c->batch_tool == tool &&
                c->batch_count < JOB_MAX_BATCH && c->batch_length + length <= limit;
     if (!fits && (c->status = flush_batch(c)) != FM_OK) return 1;
     if (c->stopped) return 1;
+    /* The check sees the grid with every batch before this one cut; the
+     * batch's earlier motions are still pending in it. */
+    if (c->check && (c->status = check_motion(c, m, tool)) != FM_OK) return 1;
     c->batch[c->batch_count++] = *m;
     c->batch_tool = tool;
     c->batch_length += length;
@@ -535,6 +637,92 @@ static fm_status cut_probe(void *user, const fm_motion *move, int toward, int *t
     }
     return fm_runner_probe(c->stock, tool_for(c->tools, move->tool), a, b, toward, tripped,
                            fraction, at_start, err);
+}
+
+/* ------------------------------------------------------------- check -- */
+
+/* "box:X0,Y0,Z0,X1,Y1,Z1": the check gets the exact initial stock. */
+static int box_of_spec(const char *spec, double lo[3], double hi[3])
+{
+    double v[6];
+    if (!spec || strncmp(spec, "box:", 4) || !parse_numbers(spec + 4, v, 6)) return 0;
+    for (int a = 0; a < 3; a++) {
+        lo[a] = v[a];
+        hi[a] = v[a + 3];
+    }
+    return 1;
+}
+
+/* The check, its grid and fixtures, for a job whose stock is made. */
+static fm_status setup_check(cutter *c, const survey *sv, fm_error *err)
+{
+    const fm_job_check *jc = c->spec->check;
+    double voxel = jc->voxel_mm > 0 ? jc->voxel_mm : FM_JOB_CHECK_VOXEL;
+    int band = fm_check_band_voxels(&jc->options, voxel);
+    if (band > 32)
+        return fm_error_set(err, FM_ERR_INPUT,
+                            "the check's clearances need a band of %d voxels of %g mm (at most "
+                            "32): use a larger check voxel or smaller clearances",
+                            band, voxel);
+    c->check = fm_check_new(&jc->options, err);
+    if (!c->check) return err ? err->code : FM_ERR_INPUT;
+    double lo[3], hi[3];
+    if (box_of_spec(c->spec->stock_spec, lo, hi)) fm_check_set_initial_box(c->check, lo, hi);
+    if (sv->any_tip) {
+        /* where any part of any tool can go: the tip's box grown by the
+         * largest tool */
+        double up = 0, out = 0;
+        for (size_t i = 0; i < c->tools->count; i++) {
+            const fm_tool *t = &c->tools->built[i].tool;
+            const fm_tool_part *parts[3] = {&t->flutes, t->has_shank ? &t->shank : NULL,
+                                            t->has_holder ? &t->holder : NULL};
+            for (int k = 0; k < 3; k++)
+                if (parts[k]) {
+                    up = fmax(up, fmax(fabs(parts[k]->z_lo), fabs(parts[k]->z_hi)));
+                    out = fmax(out, parts[k]->r_max);
+                }
+        }
+        double reach = sqrt(up * up + out * out);
+        for (int a = 0; a < 3; a++) {
+            lo[a] = sv->tip_lo[a] - reach;
+            hi[a] = sv->tip_hi[a] + reach;
+        }
+        fm_check_set_region(c->check, lo, hi);
+    }
+    for (int i = 0; i < jc->fixture_count; i++) {
+        const char *f = jc->fixtures[i];
+        fm_status st = fm_path_has_extension(f, ".hf")
+                           ? fm_check_add_fixture_hf(c->check, f, NULL, voxel, err)
+                       : fm_path_has_extension(f, ".stl")
+                           ? fm_check_add_fixture_stl(c->check, f, voxel, err)
+                           : fm_error_set(err, FM_ERR_INPUT,
+                                          "fixture %s: give a .hf model or an .stl mesh", f);
+        if (st != FM_OK) return st;
+    }
+    fm_stock_options own = c->spec->stock, defaults;
+    fm_stock_options_default(&defaults);
+    if (own.voxel_mm <= 0) own.voxel_mm = defaults.voxel_mm;
+    if (own.band_voxels <= 0) own.band_voxels = defaults.band_voxels;
+    if (!c->spec->resume_stock && fabs(own.voxel_mm - voxel) <= 1e-12 * voxel &&
+        own.band_voxels == band) {
+        c->check_grid = c->stock;
+        return FM_OK;
+    }
+    own.voxel_mm = voxel;
+    own.band_voxels = band;
+    c->check_grid = fm_job_make_stock(c->spec->stock_spec, &own, err);
+    if (!c->check_grid) return err ? err->code : FM_ERR_INPUT;
+    c->check_twin = 1;
+    return FM_OK;
+}
+
+static void free_check(cutter *c)
+{
+    if (c->check_twin) fm_stock_free(c->check_grid);
+    c->check_grid = NULL;
+    c->check_twin = 0;
+    fm_check_free(c->check);
+    c->check = NULL;
 }
 
 /* ---------------------------------------------------------------- run -- */
@@ -600,15 +788,24 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     c->progress.program_time_total = sv.time_total;
     c->progress.block = -1;
 
-    st = run_program(spec, tools.use, cut_sink, c, cut_probe, err);
+    if (spec->check) st = setup_check(c, &sv, err);
+    if (st == FM_OK) st = run_program(spec, tools.use, cut_sink, c, cut_probe, err);
     if (st == FM_OK) st = c->status;
     if (st == FM_OK && !c->stopped) st = flush_batch(c);
     if (st != FM_OK) {
+        free_check(c);
         free(c->lines_cut);
         free(c);
         fm_stock_free(stock);
         free_tools(&tools);
         return st;
+    }
+    if (c->check) {
+        fm_check_finish(c->check);
+        result->check = c->check;
+        result->check_time_s = c->check_time;
+        c->check = NULL;
+        free_check(c);
     }
 
     result->stock = stock;

@@ -8,6 +8,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "check/check.h"
 #include "core/core.h"
 #include "stock/stock.h"
 #include "sweep/motion.h"
@@ -18,6 +19,26 @@ typedef enum fm_program_kind {
     FM_PROGRAM_GCODE,
     FM_PROGRAM_TRAJECTORY
 } fm_program_kind;
+
+/* The collision check (lib/check), run in the same pass as the cut
+ * (DESIGN.md, "Checking in the same pass"): every motion is related to the
+ * stock as the runner cuts it, and findings are reported as they are
+ * found. The check has a grid of its own voxel: the job's own grid when
+ * voxel and band agree (`frepmill check`), else a second grid cut batch by
+ * batch beside it, so that the findings depend on the check's options and
+ * never on the simulation's voxel: `frepmill check`, `frepmill simulate
+ * --check` and the daemon give the same findings for the same inputs. */
+#define FM_JOB_CHECK_VOXEL 0.5
+#define FM_JOB_MAX_FIXTURES 64
+
+typedef struct fm_job_check {
+    fm_check_options options;
+    double voxel_mm;                             /* 0: FM_JOB_CHECK_VOXEL */
+    const char *fixtures[FM_JOB_MAX_FIXTURES];   /* a HyperFun model (.hf) or a closed STL mesh */
+    int fixture_count;
+} fm_job_check;
+
+void fm_job_check_default(fm_job_check *check);
 
 typedef struct fm_job_spec {
     /* The program: a file, or text held by the caller (then program_name
@@ -58,6 +79,11 @@ typedef struct fm_job_spec {
     const char *subroutine_path;
     double reference_points[4][3];
     int calculator_input;     /* Fanuc: X5 is 5 mm, not 0.005 */
+
+    /* The collision check (NULL: none). When resuming, the check's own
+     * grid is cut from the start, the motions before skip_motions
+     * included, so that its findings are those of a run from the start. */
+    const fm_job_check *check;
 } fm_job_spec;
 
 void fm_job_spec_default(fm_job_spec *spec);
@@ -99,6 +125,10 @@ typedef struct fm_job_hooks {
      * toolpath overlays and logs. A PARAM motion's path is valid during the
      * call. */
     void (*on_motion)(void *user, const fm_motion *motion);
+    /* Called as the check opens a finding (index into fm_check_get of
+     * check), on the job's thread, before the motion that found it is cut;
+     * its depth and extent grow while later motions extend it. */
+    void (*on_finding)(void *user, const fm_check *check, size_t index);
 } fm_job_hooks;
 
 #define FM_JOB_TOP_BLOCKS 10
@@ -125,6 +155,11 @@ typedef struct fm_job_result {
      * batch of motions is one cut): for benchmarks and profiling. */
     fm_stock_cut_stats cut_stats;
     long cuts;
+    /* With spec.check: the finished check (its findings closed), owned by
+     * the caller (fm_check_free), also when a hook stopped the job; and the
+     * wall time its relations took. */
+    fm_check *check;
+    double check_time_s;
 } fm_job_result;
 
 /* Run the whole job. On success result->stock holds the final stock. On

@@ -8,7 +8,8 @@
 
 #include "job.h"
 
-/* A new JSON object (the caller owns the reference). */
+/* A new JSON object (the caller owns the reference); with the check's
+ * "findings" when the job ran one. */
 json_t *fm_job_report_json(const fm_job_result *result);
 
 #endif

@@ -27,7 +27,7 @@ int fm_jobs_check_enabled(json_t *spec)
 }
 
 /* options.check -> lib/check options and the check's voxel. */
-static int parse_options(json_t *check, fm_check_pass_input *in, fm_http_error *err)
+static int parse_options(json_t *check, fm_job_check *in, fm_http_error *err)
 {
     if (!check || json_is_boolean(check)) return 0;
     if (!json_is_object(check))
@@ -56,7 +56,7 @@ static int parse_options(json_t *check, fm_check_pass_input *in, fm_http_error *
         } else if (!strcmp(key, "max_ramp") && ok && d >= 0 && d <= 90) {
             in->options.max_ramp_deg = d;
         } else if (!strcmp(key, "voxel") && ok && d >= 0.01 && d <= 100) {
-            in->check_voxel_mm = d;
+            in->voxel_mm = d;
         } else if (!strcmp(key, "clearance") || !strcmp(key, "rapid_clearance") ||
                    !strcmp(key, "tolerance") || !strcmp(key, "max_ramp") ||
                    !strcmp(key, "voxel")) {
@@ -74,8 +74,8 @@ static int parse_options(json_t *check, fm_check_pass_input *in, fm_http_error *
 
 int fm_jobs_check_validate(json_t *spec, fm_http_error *err)
 {
-    fm_check_pass_input in;
-    fm_check_pass_input_default(&in);
+    fm_job_check in;
+    fm_job_check_default(&in);
     return parse_options(check_options_of(spec), &in, err);
 }
 
@@ -103,43 +103,71 @@ static fm_status write_model(json_t *model, const char *dir, const char *stem, c
     return st;
 }
 
+struct fm_jobs_check_setup {
+    fm_job_check check;
+    char paths[FM_JOB_MAX_FIXTURES][PATH_MAX];
+};
+
+const fm_job_check *fm_jobs_check_of(const fm_jobs_check_setup *setup) { return &setup->check; }
+
+void fm_jobs_check_setup_free(fm_jobs_check_setup *setup) { free(setup); }
+
+fm_status fm_jobs_check_prepare(json_t *spec, const char *dir, fm_jobs_check_setup **out,
+                                fm_error *err)
+{
+    *out = NULL;
+    fm_jobs_check_setup *cs = calloc(1, sizeof *cs);
+    if (!cs) return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    fm_job_check_default(&cs->check);
+    fm_http_error herr;
+    if (parse_options(check_options_of(spec), &cs->check, &herr)) {
+        free(cs);
+        return fm_error_set(err, FM_ERR_INPUT, "%s", herr.message);
+    }
+    json_t *fixtures = json_object_get(spec, "fixtures");
+    size_t i;
+    json_t *f;
+    json_array_foreach(fixtures, i, f)
+    {
+        if (i >= FM_JOB_MAX_FIXTURES) break;
+        char stem[32];
+        snprintf(stem, sizeof stem, "check-fixture%zu", i);
+        fm_status st = write_model(f, dir, stem, cs->paths[i], sizeof cs->paths[i], err);
+        if (st != FM_OK) {
+            free(cs);
+            return st;
+        }
+        cs->check.fixtures[cs->check.fixture_count++] = cs->paths[i];
+    }
+    *out = cs;
+    return FM_OK;
+}
+
 fm_status fm_jobs_check_run(json_t *spec, const char *dir, size_t memory_budget,
                             fm_jobs_check_result *out, fm_error *err)
 {
-    int stopped;
-    return fm_jobs_check_run_until(spec, dir, memory_budget, NULL, NULL, out, &stopped, err);
-}
-
-fm_status fm_jobs_check_run_until(json_t *spec, const char *dir, size_t memory_budget,
-                                  int (*keep_going)(void *user), void *user,
-                                  fm_jobs_check_result *out, int *stopped, fm_error *err)
-{
     memset(out, 0, sizeof *out);
-    *stopped = 0;
     fm_check_pass_input *in = calloc(1, sizeof *in);
-    char (*paths)[PATH_MAX] = calloc(FM_CHECK_PASS_MAX_FIXTURES + 1, sizeof *paths);
+    char *stock_path = calloc(1, PATH_MAX);
+    fm_jobs_check_setup *cs = NULL;
     fm_tool_table table;
     memset(&table, 0, sizeof table);
     char *tools_text = NULL, *trajectory_text = NULL;
     fm_status st = FM_OK;
-    if (!in || !paths) {
+    if (!in || !stock_path) {
         st = fm_error_set(err, FM_ERR_LIMIT, "out of memory");
         goto done;
     }
     fm_check_pass_input_default(in);
-    in->keep_going = keep_going;
-    in->keep_going_user = user;
-    fm_http_error herr;
-    if (parse_options(check_options_of(spec), in, &herr)) {
-        st = fm_error_set(err, FM_ERR_INPUT, "%s", herr.message);
-        goto done;
-    }
+    if ((st = fm_jobs_check_prepare(spec, dir, &cs, err)) != FM_OK) goto done;
+    in->check = cs->check;
     json_t *options = json_object_get(spec, "options");
     json_t *v;
     if ((v = json_object_get(options, "rapid_rate"))) in->spec.rapid_rate = json_number_value(v);
-    else if (in->options.machine.rapid_rate > 0) in->spec.rapid_rate = in->options.machine.rapid_rate;
+    else if (in->check.options.machine.rapid_rate > 0)
+        in->spec.rapid_rate = in->check.options.machine.rapid_rate;
     in->spec.stock.memory_budget = memory_budget;
-    in->spec.stock.threads = 1; /* the coarse grid is small; leave the cores to the simulations */
+    in->spec.stock.threads = 1; /* a request's thread; leave the cores to the jobs */
 
     tools_text = json_dumps(json_object_get(spec, "tools"), JSON_INDENT(1));
     st = tools_text ? fm_tooltable_parse_json(tools_text, strlen(tools_text), "tools", &table, err)
@@ -158,9 +186,9 @@ fm_status fm_jobs_check_run_until(json_t *spec, const char *dir, size_t memory_b
 
     json_t *stock = json_object_get(spec, "stock");
     if (json_is_string(stock)) in->spec.stock_spec = json_string_value(stock);
-    else if ((st = write_model(stock, dir, "check-stock", paths[0], sizeof paths[0], err)) != FM_OK)
+    else if ((st = write_model(stock, dir, "check-stock", stock_path, PATH_MAX, err)) != FM_OK)
         goto done;
-    else in->spec.stock_spec = paths[0];
+    else in->spec.stock_spec = stock_path;
 
     json_t *program = json_object_get(spec, "program");
     json_t *gcode = json_object_get(program, "gcode");
@@ -177,26 +205,8 @@ fm_status fm_jobs_check_run_until(json_t *spec, const char *dir, size_t memory_b
         in->spec.program_kind = FM_PROGRAM_TRAJECTORY;
     }
 
-    json_t *fixtures = json_object_get(spec, "fixtures");
-    size_t i;
-    json_t *f;
-    json_array_foreach(fixtures, i, f)
-    {
-        if (i >= FM_CHECK_PASS_MAX_FIXTURES) break;
-        char stem[32];
-        snprintf(stem, sizeof stem, "check-fixture%zu", i);
-        if ((st = write_model(f, dir, stem, paths[i + 1], sizeof paths[i + 1], err)) != FM_OK)
-            goto done;
-        in->fixtures[in->fixture_count++] = paths[i + 1];
-    }
-
     fm_check *check = NULL;
     st = fm_check_pass_run(in, &check, NULL, err);
-    if (st != FM_OK && keep_going && !keep_going(user)) {
-        *stopped = 1;
-        st = FM_OK;
-        goto done;
-    }
     if (st != FM_OK) goto done;
     out->findings = fm_findings_json_array(check);
     out->count = (int)fm_check_count(check);
@@ -208,7 +218,8 @@ done:
     free(tools_text);
     free(trajectory_text);
     fm_tool_table_free(&table);
-    free(paths);
+    fm_jobs_check_setup_free(cs);
+    free(stock_path);
     free(in);
     return st;
 }

@@ -1,13 +1,14 @@
-/* jobs_check.h: the collision check (lib/check) over a canonical job
- * (fm_http_job_parse): for every job before it is simulated, and for POST
- * /v1/check. Both run check_pass.c, the pass `frepmill check` runs, so the
- * findings are the CLI's for the same inputs. */
+/* jobs_check.h: the collision check (lib/check) of a canonical job
+ * (fm_http_job_parse): set up for a job's own pass (the runner checks as it
+ * cuts, job.h), or run alone for POST /v1/check (check_pass.c, as
+ * `frepmill check`). Both give the CLI's findings for the same inputs. */
 #ifndef FM_DAEMON_JOBS_CHECK_H
 #define FM_DAEMON_JOBS_CHECK_H
 
 #include <jansson.h>
 
 #include "http/http_server.h"
+#include "runner/job.h"
 
 /* The largest program (bytes of G-code or trajectory JSON) POST /v1/check
  * answers synchronously; larger programs go through POST /v1/jobs. */
@@ -23,23 +24,27 @@ int fm_jobs_check_validate(json_t *spec, fm_http_error *err);
 /* 1 unless options.check is false. */
 int fm_jobs_check_enabled(json_t *spec);
 
+/* The check of a canonical job as the runner takes it (job.h): options,
+ * the check's voxel and the fixtures, which are written to files in dir
+ * (the job's folder, or a private temporary folder) because lib/check
+ * reads models from files; *rapid_rate gets the machine's rapid rate (0
+ * when none). Free with fm_jobs_check_setup_free. */
+typedef struct fm_jobs_check_setup fm_jobs_check_setup;
+fm_status fm_jobs_check_prepare(json_t *spec, const char *dir, fm_jobs_check_setup **out,
+                                fm_error *err);
+const fm_job_check *fm_jobs_check_of(const fm_jobs_check_setup *setup);
+void fm_jobs_check_setup_free(fm_jobs_check_setup *setup);
+
 typedef struct fm_jobs_check_result {
     json_t *findings;  /* array, as `frepmill check` prints it (new reference) */
     int count, errors, warnings;
     int first_line;    /* source line of the first finding, 0 if none */
 } fm_jobs_check_result;
 
-/* Run the check of spec. Inline stock and fixture models are written to
- * files in dir (the job's folder, or a private temporary folder) because
- * lib/check and the runner read models from files. memory_budget bounds the
- * coarse grid. On failure err has the fm_status code and where. */
+/* The check alone (check_pass.h), for POST /v1/check. memory_budget bounds
+ * the grid. On failure err has the fm_status code and where. */
 fm_status fm_jobs_check_run(json_t *spec, const char *dir, size_t memory_budget,
                             fm_jobs_check_result *out, fm_error *err);
-/* The same, stopped early (*stopped = 1, FM_OK, no findings) when
- * keep_going(user) returns 0 before a motion. */
-fm_status fm_jobs_check_run_until(json_t *spec, const char *dir, size_t memory_budget,
-                                  int (*keep_going)(void *user), void *user,
-                                  fm_jobs_check_result *out, int *stopped, fm_error *err);
 
 /* POST /v1/check: the same inputs as a job; {"findings": [...], "errors",
  * "warnings"} or an error status. state_dir holds the private temporary

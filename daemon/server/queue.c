@@ -13,6 +13,7 @@
 #include "jobs_check.h"
 #include "jobs_internal.h"
 #include "log.h"
+#include "runner/findings_json.h"
 #include "runner/report_json.h"
 #include "toolpaths/tooltable/tooltable.h"
 
@@ -93,16 +94,18 @@ void fm_queue_finish(fm_jobs *jobs, job *j, fm_job_state state, const char *what
     fm_jobs_notify_end(jobs, j);
 }
 
-/* The check pass of a job stops for cancel, delete and shutdown like the
- * simulation does. */
-static int check_keep_going(void *user)
+/* The check opened a finding: published at once (status, `finding` event,
+ * Modbus registers 23-25) while the job goes on cutting. */
+static void on_finding(void *user, const fm_check *check, size_t index)
 {
     run_ctx *rc = user;
-    if (atomic_load(&rc->j->cancel_requested)) return 0;
-    pthread_mutex_lock(&rc->jobs->lock);
-    int stopping = rc->jobs->stopping;
-    pthread_mutex_unlock(&rc->jobs->lock);
-    return !stopping;
+    job *j = rc->j;
+    json_t *all = fm_findings_json_array(check);
+    pthread_mutex_lock(&j->lock);
+    fm_publish_findings(j, all);
+    fm_publish_event(j, "finding", fm_finding_json(fm_check_get(check, index)));
+    pthread_mutex_unlock(&j->lock);
+    json_decref(all);
 }
 
 static void run_job(fm_jobs *jobs, job *j)
@@ -164,35 +167,24 @@ static void run_job(fm_jobs *jobs, job *j)
         spec.skip_motions = from;
         fm_log(FM_LOG_INFO, "job %s: resuming from its snapshot at motion %ld", j->id, from);
     }
-    /* The collision check first, as its own coarse pass (check_pass.h):
-     * the findings are known before the simulation starts (a gate wants
-     * them early) and are the ones `frepmill check` gives. */
+    /* The collision check runs in the same pass as the cut, on a grid of
+     * its own voxel (job.h): findings are published as they are found and
+     * are the ones `frepmill check` gives. */
+    fm_jobs_check_setup *check_setup = NULL;
     if (st == FM_OK && fm_jobs_check_enabled(j->spec)) {
-        fm_jobs_check_result cr;
-        double t0 = fm_jobs_mono_s();
-        int stopped = 0;
-        st = fm_jobs_check_run_until(j->spec, j->dir, spec.stock.memory_budget, check_keep_going,
-                                     &rc, &cr, &stopped, &err);
-        /* Stopped (cancel, shutdown): the runner below stops at its first
-         * cut and takes the usual path (cancelled, or resumed next start). */
-        if (st == FM_OK && !stopped) {
-            pthread_mutex_lock(&j->lock);
-            fm_publish_findings(j, cr.findings);
-            size_t i;
-            json_t *f;
-            json_array_foreach(cr.findings, i, f) fm_publish_event(j, "finding", json_incref(f));
-            pthread_mutex_unlock(&j->lock);
-            fm_log(cr.errors ? FM_LOG_WARN : FM_LOG_INFO,
-                   "job %s: check: %d errors, %d warnings (first at line %d) in %.2f s", j->id,
-                   cr.errors, cr.warnings, cr.first_line, fm_jobs_mono_s() - t0);
-            json_decref(cr.findings);
+        st = fm_jobs_check_prepare(j->spec, j->dir, &check_setup, &err);
+        if (st == FM_OK) {
+            spec.check = fm_jobs_check_of(check_setup);
+            /* the machine's rapid rate times the job, unless options give one */
+            if (!json_object_get(options, "rapid_rate") && spec.check->options.machine.rapid_rate > 0)
+                spec.rapid_rate = spec.check->options.machine.rapid_rate;
         }
     }
     if (st == FM_OK) fm_log(FM_LOG_INFO, "job %s: running", j->id);
 
     fm_job_result result;
     memset(&result, 0, sizeof result);
-    fm_job_hooks hooks = {.user = &rc, .progress = on_progress};
+    fm_job_hooks hooks = {.user = &rc, .progress = on_progress, .on_finding = on_finding};
     if (st == FM_OK) {
         st = fm_job_run(&spec, &hooks, &result, &err);
         spec.resume_stock = NULL; /* the runner took it */
@@ -203,6 +195,19 @@ static void run_job(fm_jobs *jobs, job *j)
     free(tools_text);
     free(trajectory_text);
     fm_tool_table_free(&table);
+    fm_jobs_check_setup_free(check_setup);
+    if (st == FM_OK && result.check) {
+        /* the findings as the check closed them (final depths and extents) */
+        json_t *findings = fm_findings_json_array(result.check);
+        pthread_mutex_lock(&j->lock);
+        fm_publish_findings(j, findings);
+        pthread_mutex_unlock(&j->lock);
+        fm_log(fm_check_count_severity(result.check, FM_CHECK_ERROR) ? FM_LOG_WARN : FM_LOG_INFO,
+               "job %s: check: %zu errors, %zu warnings in %.2f s of the pass", j->id,
+               fm_check_count_severity(result.check, FM_CHECK_ERROR),
+               fm_check_count_severity(result.check, FM_CHECK_WARNING), result.check_time_s);
+        json_decref(findings);
+    }
 
     if (st != FM_OK) {
         pthread_mutex_lock(&j->lock);
@@ -223,6 +228,7 @@ static void run_job(fm_jobs *jobs, job *j)
         /* Stopping: keep the work done, resume at the next start. */
         fm_job_store_save_snapshot(j, result.stock, rc.resume_from);
         fm_stock_free(result.stock);
+        fm_check_free(result.check);
         pthread_mutex_lock(&j->lock);
         j->state = FM_JOB_QUEUED;
         pthread_mutex_unlock(&j->lock);
@@ -236,6 +242,7 @@ static void run_job(fm_jobs *jobs, job *j)
     pthread_mutex_unlock(&jobs->lock);
     if (deleted) {
         fm_stock_free(result.stock);
+        fm_check_free(result.check);
         fm_job_store_remove_deleted(j);
         fm_log(FM_LOG_INFO, "job %s: stopped (deleted)", j->id);
         return;
@@ -248,6 +255,7 @@ static void run_job(fm_jobs *jobs, job *j)
     pthread_mutex_unlock(&j->lock);
     fm_job_store_save_snapshot(j, result.stock, result.stopped ? rc.resume_from : result.motions);
     fm_stock_free(result.stock);
+    fm_check_free(result.check);
     if (result.stopped) {
         fm_queue_finish(jobs, j, FM_JOB_CANCELLED, "cancelled");
     } else {

@@ -1,19 +1,23 @@
 /* check.h: collision and safety relations between the moving tool, the
- * stock, fixtures and the machine (issue 8). The caller feeds every motion,
- * in program order, with the stock as it is when that motion starts (the
- * job runner's before_motion hook); the check records findings: rapids into
- * the stock, shank and holder contact, fixture contact, plunges with a tool
- * that cannot cut at its centre, cutting with the spindle stopped, travel
- * limits, and a start position inside the stock.
+ * stock, fixtures and the machine (issues 8 and 14): rapids into the stock,
+ * shank and holder contact, fixture contact, plunges with a tool that cannot
+ * cut at its centre, cutting with the spindle stopped, travel limits, a
+ * start position inside the stock, and the places where a search could not
+ * decide (uncertain).
  *
- * Two solids interfere where the maximum of their R-conjunction (min) is not
- * negative (Pasko 1995 sec. 2.3.3, Shapiro 2007 sec. 6.5). Both fields are
- * distances, so that maximum is the penetration depth. It is computed by a
- * Lipschitz branch-and-bound against an upper bound of the stock's distance
- * (the coarse grid inflated by its interpolation error, tightened by the
- * exact swept volumes of the motions that cut it); docs/check.md argues why
- * no contact deeper than the tolerance is missed. No JSON and no printing
- * here: daemon/runner/findings_json.c writes the findings. */
+ * The check runs in the same pass as the cut (DESIGN.md, "Checking in the
+ * same pass"): the caller feeds every motion in program order with the
+ * stock grid as it is then, except for the motions fed since its last
+ * fm_check_stock_cut, whose flute sweeps are applied exactly. Within a
+ * motion the flutes lead: a point is in contact with the shank or holder at
+ * time t when it is inside that part at t and inside the stock before the
+ * motion less the flutes' sweep over [t0, t]. The parts are evaluated at
+ * the grid's voxel centres, where the grid holds the stock's exact distance
+ * (clamped to its band); penetration_mm is how far the part went into what
+ * it entered: the largest depth below the surface of the stock (or
+ * fixture) of a point of the part, in millimetres. docs/check.md argues
+ * what is never reported and what is never missed. No JSON and no
+ * printing here: daemon/runner/findings_json.c writes the findings. */
 #ifndef FM_CHECK_H
 #define FM_CHECK_H
 
@@ -33,6 +37,7 @@ typedef enum fm_check_kind {
     FM_CHECK_SPINDLE_OFF_CUT,      /* a feed motion cuts the stock with the spindle stopped */
     FM_CHECK_TRAVEL_LIMIT,         /* a programmed point outside the machine's travel */
     FM_CHECK_START_IN_STOCK,       /* the tool at the start position is in the stock */
+    FM_CHECK_UNCERTAIN,            /* a search stopped at its budget where it mattered */
     FM_CHECK_KIND_COUNT
 } fm_check_kind;
 
@@ -69,12 +74,13 @@ typedef struct fm_check_options {
      * from the plane normal to the axis is a plunge (degrees). */
     double max_ramp_deg;
     fm_check_machine machine;
-    /* How many of the latest cutting motions near a place tighten the
-     * stock's distance bound there (0: 64). */
-    size_t history_terms;
 } fm_check_options;
 
 void fm_check_options_default(fm_check_options *opt);
+
+/* The band (voxels) a grid of this voxel size needs for these options: the
+ * clearances must lie inside it. */
+int fm_check_band_voxels(const fm_check_options *opt, double voxel_mm);
 
 typedef struct fm_check_finding {
     fm_check_kind kind;
@@ -89,6 +95,7 @@ typedef struct fm_check_finding {
     double contact[3];      /* first contact point */
     int last_line;          /* source line of the last motion grouped into it */
     long motions;           /* motions grouped into it */
+    long points;            /* FM_CHECK_UNCERTAIN: the points left undecided; else 0 */
 } fm_check_finding;
 
 typedef struct fm_check fm_check;
@@ -97,24 +104,37 @@ typedef struct fm_check fm_check;
 fm_check *fm_check_new(const fm_check_options *opt, fm_error *err);
 void fm_check_free(fm_check *check);
 
-/* The stock as first created, as an exact field (positive inside, first
- * order, at least the true signed distance): tightens the bound where
- * nothing has cut yet. Optional. */
+/* The stock as first created, as an exact field (a box: positive inside,
+ * its true distance): bounds depths beyond the grid's band without a
+ * search. Optional. */
 void fm_check_set_initial_box(fm_check *check, const double lo[3], const double hi[3]);
 
-/* Fixtures: a HyperFun model (distance-like, positive inside; the last or
- * the named object) or a closed STL mesh rasterized at voxel_mm. */
+/* Where the tool can go (the box of every part over the whole program):
+ * fixtures that are not bounded (a table as a half-space) are kept within
+ * it, widened by FM_CHECK_FIXTURE_MARGIN_MM. Set it before adding them. */
+#define FM_CHECK_FIXTURE_MARGIN_MM 20.0
+void fm_check_set_region(fm_check *check, const double lo[3], const double hi[3]);
+
+/* Fixtures become level sets of voxel_mm whose band holds true distances:
+ * a HyperFun model (positive inside, any scale: its zero set is the
+ * surface; the last or the named object) or a closed STL mesh. Add them
+ * before the first motion. */
 fm_status fm_check_add_fixture_hf(fm_check *check, const char *path, const char *model_name,
-                                  fm_error *err);
+                                  double voxel_mm, fm_error *err);
 fm_status fm_check_add_fixture_stl(fm_check *check, const char *path, double voxel_mm,
                                    fm_error *err);
 size_t fm_check_fixture_count(const fm_check *check);
 
-/* Check one motion against the stock as it is before the motion cuts
- * (tool NULL: nothing in the spindle). The caller then cuts the motion's
- * flute sweep from the stock, as the job runner does. */
+/* Check one motion (tool NULL: nothing in the spindle). stock is the grid
+ * with every motion before this one cut, except those fed since the last
+ * fm_check_stock_cut (at most FM_CHECK_MAX_PENDING). The motion's flutes
+ * then count as not yet cut until the next fm_check_stock_cut. A PARAM
+ * motion's path must stay valid until then. */
+#define FM_CHECK_MAX_PENDING 1024
 fm_status fm_check_motion(fm_check *check, const fm_motion *motion, const fm_tool *tool,
                           const fm_stock *stock, fm_error *err);
+/* The motions fed so far are now cut from the stock grid. */
+void fm_check_stock_cut(fm_check *check);
 /* Close the findings still open (call after the last motion). */
 void fm_check_finish(fm_check *check);
 
@@ -129,9 +149,13 @@ const char *fm_check_part_name(fm_check_part part);
 /* Work done, for benchmarks. */
 typedef struct fm_check_stats {
     long motions;
-    long relations;       /* part-versus-target relations evaluated */
-    long skipped;         /* relations skipped by their bounds alone */
-    long boxes;           /* branch-and-bound boxes */
+    long relations;       /* part-versus-grid relations evaluated */
+    long skipped;         /* relations no region of the grid could answer */
+    long regions;         /* leaves and tiles looked at */
+    long voxels;          /* voxel centres the part was evaluated at */
+    long ordered;         /* of those, evaluated against the flutes' sweep up to a time */
+    long depth_searches;  /* depths beyond the band, searched in the grid */
+    long uncertain;       /* points a search left undecided (see FM_CHECK_UNCERTAIN) */
 } fm_check_stats;
 void fm_check_get_stats(const fm_check *check, fm_check_stats *stats);
 

@@ -1,6 +1,6 @@
 /* check_internal.h: what the files of lib/check share and nobody else sees:
- * the check's state, the targets a swept part is related to (the stock's
- * distance bound, fixtures) and the branch-and-bound over boxes. */
+ * the check's state, the flute sweeps not yet cut from the grid, fixtures
+ * as grids, and one relation of a swept part to a grid (relate.c). */
 #ifndef FM_CHECK_INTERNAL_H
 #define FM_CHECK_INTERNAL_H
 
@@ -8,15 +8,13 @@
 #include "frep/frep.h"
 #include "sweep/sweep.h"
 
-/* A motion that cut the stock: -S is an upper bound of the stock's
- * distance from then on. */
-typedef struct check_history {
+/* A motion fed but not yet cut from the grid: -S of its flutes is an exact
+ * term of the stock's distance until the caller cuts it. */
+typedef struct check_pending {
     fm_sweep *sweep;
-    fm_sweep_worker *worker;
+    fm_sweep_worker *worker; /* the check's worker for that tool's flutes */
     double lo[3], hi[3];
-    int straight;           /* a line with a fixed axis: retracing it is free */
-    double tip0[3], tip1[3], axis[3];
-} check_history;
+} check_pending;
 
 /* A worker points into the sweep it was made from: each is made from a
  * sweep of its own that lives as long as it does. */
@@ -28,87 +26,96 @@ typedef struct check_workers {
 
 typedef struct check_fixture {
     char name[256];
-    /* HyperFun: a compiled model */
-    fm_graph *graph;
-    fm_tape *tape;
-    fm_evaluator *ev;
-    /* STL: a level set */
-    fm_stock *grid;
-    double lo[3], hi[3]; /* where it can be positive */
+    fm_stock *grid; /* true distances in its band, mm */
 } check_fixture;
 
 void check_fixture_free(check_fixture *fx);
 
-/* A level set (the stock or an STL fixture) read as an upper bound of a
- * 1-Lipschitz distance: G(p) <= I(p) + e(p) while that stays below the
- * band (docs/check.md). */
-typedef struct check_grid {
-    const fm_stock *stock;
-    double voxel, band, origin[3];
-    double lo[3], hi[3]; /* world box of the active voxels, widened by a voxel */
-} check_grid;
-
-int check_grid_init(check_grid *g, const fm_stock *stock);
-
-typedef struct check_target {
-    fm_check *check;
-    check_grid grid;
-    int has_grid;
-    check_fixture *fixture; /* NULL: the stock */
-    int have_box;
-    double box_lo[3], box_hi[3];
-    const check_history *history;
-    const size_t *pick;
-    size_t pick_count;
-    double lo[3], hi[3]; /* region searched */
-} check_target;
-
-typedef struct check_bb {
-    fm_check *check;
-    const fm_sweep *sweep;
-    fm_sweep_worker *worker;
-    int custom;    /* the part is not a distance: use the sweep's interval */
-    double clear;  /* S + clear is related */
-    check_target *target;
-    double tol;
-} check_bb;
-
-typedef struct check_bb_result {
-    int found;
-    double value; /* detect: a value above the threshold; maximize: the maximum (upper bound) */
-    double at[3];
-} check_bb_result;
-
-/* Is max over the region of min(S + clear, F) above 3/4 of the tolerance?
- * Never misses a maximum above the tolerance. */
-fm_status check_bb_detect(check_bb *bb, const double lo[3], const double hi[3],
-                          check_bb_result *out, fm_error *err);
-/* The maximum of min(S + clear, F) over the region, from above, within a
- * quarter of the tolerance. */
-fm_status check_bb_maximize(check_bb *bb, const double lo[3], const double hi[3],
-                            check_bb_result *out, fm_error *err);
-/* Detect for the part standing still at the pose of motion m at parameter
- * u in [0, 1]. */
-fm_status check_static_detect(check_bb *bb, const fm_motion *m, const fm_tool_part *part, double u,
-                              check_bb_result *out, int *found, fm_error *err);
+/* A leaf copied from the grid for a relation: its values and where. */
+typedef struct check_leaf {
+    int32_t lo[3];
+    float max;      /* largest value in it */
+    float values[512];
+} check_leaf;
 
 typedef struct check_box {
-    double lo[3], hi[3];
+    int32_t lo[3], hi[3];
 } check_box;
+
+/* A contact voxel whose grid value is clamped at the band: its depth is
+ * searched for in the grid afterwards. cap is min of the exact terms (the
+ * flutes not yet cut, the flutes' sweep up to the contact time); part the
+ * part's value then (negative: the point lies that far outside it). */
+typedef struct check_deep {
+    double p[3];
+    double cap, part, t;
+} check_deep;
+
+/* One relation: a part swept over a motion against a grid (the stock or a
+ * fixture). For every voxel centre v near the part, with G the grid's
+ * distance there less the flutes not yet cut,
+ *     Q(v) = min(G(v), -M(v, t)) + min(0, P_t(v))
+ * is a lower bound of the depth of a point of the part at time t below the
+ * grid's surface (P the part, 1-Lipschitz; M the flutes' sweep up to t
+ * when they lead, else nothing): Q above the threshold proves a contact. */
+typedef struct check_rel {
+    fm_check *check;
+    const fm_stock *grid;
+    int is_stock;           /* pending cuts and the initial box apply */
+    double voxel, band, origin[3];
+    const fm_motion *motion;
+    const fm_tool_part *shape;
+    const fm_sweep *sweep;  /* the part over the motion */
+    fm_sweep_worker *worker;
+    int custom;             /* the part is not a distance: only points inside it count */
+    /* the flutes leading the part within the motion (NULL: no time order) */
+    const fm_tool_part *flutes_shape;
+    const fm_sweep *flutes;
+    fm_sweep_worker *flutes_worker; /* also evaluates the flutes' sweeps up to a time */
+    double threshold;       /* Q above it is reported (a contact, or a near miss) */
+    double reach;           /* voxels farther outside the part are not looked at */
+    double known;           /* depth already known (an open finding) */
+    int need_first;         /* find the first contact's time and place */
+
+    int found;
+    double depth;           /* the largest Q proven (then searched beyond the band) */
+    double depth_at[3], depth_t;
+    double first_t, first_at[3];
+    long uncertain;
+    double uncertain_at[3], uncertain_t;
+} check_rel;
+
+fm_status check_relate(check_rel *r, fm_error *err);
+
+/* The distance from p to the grid's surface, from above: the smallest
+ * |p - u| + G(u) over voxels u within the band (and outside tiles), found
+ * within limit; returns limit when nothing is nearer. */
+double check_grid_depth(fm_check *c, const fm_stock *grid, const double p[3], double limit,
+                        fm_error *err);
+
+/* geometry.c: the motion up to parameter u in [0, 1] (a prefix of it, as
+ * lib/sweep parameterizes it); an arc's swept angle (radians, positive),
+ * start radius, start angle and direction; the descent of a feed motion
+ * along the tool axis (degrees; 0 level or climbing, 90 a plunge); the box
+ * of the programmed point over a motion. */
+void check_motion_prefix(const fm_motion *m, double u, fm_motion *out);
+double check_arc_angle(const fm_motion *m, double *radius, double *a0, int *ccw);
+double check_descent_deg(const fm_motion *m);
+void check_motion_point_bounds(const fm_motion *m, double lo[3], double hi[3]);
 
 struct fm_check {
     fm_check_options opt;
     int started;
     int have_box;
     double box_lo[3], box_hi[3];
+    int have_region;
+    double region_lo[3], region_hi[3];
 
     check_fixture *fixtures;
     size_t fixture_count;
 
-    check_history *history;
-    size_t history_count, history_cap;
-    size_t *pick;
-    size_t pick_cap;
+    check_pending *pending;
+    size_t pending_count, pending_cap;
 
     check_workers *workers;
     size_t worker_count, worker_cap;
@@ -119,15 +126,15 @@ struct fm_check {
     int open[FM_CHECK_KIND_COUNT][FM_CHECK_PART_COUNT];
     int *open_fixture; /* fixture * FM_CHECK_PART_COUNT + part */
 
-    /* the stock's active box, cached per stock version */
-    const fm_stock *bounds_stock;
-    uint64_t bounds_version;
-    int bounds_ok;
-    double bounds_lo[3], bounds_hi[3];
+    /* scratch of the relations, kept between them */
+    check_leaf *leaves;
+    size_t leaf_count, leaf_cap;
+    check_box *tiles;
+    size_t tile_count, tile_cap;
+    check_deep *deep;
+    size_t deep_count, deep_cap;
+    fm_status scratch_status;
 
-    int need_first; /* the relation being run must find its first contact */
-    check_box *stack;
-    size_t stack_cap;
     fm_check_stats stats;
 };
 

@@ -1,6 +1,9 @@
-/* fixtures.c: clamps, vises and tables the tool must not touch, given as
- * HyperFun models (evaluated exactly, with interval bounds) or closed STL
- * meshes (rasterized to a level set and read like the stock). */
+/* fixtures.c: clamps, vises and tables the tool must not touch, as level
+ * sets at the check's voxel whose band holds true distances in millimetres:
+ * a HyperFun model through its zero set (whatever the model's scale: a
+ * model whose gradient is 0.1 is measured in mm, not in tenths), a closed
+ * STL mesh through OpenVDB's mesh-to-volume. The check relates the tool's
+ * parts to them as it does to the stock (relate.c). */
 #include "check/check_internal.h"
 
 #include <math.h>
@@ -17,14 +20,20 @@
 
 void check_fixture_free(check_fixture *fx)
 {
-    fm_evaluator_free(fx->ev);
-    fm_tape_free(fx->tape);
-    fm_graph_free(fx->graph);
     fm_stock_free(fx->grid);
     memset(fx, 0, sizeof *fx);
 }
 
 size_t fm_check_fixture_count(const fm_check *c) { return c->fixture_count; }
+
+void fm_check_set_region(fm_check *c, const double lo[3], const double hi[3])
+{
+    c->have_region = 1;
+    for (int a = 0; a < 3; a++) {
+        c->region_lo[a] = lo[a];
+        c->region_hi[a] = hi[a];
+    }
+}
 
 static check_fixture *new_fixture(fm_check *c, const char *path, fm_error *err)
 {
@@ -46,61 +55,118 @@ static check_fixture *new_fixture(fm_check *c, const char *path, fm_error *err)
     return fx;
 }
 
+/* A fixture does not change: its grid gets the widest band lib/stock
+ * allows, so that depths into it (up to 32 voxels) are read, not searched. */
+static void grid_options(const fm_check *c, double voxel_mm, fm_stock_options *so)
+{
+    (void)c;
+    fm_stock_options_default(so);
+    if (voxel_mm > 0) so->voxel_mm = voxel_mm;
+    so->band_voxels = 32;
+}
+
 fm_status fm_check_add_fixture_hf(fm_check *c, const char *path, const char *model_name,
-                                  fm_error *err)
+                                  double voxel_mm, fm_error *err)
 {
     check_fixture *fx = new_fixture(c, path, err);
     if (!fx) return err ? err->code : FM_ERR_INPUT;
     fm_status st = FM_OK;
-    fx->graph = fm_graph_new(0);
-    if (!fx->graph) {
+    fm_tape *tape = NULL;
+    fm_evaluator *ev = NULL;
+    fm_field field;
+    memset(&field, 0, sizeof field);
+    fm_graph *graph = fm_graph_new(0);
+    if (!graph) {
         st = fm_error_set(err, FM_ERR_LIMIT, "out of memory");
-        goto fail;
+        goto done;
     }
     fm_hf_model model;
-    st = fm_hf_compile_file(fx->graph, path, model_name, &model, err);
-    if (st != FM_OK) goto fail;
+    st = fm_hf_compile_file(graph, path, model_name, &model, err);
+    if (st != FM_OK) goto done;
     if (model.dimension > 3) {
         st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
                          "the fixture model '%s' is %dD; a fixture is a 3D object (x[3])",
                          model.name, model.dimension);
-        goto fail;
+        goto done;
     }
-    fx->tape = fm_tape_compile(fx->graph, model.root, err);
-    if (!fx->tape) {
+    tape = fm_tape_compile(graph, model.root, err);
+    if (!tape) {
         st = err ? err->code : FM_ERR_INPUT;
-        goto fail;
+        goto done;
     }
-    fx->ev = fm_evaluator_new(fx->tape, err);
-    if (!fx->ev) {
+    ev = fm_evaluator_new(tape, err);
+    if (!ev) {
         st = err ? err->code : FM_ERR_INPUT;
-        goto fail;
+        goto done;
     }
     fm_inside_bounds s;
     fm_interval start[3];
     for (int a = 0; a < 3; a++)
         start[a] = (fm_interval){-CHECK_FIXTURE_SEARCH_MM, CHECK_FIXTURE_SEARCH_MM};
-    if (fm_find_inside_bounds(fx->ev, start, CHECK_FIXTURE_MIN_BOX_MM, CHECK_FIXTURE_MAX_BOXES,
+    if (fm_find_inside_bounds(ev, start, CHECK_FIXTURE_MIN_BOX_MM, CHECK_FIXTURE_MAX_BOXES,
                               &s) != FM_OK) {
         st = fm_error_at(err, FM_ERR_LIMIT, path, 0, 0,
                          "the fixture model's boundary is too complex to bound");
-        goto fail;
+        goto done;
     }
     if (!s.found) {
-        st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "the fixture model '%s' is empty within +-%.0f mm",
-                         model.name, CHECK_FIXTURE_SEARCH_MM);
-        goto fail;
+        st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                         "the fixture model '%s' is empty within +-%.0f mm", model.name,
+                         CHECK_FIXTURE_SEARCH_MM);
+        goto done;
     }
-    /* A fixture reaching the search cube's faces is unbounded (a table as
-     * a half-space): keep those sides open. */
+    /* A fixture reaching the search cube's faces is not bounded (a table as
+     * a half-space): it is kept within the region the tool can reach, with
+     * a margin, so that its artificial faces lie beyond every depth the
+     * check measures up to that margin. */
+    fm_stock_options so;
+    grid_options(c, voxel_mm, &so);
+    double lo[3], hi[3];
     for (int a = 0; a < 3; a++) {
-        fx->lo[a] = s.lo[a] <= -CHECK_FIXTURE_SEARCH_MM ? -INFINITY : s.lo[a];
-        fx->hi[a] = s.hi[a] >= CHECK_FIXTURE_SEARCH_MM ? INFINITY : s.hi[a];
+        int open_lo = s.lo[a] <= -CHECK_FIXTURE_SEARCH_MM, open_hi = s.hi[a] >= CHECK_FIXTURE_SEARCH_MM;
+        if ((open_lo || open_hi) && !c->have_region) {
+            st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                             "the fixture model '%s' is not bounded along %c and no region for "
+                             "the tool is known; intersect it with a block",
+                             model.name, "xyz"[a]);
+            goto done;
+        }
+        double margin = FM_CHECK_FIXTURE_MARGIN_MM;
+        lo[a] = open_lo ? c->region_lo[a] - margin : s.lo[a];
+        hi[a] = open_hi ? c->region_hi[a] + margin : s.hi[a];
+        if (c->have_region) {
+            lo[a] = fmax(lo[a], c->region_lo[a] - margin);
+            hi[a] = fmin(hi[a], c->region_hi[a] + margin);
+        }
+        /* room for the band on both sides of the surface */
+        lo[a] -= (so.band_voxels + 2) * so.voxel_mm;
+        hi[a] += (so.band_voxels + 2) * so.voxel_mm;
+        if (!(lo[a] < hi[a])) {
+            /* out of the tool's reach: nothing to meet */
+            st = FM_OK;
+            c->fixture_count++;
+            goto done;
+        }
+    }
+    st = fm_field_from_tape(&field, tape, lo, hi, 0.0, err);
+    if (st != FM_OK) goto done;
+    fx->grid = fm_stock_new_from_zero_set(&field, &so, err);
+    fm_field_release(&field);
+    if (!fx->grid) {
+        st = err ? err->code : FM_ERR_INPUT;
+        if (err && !err->file[0]) {
+            char msg[sizeof err->message];
+            memcpy(msg, err->message, sizeof msg);
+            fm_error_at(err, st, path, 0, 0, "the fixture model '%s': %s", model.name, msg);
+        }
+        goto done;
     }
     c->fixture_count++;
-    return FM_OK;
-fail:
-    check_fixture_free(fx);
+done:
+    if (st != FM_OK) check_fixture_free(fx);
+    fm_evaluator_free(ev);
+    fm_tape_free(tape);
+    fm_graph_free(graph);
     return st;
 }
 
@@ -109,17 +175,9 @@ fm_status fm_check_add_fixture_stl(fm_check *c, const char *path, double voxel_m
     check_fixture *fx = new_fixture(c, path, err);
     if (!fx) return err ? err->code : FM_ERR_INPUT;
     fm_stock_options so;
-    fm_stock_options_default(&so);
-    if (voxel_mm > 0) so.voxel_mm = voxel_mm;
+    grid_options(c, voxel_mm, &so);
     fx->grid = fm_stock_new_from_stl(path, &so, err);
     if (!fx->grid) return err ? err->code : FM_ERR_INPUT;
-    check_grid g;
-    if (!check_grid_init(&g, fx->grid)) {
-        check_fixture_free(fx);
-        return fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "the fixture mesh is empty");
-    }
-    memcpy(fx->lo, g.lo, sizeof fx->lo);
-    memcpy(fx->hi, g.hi, sizeof fx->hi);
     c->fixture_count++;
     return FM_OK;
 }

@@ -1,7 +1,15 @@
 /* test_check.c: lib/check on programs built for the purpose, run through
- * the job runner as `frepmill check` runs them (0.5 mm voxels, the check's
- * default). Every expected value is worked out by hand from the geometry
- * in the comments, never taken from the check's own output. */
+ * the job runner as `frepmill check` runs them (the check in the cutting
+ * pass, 0.5 mm voxels). Every expected value is worked out by hand from the
+ * geometry in the comments, never taken from the check's own output.
+ *
+ * Depth precision (docs/check.md): a part's face parallel to a face of
+ * what it entered is measured exactly (the voxel centres just outside the
+ * part see it); a maximum inside the part is sampled at voxel centres, so
+ * it is exact where the deepest point is a voxel centre and at most a voxel
+ * low otherwise. The box stocks below start at a whole millimetre, so their
+ * voxel centres sit at a quarter millimetre off whole ones (x = 0.25 +
+ * 0.5 k). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -11,21 +19,8 @@
 #include "job.h"
 #include "test.h"
 
-typedef struct run {
-    fm_check *check;
-    fm_status status;
-    fm_error err;
-} run;
-
-static int before_motion(void *user, const fm_motion *m, const fm_tool *tool, fm_stock *stock)
-{
-    run *r = user;
-    r->status = fm_check_motion(r->check, m, tool, stock, &r->err);
-    return r->status != FM_OK;
-}
-
-/* A 6 mm flat end mill: flutes 0..flute, shank up to length, a 20 mm
- * holder 30 mm long above it. */
+/* A 6 mm flat end mill: flutes 0..flute, shank up to length (6 mm
+ * diameter, as the cutter), a 20 mm holder 30 mm long above it. */
 static fm_tool_spec flat_tool(double flute, double length, int center_cutting)
 {
     fm_tool_spec t;
@@ -42,7 +37,8 @@ static fm_tool_spec flat_tool(double flute, double length, int center_cutting)
     return t;
 }
 
-/* Run program against a box stock; returns the check (caller frees). */
+/* Run program against a box stock with the check in the pass; returns the
+ * check (caller frees). fixture: a model file or NULL. */
 static fm_check *check_program(const char *program, const double lo[3], const double hi[3],
                                fm_tool_spec tool, const fm_check_options *opt,
                                const char *fixture)
@@ -50,12 +46,13 @@ static fm_check *check_program(const char *program, const double lo[3], const do
     fm_tool_table table = {1, &tool};
     fm_error err;
     fm_error_clear(&err);
-    run r = {0};
-    r.check = fm_check_new(opt, &err);
-    CHECK(r.check != NULL);
-    if (!r.check) return NULL;
-    fm_check_set_initial_box(r.check, lo, hi);
-    if (fixture) CHECK(fm_check_add_fixture_hf(r.check, fixture, NULL, &err) == FM_OK);
+    fm_job_check check;
+    fm_job_check_default(&check);
+    if (opt) check.options = *opt;
+    if (fixture) {
+        check.fixtures[0] = fixture;
+        check.fixture_count = 1;
+    }
     char spec_text[256];
     snprintf(spec_text, sizeof spec_text, "box:%g,%g,%g,%g,%g,%g", lo[0], lo[1], lo[2], hi[0],
              hi[1], hi[2]);
@@ -67,36 +64,50 @@ static fm_check *check_program(const char *program, const double lo[3], const do
     spec.stock_spec = spec_text;
     spec.tools = &table;
     spec.stock.voxel_mm = 0.5;
-    spec.stock.band_voxels = 4;
-    fm_job_hooks hooks = {.user = &r, .before_motion = before_motion};
+    spec.stock.band_voxels = fm_check_band_voxels(&check.options, 0.5);
+    spec.check = &check;
     fm_job_result res;
-    fm_status st = fm_job_run(&spec, &hooks, &res, &err);
+    fm_status st = fm_job_run(&spec, NULL, &res, &err);
     if (st != FM_OK) fprintf(stderr, "job: %s\n", err.message);
     CHECK(st == FM_OK);
-    CHECK(r.status == FM_OK);
-    if (st == FM_OK) fm_stock_free(res.stock);
-    fm_check_finish(r.check);
-    return r.check;
+    if (st != FM_OK) return NULL;
+    fm_stock_free(res.stock);
+    CHECK(res.check != NULL);
+    return res.check;
 }
 
 static void dump(const fm_check *c)
 {
     for (size_t i = 0; i < fm_check_count(c); i++) {
         const fm_check_finding *f = fm_check_get(c, i);
-        fprintf(stderr, "  finding: %s %s %s line %d pen %.4f pos (%.3f %.3f %.3f) contact (%.3f %.3f %.3f)\n",
+        fprintf(stderr,
+                "  finding: %s %s %s line %d-%d pen %.4f pos (%.3f %.3f %.3f) contact (%.3f %.3f "
+                "%.3f)\n",
                 fm_check_kind_name(f->kind), fm_check_severity_name(f->severity),
-                fm_check_part_name(f->part), f->line, f->penetration_mm, f->position[0],
-                f->position[1], f->position[2], f->contact[0], f->contact[1], f->contact[2]);
+                fm_check_part_name(f->part), f->line, f->last_line, f->penetration_mm,
+                f->position[0], f->position[1], f->position[2], f->contact[0], f->contact[1],
+                f->contact[2]);
     }
 }
 
-static const double box_lo[3] = {0, 0, -20}, box_hi[3] = {50, 50, 0};
+static const fm_check_finding *find_kind(const fm_check *c, fm_check_kind kind)
+{
+    for (size_t i = 0; i < fm_check_count(c); i++)
+        if (fm_check_get(c, i)->kind == kind) return fm_check_get(c, i);
+    return NULL;
+}
 
-/* A rapid at Z-5 through a 50 mm block along y = 25. The deepest point of
- * min(S, F): S = min(z + 5, 3 - |y - 25|) near the tool's bottom, F =
- * -z near the top: at y = 25, min(z + 5, -z) is largest at z = -2.5:
- * 2.5 mm. The tool (radius 3) first touches the face x = 0 with its tip at
- * x = -3. */
+static const double box_lo[3] = {0, 0, -20}, box_hi[3] = {50, 50, 0};
+static const double voxel = 0.5;
+
+/* A rapid at Z-5 through a 50 mm block along y = 25. The deepest points of
+ * the flutes are their bottom face, 5 mm below the top (15 above the
+ * bottom, 25 from the sides): 5 mm, a face parallel to the top's. The tool
+ * (radius 3) first touches the face x = 0 with its tip at x = -3, and
+ * passes half the tolerance (0.005 mm) at -2.995. The voxel centres
+ * nearest the tool's axis are 0.25 mm off it (y = 24.75, 25.25), where the
+ * cylinder's side is sqrt(9 - 0.0625) = 2.9896 mm ahead of the axis, not
+ * 3: the first contact is seen at most 0.0104 + 0.005 after -3. */
 static void test_rapid_through(void)
 {
     const char *prog = "G21 G90\nG0 Z10\nG0 X-10 Y25\nG0 Z-5\nG0 X60\nG0 Z10\n";
@@ -110,10 +121,13 @@ static void test_rapid_through(void)
         CHECK(f->severity == FM_CHECK_ERROR);
         CHECK(f->part == FM_CHECK_PART_FLUTES);
         CHECK(f->line == 5);
-        CHECK_NEAR(f->penetration_mm, 2.5, 0.5);
-        CHECK_NEAR(f->position[0], -3.0, 0.3);
+        CHECK_NEAR(f->penetration_mm, 5.0, 0.01);
+        CHECK(f->position[0] >= -3.0 && f->position[0] <= -3.0 + 0.0104 + 0.005);
         CHECK_NEAR(f->position[2], -5.0, 1e-9);
-        CHECK_NEAR(f->contact[0], 0.0, 0.3);
+        /* on the face x = 0, at the tool's side, within the flutes' height */
+        CHECK_NEAR(f->contact[0], 0.0, 0.01);
+        CHECK_NEAR(f->contact[1], 25.0, 3.0);
+        CHECK(f->contact[2] >= -5.0 && f->contact[2] <= 0.0);
     }
     fm_check_free(c);
 }
@@ -130,47 +144,153 @@ static void test_rapid_over(void)
     fm_check_free(c);
 }
 
-/* Plunge a tool with 10 mm flutes to Z-14 in the middle of the block. The
- * shank (z from tip + 10 to tip + 15, radius 3) sweeps z in [-4, 20]; its
- * depth on the axis is z + 4, the stock's is -z: the maximum of min is at
- * z = -2, 2 mm. It first touches the top face when the tip is at -10
- * (line 5). */
-static void test_deep_pocket_shank(void)
+/* Issue 14: a 6 mm flat end mill with 8 mm of flute and a 6 mm shank
+ * plunges 11.5 mm deep (line 5). The flutes cut the hole the shank follows
+ * into: no finding there. Then a feed along X (line 6) drags the shank
+ * through the 3.5 mm layer of stock between the slot its flutes cut (whose
+ * ceiling is z = tip + 8 = -3.5) and the top: the shank's points at depth
+ * 1.75 are 1.75 mm from both, the deepest (a voxel centre: z = -1.75). It
+ * starts at once, as the shank's side leaves the plunged hole. The rapid
+ * retract (line 7) drags the shank on up through that layer (the finding
+ * goes on) and the flutes with it: a rapid into the stock, whose deepest
+ * point in the layer is again 1.75 from both faces. The holder (clearance
+ * 1 mm) stays 28.5 mm above the top. */
+static void test_plunge_then_shank(void)
 {
-    const char *prog = "G21 G90\nS1000 M3\nG0 Z5\nG0 X25 Y25\nG1 Z-14 F100\nG0 Z30\n";
-    fm_check *c = check_program(prog, box_lo, box_hi, flat_tool(10, 15, 1), NULL, NULL);
+    const char *prog = "G21 G90\nS1000 M3\nG0 Z5\nG0 X25 Y25\nG1 Z-11.5 F100\nG1 X40\nG0 Z30\n";
+    fm_check *c = check_program(prog, box_lo, box_hi, flat_tool(8, 40, 1), NULL, NULL);
     if (!c) return;
     dump(c);
-    CHECK(fm_check_count(c) >= 1);
-    const fm_check_finding *f = fm_check_get(c, 0);
+    CHECK(fm_check_count(c) == 2);
+    const fm_check_finding *f = find_kind(c, FM_CHECK_SHANK_CONTACT);
+    CHECK(f != NULL);
     if (f) {
-        CHECK(f->kind == FM_CHECK_SHANK_CONTACT);
         CHECK(f->part == FM_CHECK_PART_SHANK);
         CHECK(f->severity == FM_CHECK_ERROR);
-        CHECK(f->line == 5);
-        CHECK_NEAR(f->penetration_mm, 2.0, 0.5);
-        CHECK_NEAR(f->position[2], -10.0, 0.1);
-        CHECK_NEAR(f->contact[2], 0.0, 0.1);
+        CHECK(f->line == 6);
+        CHECK(f->last_line == 7);
+        CHECK(f->motions == 2);
+        CHECK_NEAR(f->penetration_mm, 1.75, 0.01);
+        CHECK_NEAR(f->position[0], 25.0, 0.01);
+        CHECK_NEAR(f->position[2], -11.5, 1e-9);
+    }
+    f = find_kind(c, FM_CHECK_RAPID_INTO_STOCK);
+    CHECK(f != NULL);
+    if (f) {
+        CHECK(f->line == 7);
+        CHECK_NEAR(f->penetration_mm, 1.75, 0.01);
     }
     fm_check_free(c);
 }
 
-/* examples/clamp.hf holds the 100 x 60 x 30 cast stock; a rapid at Z35
- * along y = 30 crosses the strap (z 30..40), the bolt (radius 5 to z 52)
- * and the nut (radius 9, z 40..48) at x = -12. The flutes (radius 3, z 35
- * to 55) reach 3 mm deep at most (their own half width), and the clamp is
- * at least 3 mm deep all along the bolt's axis for z in [38, 49]: 3 mm. */
+/* The same with the plunge to Z-12: the layer is 4 mm, its middle z = -2
+ * lies between voxel centres (-1.75, -2.25), where the depth is 1.75: a
+ * maximum inside the part is sampled, at most a voxel low. (And the rapid
+ * retract as above.) */
+static void test_plunge_then_shank_between(void)
+{
+    const char *prog = "G21 G90\nS1000 M3\nG0 Z5\nG0 X25 Y25\nG1 Z-12 F100\nG1 X40\nG0 Z30\n";
+    fm_check *c = check_program(prog, box_lo, box_hi, flat_tool(8, 40, 1), NULL, NULL);
+    if (!c) return;
+    dump(c);
+    CHECK(fm_check_count(c) == 2);
+    const fm_check_finding *f = find_kind(c, FM_CHECK_SHANK_CONTACT);
+    CHECK(f != NULL);
+    if (f) {
+        CHECK(f->line == 6);
+        CHECK(f->penetration_mm <= 2.0 + 1e-6);
+        CHECK(f->penetration_mm >= 2.0 - voxel);
+    }
+    fm_check_free(c);
+}
+
+/* A holder face 2 mm below the top: 10 mm of flute and no shank, the
+ * holder (radius 10) from tip + 10; plunged to Z-12, the face is at z = -2.
+ * Its ring 5..10 mm from the axis is 2 mm below the top and at least 2 mm
+ * from the hole the flutes cut (radius 3): 2.0, a face parallel to the
+ * top. With the holder's 1 mm clearance the finding opens when the face
+ * comes within 1 mm of the top, with the tip at -9. */
+static void test_holder_face(void)
+{
+    const char *prog = "G21 G90\nS1000 M3\nG0 Z5\nG0 X25 Y25\nG1 Z-12 F100\nG0 Z30\n";
+    fm_check *c = check_program(prog, box_lo, box_hi, flat_tool(10, 10, 1), NULL, NULL);
+    if (!c) return;
+    dump(c);
+    const fm_check_finding *f = find_kind(c, FM_CHECK_HOLDER_CONTACT);
+    CHECK(f != NULL);
+    CHECK(fm_check_count(c) == 1);
+    if (f) {
+        CHECK(f->part == FM_CHECK_PART_HOLDER);
+        CHECK(f->severity == FM_CHECK_ERROR);
+        CHECK(f->line == 5);
+        CHECK_NEAR(f->penetration_mm, 2.0, 0.01);
+        CHECK_NEAR(f->position[2], -9.0, 0.01);
+    }
+    fm_check_free(c);
+
+    /* without the clearance: the first contact is the face at the top */
+    fm_check_options opt;
+    fm_check_options_default(&opt);
+    opt.clearance_mm[FM_CHECK_PART_HOLDER] = 0;
+    c = check_program(prog, box_lo, box_hi, flat_tool(10, 10, 1), &opt, NULL);
+    if (!c) return;
+    dump(c);
+    f = find_kind(c, FM_CHECK_HOLDER_CONTACT);
+    CHECK(f != NULL);
+    if (f) {
+        CHECK_NEAR(f->penetration_mm, 2.0, 0.01);
+        CHECK_NEAR(f->position[2], -10.0, 0.01);
+    }
+    fm_check_free(c);
+}
+
+/* A fixture whose function is a tenth of the distance (tests/check/
+ * jaw_scaled.hf: a block x 60..80, y 0..50, z -20..10, every plane times
+ * 0.1). A rapid at Z7 along y = 25 drags the flutes' bottom 3 mm below the
+ * jaw's top, 10 mm from its ends and 20 from its sides: 3.0 mm, not the
+ * model's 0.3. The tool's edge first meets the face x = 60 with the tip at
+ * x = 57. */
+static void test_fixture_scaled(void)
+{
+    const char *prog = "G21 G90\nG0 Z20\nG0 X0 Y25\nG0 Z7\nG0 X100\nG0 Z20\n";
+    fm_check_options opt;
+    fm_check_options_default(&opt);
+    opt.machine.start[2] = 20;
+    fm_check *c = check_program(prog, box_lo, box_hi, flat_tool(20, 40, 1), &opt,
+                                "check/jaw_scaled.hf");
+    if (!c) return;
+    dump(c);
+    CHECK(fm_check_count(c) == 1);
+    const fm_check_finding *f = fm_check_get(c, 0);
+    if (f) {
+        CHECK(f->kind == FM_CHECK_FIXTURE_CONTACT);
+        CHECK(f->part == FM_CHECK_PART_FLUTES);
+        CHECK(f->fixture == 0);
+        CHECK(f->line == 5);
+        CHECK_NEAR(f->penetration_mm, 3.0, 0.01);
+        CHECK_NEAR(f->position[0], 57.0, 0.01);
+    }
+    fm_check_free(c);
+}
+
+/* examples/clamp.hf: a rapid at Z35 along y = 30 crosses the strap (z
+ * 30..40, x -35..10), the bolt (radius 5 about (-12, 30), up to z 52) and
+ * the nut (radius 9, z 40..48). The deepest point of the flutes (radius 3,
+ * z 35..55) is on the bolt's axis, where the clamp's surface is nearest at
+ * the nut's top edge (r = 5, z = 48: distance sqrt(25 + (48 - z)^2)) or at
+ * the corner of the nut's bottom and the strap's side (y = 38, z = 40:
+ * sqrt(64 + (z - 40)^2)); the two are equal at z = 665 / 16 = 41.5625,
+ * sqrt(25 + 6.4375^2) = 8.151 mm. That is beyond the grid's band: the
+ * depth search measures it, within a voxel. The tool's edge meets the
+ * strap's far end x = -35 first, with the tip at -38. */
 static void test_fixture_clamp(void)
 {
     const double lo[3] = {0, 0, 0}, hi[3] = {100, 60, 30};
     const char *prog = "G21 G90\nG0 Z60\nG0 X-60 Y30\nG0 Z35\nG0 X50\nG0 Z60\n";
     FILE *probe = fopen("../examples/clamp.hf", "r");
-    if (!probe) {
-        fprintf(stderr, "examples/clamp.hf is absent: fixture test skipped\n");
-        return;
-    }
+    CHECK(probe != NULL);
+    if (!probe) return;
     fclose(probe);
-    /* the machine origin is the stock's corner: start above it */
     fm_check_options opt;
     fm_check_options_default(&opt);
     opt.machine.start[2] = 60;
@@ -185,15 +305,17 @@ static void test_fixture_clamp(void)
         CHECK(f->severity == FM_CHECK_ERROR);
         CHECK(f->line == 5);
         CHECK(f->fixture == 0);
-        CHECK_NEAR(f->penetration_mm, 3.0, 0.5);
-        /* the strap's far end is x = -35: the tool's edge gets there first */
-        CHECK_NEAR(f->position[0], -38.0, 0.3);
+        CHECK_NEAR(f->penetration_mm, 8.151, voxel);
+        CHECK_NEAR(f->position[0], -38.0, 0.01);
     }
     fm_check_free(c);
 }
 
 /* Start inside the stock: the default start is the machine origin, here
- * the middle of a block. */
+ * the middle of a 20 mm block. The flutes' tip is 10 mm from every face
+ * there; the voxel centres nearest it (+-0.25 on each axis) lie 9.75 from
+ * the faces: the depth is searched beyond the band and sampled, within a
+ * voxel of 10. */
 static void test_start_in_stock(void)
 {
     const double lo[3] = {-10, -10, -10}, hi[3] = {10, 10, 10};
@@ -207,15 +329,15 @@ static void test_start_in_stock(void)
         CHECK(f->kind == FM_CHECK_START_IN_STOCK);
         CHECK(f->line == 0);
         CHECK(f->severity == FM_CHECK_ERROR);
-        /* the flat tool at the origin: depth z (from its bottom), radius 3,
-         * the block's top is 10 above: max of min(z, 3 - r, 10 - z) = 3 */
-        CHECK_NEAR(f->penetration_mm, 3.0, 0.5);
+        CHECK(f->penetration_mm <= 10.0 + 1e-6);
+        CHECK(f->penetration_mm >= 10.0 - voxel);
     }
     fm_check_free(c);
 }
 
 /* A feed into the stock with the spindle stopped, a plunge with a tool
- * that cannot cut at its centre, and a move beyond the Z travel. */
+ * that cannot cut at its centre, and a move beyond the Z travel. The
+ * plunge goes 3 mm into the top: the flutes' bottom face, 3.0. */
 static void test_spindle_plunge_travel(void)
 {
     fm_check_options opt;
@@ -231,11 +353,14 @@ static void test_spindle_plunge_travel(void)
     int spindle = 0, plunge = 0, travel = 0;
     for (size_t i = 0; i < fm_check_count(c); i++) {
         const fm_check_finding *f = fm_check_get(c, i);
-        if (f->kind == FM_CHECK_SPINDLE_OFF_CUT && f->line == 4) spindle++;
+        if (f->kind == FM_CHECK_SPINDLE_OFF_CUT && f->line == 4) {
+            spindle++;
+            CHECK_NEAR(f->penetration_mm, 3.0, 0.01);
+        }
         if (f->kind == FM_CHECK_NON_CENTER_PLUNGE && f->line == 4) {
             plunge++;
-            /* plunged 3 mm into the top: max of min(z + 3, 3 - r, -z) = 1.5 */
-            CHECK_NEAR(f->penetration_mm, 1.5, 0.5);
+            CHECK_NEAR(f->penetration_mm, 3.0, 0.01);
+            CHECK_NEAR(f->position[2], 0.0, 0.01);
         }
         if (f->kind == FM_CHECK_TRAVEL_LIMIT && f->line == 5) {
             travel++;
@@ -263,7 +388,10 @@ int main(int argc, char **argv)
 {
     if (wanted(argc, argv, "rapid_through")) test_rapid_through();
     if (wanted(argc, argv, "rapid_over")) test_rapid_over();
-    if (wanted(argc, argv, "deep_pocket")) test_deep_pocket_shank();
+    if (wanted(argc, argv, "plunge_shank")) test_plunge_then_shank();
+    if (wanted(argc, argv, "plunge_shank_between")) test_plunge_then_shank_between();
+    if (wanted(argc, argv, "holder_face")) test_holder_face();
+    if (wanted(argc, argv, "fixture_scaled")) test_fixture_scaled();
     if (wanted(argc, argv, "fixture")) test_fixture_clamp();
     if (wanted(argc, argv, "start")) test_start_in_stock();
     if (wanted(argc, argv, "spindle_plunge_travel")) test_spindle_plunge_travel();
