@@ -1,7 +1,7 @@
-/* geometry.c: what the check needs to know of a motion's path: its swept
- * arc angle (LinuxCNC's ARC_FEED semantics, as lib/sweep reads it), its
- * descent along the tool axis, the box of its programmed point, and the
- * motion up to a parameter u (the flutes' sweep up to a time). */
+/* geometry.c: what the check needs to know of a motion's path, on top of
+ * lib/sweep's motion geometry (fm_motion_arc_of): its descent along the
+ * tool axis, the box of its programmed point, and the motion up to a
+ * parameter u (the flutes' sweep up to a time). */
 #include "check/check_internal.h"
 
 #include <math.h>
@@ -10,23 +10,15 @@
 #define CHECK_PI 3.14159265358979323846
 
 /* Swept angle of an arc in radians (positive), its radius at the start,
- * its start angle and direction. */
+ * its start angle and direction (lib/sweep's reading of the arc). */
 double check_arc_angle(const fm_motion *m, double *radius, double *a0, int *ccw)
 {
-    int p = m->plane_axis, u = (p + 1) % 3, v = (p + 2) % 3;
-    double su = m->start[u] - m->center[u], sv = m->start[v] - m->center[v];
-    double eu = m->end[u] - m->center[u], ev = m->end[v] - m->center[v];
-    double s = atan2(sv, su), e = atan2(ev, eu);
-    *radius = sqrt(su * su + sv * sv);
-    *a0 = s;
-    *ccw = m->turns >= 0;
-    int turns = m->turns < 0 ? -m->turns : m->turns;
-    double sweep = *ccw ? e - s : s - e;
-    sweep = fmod(sweep, 2 * CHECK_PI);
-    if (sweep < 0) sweep += 2 * CHECK_PI;
-    if (sweep < 1e-12) sweep = 2 * CHECK_PI; /* same start and end angle: a full circle */
-    if (turns > 1) sweep += 2 * CHECK_PI * (turns - 1);
-    return sweep;
+    fm_motion_arc arc;
+    fm_motion_arc_of(m, &arc);
+    *radius = arc.r0;
+    *a0 = arc.th0;
+    *ccw = arc.dth >= 0;
+    return fabs(arc.dth);
 }
 
 double check_descent_deg(const fm_motion *m)
@@ -97,6 +89,7 @@ static void still_at_start(const fm_motion *m, fm_motion *out)
     out->kind = FM_MOTION_RAPID;
     memcpy(out->end, m->start, sizeof out->end);
     memcpy(out->axis_end, m->axis_start, sizeof out->axis_end);
+    memcpy(out->rotary_end, m->rotary_start, sizeof out->rotary_end);
     out->t1 = m->t0;
     if (m->kind == FM_MOTION_PARAM && m->path && m->path->pose) {
         double c[3], a[3];
@@ -118,6 +111,8 @@ void check_motion_prefix(const fm_motion *m, double u, fm_motion *out)
         return;
     }
     out->t1 = m->t0 + u * (m->t1 - m->t0);
+    /* rotary joints move linearly in u (docs/sweep.md) */
+    for (int k = 0; k < 3; k++) out->rotary_end[k] = m->rotary_start[k] + u * (m->rotary_end[k] - m->rotary_start[k]);
     switch (m->kind) {
     case FM_MOTION_RAPID:
     case FM_MOTION_LINE: {
@@ -134,12 +129,12 @@ void check_motion_prefix(const fm_motion *m, double u, fm_motion *out)
         return;
     }
     case FM_MOTION_ARC: {
-        double r0, a0;
-        int ccw;
-        double ang = check_arc_angle(m, &r0, &a0, &ccw);
-        int p = m->plane_axis, i = (p + 1) % 3, j = (p + 2) % 3;
-        double r1 = hypot(m->end[i] - m->center[i], m->end[j] - m->center[j]);
-        double part = u * ang;
+        fm_motion_arc arc;
+        if (!fm_motion_arc_of(m, &arc)) {
+            still_at_start(m, out);
+            return;
+        }
+        double ang = fabs(arc.dth), part = u * ang;
         if (part < 1e-9) {
             still_at_start(m, out);
             return;
@@ -154,13 +149,12 @@ void check_motion_prefix(const fm_motion *m, double u, fm_motion *out)
         if (part - whole * two_pi < 1e-7) part = whole * two_pi + 1e-7;
         if (part > ang) part = ang;
         int turns = (int)floor(part / two_pi) + 1;
-        double th = ccw ? a0 + part : a0 - part;
-        double rr = r0 + (part / ang) * (r1 - r0);
-        out->end[i] = m->center[i] + rr * cos(th);
-        out->end[j] = m->center[j] + rr * sin(th);
-        out->end[p] = m->start[p] + (part / ang) * (m->end[p] - m->start[p]);
-        out->turns = ccw ? turns : -turns;
-        out->t1 = m->t0 + (part / ang) * (m->t1 - m->t0);
+        double up = part / ang;
+        fm_motion_arc_point(&arc, up, out->end, NULL);
+        out->turns = arc.dth > 0 ? turns : -turns;
+        out->t1 = m->t0 + up * (m->t1 - m->t0);
+        for (int k = 0; k < 3; k++)
+            out->rotary_end[k] = m->rotary_start[k] + up * (m->rotary_end[k] - m->rotary_start[k]);
         return;
     }
     case FM_MOTION_PARAM:
