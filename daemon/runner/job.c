@@ -585,16 +585,6 @@ static int cut_sink(void *user, const fm_motion *m)
         if (c->check && (c->status = check_skipped(c, m)) != FM_OK) return 1;
         return 0;
     }
-    if (c->hooks && c->hooks->before_motion) {
-        /* The hook must see the stock as it is when this motion starts. */
-        if ((c->status = flush_batch(c)) != FM_OK) return 1;
-        if (c->stopped) return 1;
-        const fm_tool *t = tool_for(c->tools, m->tool);
-        if (c->hooks->before_motion(c->hooks->user, m, t, c->stock)) {
-            c->stopped = 1;
-            return 1;
-        }
-    }
     const fm_tool *tool = tool_for(c->tools, m->tool);
     if (m->kind == FM_MOTION_DWELL || !tool) {
         /* nothing cuts; the check still sees where the machine goes */

@@ -116,10 +116,6 @@ typedef struct fm_job_hooks {
      * (FM_ERR_INPUT "cancelled" is not used: the job ends with FM_OK and
      * result.stopped set). */
     int (*progress)(void *user, const fm_job_progress *progress);
-    /* Called for every motion before it is cut, with the stock as it is
-     * then (lib/check hooks in here). Non-zero stops the job. */
-    int (*before_motion)(void *user, const fm_motion *motion, const fm_tool *tool,
-                         fm_stock *stock);
     /* Called for every motion as the program produces it, without
      * touching the stock (and so without ending a batch early): for
      * toolpath overlays and logs. A PARAM motion's path is valid during the

@@ -87,6 +87,7 @@ fm_check *fm_check_new(const fm_check_options *opt, fm_error *err)
         return NULL;
     }
     c->opt = o;
+    c->sweep_opt.max_evaluations = o.sweep_evaluations;
     for (int k = 0; k < FM_CHECK_KIND_COUNT; k++)
         for (int p = 0; p < FM_CHECK_PART_COUNT; p++) c->open[k][p] = -1;
     return c;
@@ -144,6 +145,8 @@ size_t fm_check_count_severity(const fm_check *c, fm_check_severity s)
 }
 
 void fm_check_get_stats(const fm_check *c, fm_check_stats *stats) { *stats = c->stats; }
+
+const fm_sweep_options *check_sweep_options(const fm_check *c) { return &c->sweep_opt; }
 
 /* ------------------------------------------------------- bookkeeping -- */
 
@@ -370,7 +373,7 @@ static fm_status check_start(fm_check *c, const fm_motion *first, const fm_tool 
         const fm_tool_part *tp = tool_part(tool, (fm_check_part)p);
         if (!tp) continue;
         fm_sweep *s = NULL;
-        fm_status st = fm_sweep_new(&sm, tp, NULL, &s, err);
+        fm_status st = fm_sweep_new(&sm, tp, check_sweep_options(c), &s, err);
         if (st != FM_OK) return st;
         fm_sweep_worker *w = worker_for(c, first->tool, (fm_check_part)p, tp);
         if (!w) {
@@ -436,7 +439,7 @@ static fm_status add_pending(fm_check *c, const fm_motion *m, const fm_tool *too
         c->pending_cap = cap;
     }
     check_pending *p = &c->pending[c->pending_count];
-    fm_status st = fm_sweep_new(m, &tool->flutes, NULL, &p->sweep, err);
+    fm_status st = fm_sweep_new(m, &tool->flutes, check_sweep_options(c), &p->sweep, err);
     if (st != FM_OK) return st;
     p->worker = w;
     fm_sweep_bounds(p->sweep, p->lo, p->hi);
@@ -485,7 +488,7 @@ fm_status fm_check_motion(fm_check *c, const fm_motion *m, const fm_tool *tool,
     for (int p = 0; p < FM_CHECK_PART_COUNT && st == FM_OK; p++) {
         const fm_tool_part *tp = tool_part(tool, (fm_check_part)p);
         if (!tp) continue;
-        st = fm_sweep_new(m, tp, NULL, &sweeps[p], err);
+        st = fm_sweep_new(m, tp, check_sweep_options(c), &sweeps[p], err);
         if (st != FM_OK) break;
         workers[p] = worker_for(c, m->tool, (fm_check_part)p, tp);
         if (!workers[p]) st = fm_error_set(err, FM_ERR_LIMIT, "out of memory");

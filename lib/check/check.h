@@ -74,6 +74,11 @@ typedef struct fm_check_options {
      * from the plane normal to the axis is a plunge (degrees). */
     double max_ramp_deg;
     fm_check_machine machine;
+    /* Evaluations of a tool part a swept volume's search may spend per
+     * point (0: lib/sweep's default). Where a search stops at it before its
+     * proof closes, and the answer depended on it, the point counts as
+     * uncertain. For tests. */
+    size_t sweep_evaluations;
 } fm_check_options;
 
 void fm_check_options_default(fm_check_options *opt);

@@ -31,6 +31,9 @@ typedef struct check_fixture {
 
 void check_fixture_free(check_fixture *fx);
 
+/* The options every sweep the check makes gets (the evaluation budget). */
+const fm_sweep_options *check_sweep_options(const fm_check *c);
+
 /* A leaf copied from the grid for a relation: its values and where. */
 typedef struct check_leaf {
     int32_t lo[3];
@@ -105,6 +108,7 @@ void check_motion_point_bounds(const fm_motion *m, double lo[3], double hi[3]);
 
 struct fm_check {
     fm_check_options opt;
+    fm_sweep_options sweep_opt;
     int started;
     int have_box;
     double box_lo[3], box_hi[3];

@@ -130,6 +130,25 @@ static int unimodal(const fm_sweep *s)
            m == FM_SWEEP_STATIC;
 }
 
+/* The tip's path length over the motion (an upper bound for arcs whose
+ * radius changes); 0 when it is not known (parametric paths, rotary
+ * axes). */
+static double path_length(const fm_motion *m)
+{
+    double d2 = 0;
+    for (int k = 0; k < 3; k++) d2 += (m->end[k] - m->start[k]) * (m->end[k] - m->start[k]);
+    if (m->kind == FM_MOTION_ARC) {
+        double r0, a0;
+        int ccw;
+        double ang = check_arc_angle(m, &r0, &a0, &ccw);
+        int p = m->plane_axis, i = (p + 1) % 3, j = (p + 2) % 3;
+        double r1 = hypot(m->end[i] - m->center[i], m->end[j] - m->center[j]);
+        return fmax(r0, r1) * ang + fabs(r1 - r0) + fabs(m->end[p] - m->start[p]);
+    }
+    if (m->kind == FM_MOTION_PARAM || fm_motion_has_rotary(m)) return 0;
+    return sqrt(d2);
+}
+
 /* The first parameter u in [0, u_max] where the part's value at p reaches
  * level, given that it does at u_max: bisected from the last scanned u
  * where it does not.
@@ -152,14 +171,12 @@ static double entry_u(const check_rel *r, const double p[3], double u_max, doubl
             lo = u;
         }
     }
-    double len = 0;
-    for (int k = 0; k < 3; k++) {
-        double d = r->motion->end[k] - r->motion->start[k];
-        len += d * d;
-    }
-    /* to a thousandth of the tolerance in path length (and a floor for
-     * arcs and parametric paths, whose chord may be short) */
-    double want = 1e-3 * r->check->opt.tolerance_mm / fmax(1.0, sqrt(len));
+    /* to a tenth of the tolerance in path length: the tip moves no farther
+     * in the time left, so the flutes' sweep and the first contact are off
+     * by no more (a parametric path's length is not known: to the end of
+     * the bisection) */
+    double len = path_length(r->motion);
+    double want = len > 0 ? 0.1 * r->check->opt.tolerance_mm / len : 0;
     for (int i = 0; i < REL_BISECT && hi - lo > want; i++) {
         double mid = 0.5 * (lo + hi);
         if (fm_sweep_tool_at_u(s, r->worker, p, mid) >= level) hi = mid;
@@ -189,7 +206,7 @@ static fm_status flutes_until(check_rel *r, const double p[3], double u, fm_swee
     fm_motion sub;
     check_motion_prefix(r->motion, u, &sub);
     fm_sweep *s = NULL;
-    fm_status st = fm_sweep_new(&sub, r->flutes_shape, NULL, &s, err);
+    fm_status st = fm_sweep_new(&sub, r->flutes_shape, check_sweep_options(r->check), &s, err);
     if (st != FM_OK) return st;
     fm_sweep_eval_ex(s, r->flutes_worker, p, out);
     fm_sweep_free(s);

@@ -374,6 +374,37 @@ static void test_spindle_plunge_travel(void)
     fm_check_free(c);
 }
 
+/* A rapid diving across the block (a line neither level nor along the
+ * axis: lib/sweep's concave search) with the sweeps' searches allowed two
+ * evaluations per point: they stop before their proofs close, and the
+ * points where that leaves the answer open are counted in an uncertain
+ * warning at that line, not passed over in silence (nor reported as
+ * contacts). With lib/sweep's own budget there is none. */
+static void test_uncertain(void)
+{
+    const char *prog = "G21 G90\nG0 Z10\nG0 X-10 Y25\nG0 X40 Z-5\nG0 Z10\n";
+    fm_check_options opt;
+    fm_check_options_default(&opt);
+    opt.sweep_evaluations = 2;
+    fm_check *c = check_program(prog, box_lo, box_hi, flat_tool(20, 40, 1), &opt, NULL);
+    if (!c) return;
+    dump(c);
+    const fm_check_finding *f = find_kind(c, FM_CHECK_UNCERTAIN);
+    CHECK(f != NULL);
+    if (f) {
+        CHECK(f->severity == FM_CHECK_WARNING);
+        CHECK(f->line == 4);
+        CHECK(f->points > 0);
+        CHECK(f->penetration_mm == 0);
+    }
+    fm_check_free(c);
+    c = check_program(prog, box_lo, box_hi, flat_tool(20, 40, 1), NULL, NULL);
+    if (!c) return;
+    CHECK(find_kind(c, FM_CHECK_UNCERTAIN) == NULL);
+    CHECK(find_kind(c, FM_CHECK_RAPID_INTO_STOCK) != NULL);
+    fm_check_free(c);
+}
+
 /* Arguments name the cases to run (all by default): valgrind runs the
  * quick ones. */
 static int wanted(int argc, char **argv, const char *name)
@@ -395,6 +426,7 @@ int main(int argc, char **argv)
     if (wanted(argc, argv, "fixture")) test_fixture_clamp();
     if (wanted(argc, argv, "start")) test_start_in_stock();
     if (wanted(argc, argv, "spindle_plunge_travel")) test_spindle_plunge_travel();
+    if (wanted(argc, argv, "uncertain")) test_uncertain();
     fprintf(stderr, "%d checks, %d failures\n", fm_test_checks, fm_test_failures);
     return fm_test_failures != 0;
 }
