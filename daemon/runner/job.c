@@ -613,7 +613,7 @@ static int cut_sink(void *user, const fm_motion *m)
 }
 
 /* G38.x: the stock as cut so far stops the probe (probe.c), so pending
- * cuts go in first. */
+ * cuts go in first; so do the check's fixtures when the job has a check. */
 static fm_status cut_probe(void *user, const fm_motion *move, int toward, int *tripped,
                            double *fraction, int *at_start, fm_error *err)
 {
@@ -625,8 +625,8 @@ static fm_status cut_probe(void *user, const fm_motion *move, int toward, int *t
         a[k] = move->start[k] + move->tip_offset[k];
         b[k] = move->end[k] + move->tip_offset[k];
     }
-    return fm_runner_probe(c->stock, tool_for(c->tools, move->tool), a, b, toward, tripped,
-                           fraction, at_start, err);
+    return fm_runner_probe(c->stock, c->check, tool_for(c->tools, move->tool), a, b, toward,
+                           tripped, fraction, at_start, err);
 }
 
 /* ------------------------------------------------------------- check -- */

@@ -2,9 +2,10 @@
  * of its cutting part and shank (solids of revolution, lib/tools), keeping
  * only the points whose outward normal does not face away from the motion
  * (a first contact can only happen there). Along the move the search steps
- * by the stock's signed distance at those points (a distance: no sample can
- * cross the surface within one step), then bisects between the last free
- * and the first touching position. */
+ * by the signed distance at those points of the stock and the fixtures
+ * together (their maximum: a distance, so no sample can cross a surface
+ * within one step), then bisects between the last free and the first
+ * touching position. */
 #include "probe.h"
 
 #include <math.h>
@@ -124,22 +125,24 @@ static fm_status sample_part(const fm_tool_part *part, double h, const double di
     return FM_OK;
 }
 
-/* The largest stock distance (positive inside) over the samples with the
- * tip at c: >= 0 when the tool touches the stock. */
-static double deepest(const fm_stock *stock, const probe_samples *s, const double c[3])
+/* The largest distance (positive inside) of the stock or a fixture over
+ * the samples with the tip at c: >= 0 when the tool touches either. */
+static double deepest(const fm_stock *stock, const fm_check *fixtures, const probe_samples *s,
+                      const double c[3])
 {
     double best = -INFINITY;
     for (size_t i = 0; i < s->n; i++) {
         double p[3] = {c[0] + s->p[3 * i], c[1] + s->p[3 * i + 1], c[2] + s->p[3 * i + 2]};
         double v = fm_stock_sample(stock, p);
+        if (fixtures) v = fmax(v, fm_check_fixture_distance(fixtures, p));
         if (v > best) best = v;
     }
     return best;
 }
 
-fm_status fm_runner_probe(const fm_stock *stock, const fm_tool *tool, const double tip_start[3],
-                          const double tip_end[3], int toward, int *tripped, double *fraction,
-                          int *at_start, fm_error *err)
+fm_status fm_runner_probe(const fm_stock *stock, const fm_check *fixtures, const fm_tool *tool,
+                          const double tip_start[3], const double tip_end[3], int toward,
+                          int *tripped, double *fraction, int *at_start, fm_error *err)
 {
     *tripped = 0;
     *fraction = 1;
@@ -167,7 +170,7 @@ fm_status fm_runner_probe(const fm_stock *stock, const fm_tool *tool, const doub
     }
     /* state(f) is 1 when the probe is tripped at fraction f */
     double c[3];
-    double v = deepest(stock, &s, tip_start);
+    double v = deepest(stock, fixtures, &s, tip_start);
     int touching = v >= 0;
     if (touching == (toward != 0)) {
         *at_start = 1;
@@ -184,7 +187,7 @@ fm_status fm_runner_probe(const fm_stock *stock, const fm_tool *tool, const doub
         double nf = f + step;
         if (nf > 1) nf = 1;
         for (int k = 0; k < 3; k++) c[k] = tip_start[k] + nf * d[k];
-        double nv = deepest(stock, &s, c);
+        double nv = deepest(stock, fixtures, &s, c);
         int now = nv >= 0;
         if (now == (toward != 0)) {
             /* changed between f and nf: bisect */
@@ -192,7 +195,7 @@ fm_status fm_runner_probe(const fm_stock *stock, const fm_tool *tool, const doub
             while ((hi - lo) * len > PROBE_RESOLUTION) {
                 double mid = 0.5 * (lo + hi);
                 for (int k = 0; k < 3; k++) c[k] = tip_start[k] + mid * d[k];
-                int m = deepest(stock, &s, c) >= 0;
+                int m = deepest(stock, fixtures, &s, c) >= 0;
                 if (m == (toward != 0)) hi = mid;
                 else lo = mid;
             }

@@ -129,6 +129,13 @@ fm_status fm_check_add_fixture_hf(fm_check *check, const char *path, const char 
 fm_status fm_check_add_fixture_stl(fm_check *check, const char *path, double voxel_mm,
                                    fm_error *err);
 size_t fm_check_fixture_count(const fm_check *check);
+/* The largest signed distance (mm, positive inside) at p over the
+ * fixtures: the distance to the nearest fixture's surface outside them all.
+ * True within the grids' band (32 voxels), and beyond it no larger in size
+ * than the truth, so a probe may step by it without crossing a surface.
+ * -HUGE_VAL when no fixture lies within the tool's reach. G38 probing
+ * (daemon/runner/probe.c) stops at fixtures with it. */
+double fm_check_fixture_distance(const fm_check *check, const double p[3]);
 
 /* Check one motion (tool NULL: nothing in the spindle). stock is the grid
  * with every motion before this one cut, except those fed since the last

@@ -26,6 +26,18 @@ void check_fixture_free(check_fixture *fx)
 
 size_t fm_check_fixture_count(const fm_check *c) { return c->fixture_count; }
 
+double fm_check_fixture_distance(const fm_check *c, const double p[3])
+{
+    double best = -HUGE_VAL;
+    for (size_t i = 0; i < c->fixture_count; i++) {
+        /* a fixture out of the tool's reach has no grid */
+        if (!c->fixtures[i].grid) continue;
+        double v = fm_stock_sample(c->fixtures[i].grid, p);
+        if (v > best) best = v;
+    }
+    return best;
+}
+
 void fm_check_set_region(fm_check *c, const double lo[3], const double hi[3])
 {
     c->have_region = 1;

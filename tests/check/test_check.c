@@ -405,6 +405,70 @@ static void test_uncertain(void)
     fm_check_free(c);
 }
 
+/* G38.2 stops at a fixture as it does at the stock (daemon/runner/
+ * probe.c with fm_check_fixture_distance). tests/check/jaw_scaled.hf is a
+ * block x 60..80, y 0..50, z -20..10 whose function is a tenth of the
+ * distance; the stock (x 0..50) is not under the tool. Probing down from
+ * Z20 at X70 Y25, the 6 mm flat end mill's bottom face (x 67..73, inside
+ * the jaw's top face) meets the top at Z10: #5063 = 10, read back from the
+ * last rapid's X. The jaw's top is a plane, which its grid holds exactly
+ * (a linear field's zero set, distances to a plane interpolated), so the
+ * probe's 1e-6 mm bisection leaves 10 to well within 0.01 mm. Without the
+ * fixture the probe ends without contact: a G38.2 error. */
+static void record_motion(void *user, const fm_motion *m) { *(fm_motion *)user = *m; }
+
+static void test_probe_fixture(void)
+{
+    const char *prog = "G21 G90\nG0 Z20\nG0 X70 Y25\nG38.2 Z-15 F100\nG0 Z20\nG0 X[#5063]\nM2\n";
+    for (int with_fixture = 1; with_fixture >= 0; with_fixture--) {
+        fm_tool_spec tool = flat_tool(20, 40, 1);
+        fm_tool_table table = {1, &tool};
+        fm_job_check check;
+        fm_job_check_default(&check);
+        check.options.machine.start[2] = 20;
+        if (with_fixture) {
+            check.fixtures[0] = "check/jaw_scaled.hf";
+            check.fixture_count = 1;
+        }
+        fm_job_spec spec;
+        fm_job_spec_default(&spec);
+        spec.program_text = prog;
+        spec.program_length = strlen(prog);
+        spec.program_name = "probe.ngc";
+        spec.stock_spec = "box:0,0,-20,50,50,0";
+        spec.tools = &table;
+        spec.stock.voxel_mm = 0.5;
+        spec.stock.band_voxels = fm_check_band_voxels(&check.options, 0.5);
+        spec.check = &check;
+        fm_motion last;
+        memset(&last, 0, sizeof last);
+        fm_job_hooks hooks = {.user = &last, .on_motion = record_motion};
+        fm_job_result res;
+        fm_error err;
+        fm_error_clear(&err);
+        fm_status st = fm_job_run(&spec, &hooks, &res, &err);
+        if (!with_fixture) {
+            fprintf(stderr, "  without the fixture: %s\n", st == FM_OK ? "ok" : err.message);
+            CHECK(st != FM_OK);
+            if (st == FM_OK) {
+                fm_stock_free(res.stock);
+                fm_check_free(res.check);
+            }
+            continue;
+        }
+        if (st != FM_OK) fprintf(stderr, "job: %s\n", err.message);
+        CHECK(st == FM_OK);
+        if (st != FM_OK) continue;
+        fprintf(stderr, "  probe found Z %.6f\n", last.end[0]);
+        CHECK_NEAR(last.end[0], 10.0, 0.01);
+        dump(res.check);
+        /* stopped at the surface: not into the jaw */
+        CHECK(fm_check_count_severity(res.check, FM_CHECK_ERROR) == 0);
+        fm_stock_free(res.stock);
+        fm_check_free(res.check);
+    }
+}
+
 /* Arguments name the cases to run (all by default): valgrind runs the
  * quick ones. */
 static int wanted(int argc, char **argv, const char *name)
@@ -427,6 +491,7 @@ int main(int argc, char **argv)
     if (wanted(argc, argv, "start")) test_start_in_stock();
     if (wanted(argc, argv, "spindle_plunge_travel")) test_spindle_plunge_travel();
     if (wanted(argc, argv, "uncertain")) test_uncertain();
+    if (wanted(argc, argv, "probe_fixture")) test_probe_fixture();
     fprintf(stderr, "%d checks, %d failures\n", fm_test_checks, fm_test_failures);
     return fm_test_failures != 0;
 }
