@@ -1,7 +1,7 @@
 /* probe.h: simulated probing for the runner (G38.2-G38.5): where a tool
- * moving along a straight segment first touches the stock, or first leaves
- * it. Private to daemon/runner (job.c answers the G-code interpreter's
- * probe callback with it). */
+ * moving along a straight segment first touches the stock (or a fixture of
+ * the collision check), or first leaves it. Private to daemon/runner
+ * (job.c answers the G-code interpreter's probe callback with it). */
 #ifndef FM_RUNNER_PROBE_H
 #define FM_RUNNER_PROBE_H
 

@@ -123,9 +123,10 @@ fm_status gc_exec_probe(gc_interp *g, const gc_block *b, int code, int col)
     if (!tripped && must_trip)
         return gc_fail(g, FM_ERR_INPUT, col,
                        toward ? "%s move finished without making contact; expected the stock "
-                                "between the start and the target (or G38.3)"
+                                "(or a fixture of the check) between the start and the target "
+                                "(or G38.3)"
                               : "%s move finished without losing contact; expected the target "
-                                "clear of the stock (or G38.5)",
+                                "clear of the stock and fixtures (or G38.5)",
                        name);
     if (f < 0) f = 0;
     if (f > 1) f = 1;
