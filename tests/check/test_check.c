@@ -405,67 +405,100 @@ static void test_uncertain(void)
     fm_check_free(c);
 }
 
-/* G38.2 stops at a fixture as it does at the stock (daemon/runner/
+/* G38.x stops at a fixture as it does at the stock (daemon/runner/
  * probe.c with fm_check_fixture_distance). tests/check/jaw_scaled.hf is a
  * block x 60..80, y 0..50, z -20..10 whose function is a tenth of the
- * distance; the stock (x 0..50) is not under the tool. Probing down from
- * Z20 at X70 Y25, the 6 mm flat end mill's bottom face (x 67..73, inside
- * the jaw's top face) meets the top at Z10: #5063 = 10, read back from the
- * last rapid's X. The jaw's top is a plane, which its grid holds exactly
- * (a linear field's zero set, distances to a plane interpolated), so the
- * probe's 1e-6 mm bisection leaves 10 to well within 0.01 mm. Without the
- * fixture the probe ends without contact: a G38.2 error. */
+ * distance; the stock is x 0..50, z -20..0. The jaw's faces are planes,
+ * which its grid holds exactly (a linear field's zero set, distances to a
+ * plane interpolated), so the probe's 1e-6 mm bisection leaves the
+ * expected values to well within 0.01 mm. Results are read back from the
+ * last rapid's end, whose coordinates the program sets from #5061-#5070.
+ *  - Down: G38.2 from Z20 at X70 Y25; the 6 mm flat end mill's bottom
+ *    (x 67..73, inside the jaw's top face) meets the top at Z10. Without
+ *    the fixture nothing is under the tool: a G38.2 error.
+ *  - Sideways: G38.3 at Z5 (5 above the stock, inside the jaw's height)
+ *    from X40 toward X100 along Y25; the tool's side (radius 3) meets the
+ *    face x = 60 with the tip at X57, #5070 = 1. Without the fixture the
+ *    probe reaches X100 and #5070 = 0 (G38.3: no error). */
 static void record_motion(void *user, const fm_motion *m) { *(fm_motion *)user = *m; }
+
+static fm_status probe_run(const char *prog, int with_fixture, fm_motion *last, fm_check **out,
+                           fm_error *err)
+{
+    fm_tool_spec tool = flat_tool(20, 40, 1);
+    fm_tool_table table = {1, &tool};
+    fm_job_check check;
+    fm_job_check_default(&check);
+    check.options.machine.start[2] = 20;
+    if (with_fixture) {
+        check.fixtures[0] = "check/jaw_scaled.hf";
+        check.fixture_count = 1;
+    }
+    fm_job_spec spec;
+    fm_job_spec_default(&spec);
+    spec.program_text = prog;
+    spec.program_length = strlen(prog);
+    spec.program_name = "probe.ngc";
+    spec.stock_spec = "box:0,0,-20,50,50,0";
+    spec.tools = &table;
+    spec.stock.voxel_mm = 0.5;
+    spec.stock.band_voxels = fm_check_band_voxels(&check.options, 0.5);
+    spec.check = &check;
+    memset(last, 0, sizeof *last);
+    fm_job_hooks hooks = {.user = last, .on_motion = record_motion};
+    fm_job_result res;
+    fm_error_clear(err);
+    *out = NULL;
+    fm_status st = fm_job_run(&spec, &hooks, &res, err);
+    if (st != FM_OK) return st;
+    fm_stock_free(res.stock);
+    *out = res.check;
+    return FM_OK;
+}
 
 static void test_probe_fixture(void)
 {
-    const char *prog = "G21 G90\nG0 Z20\nG0 X70 Y25\nG38.2 Z-15 F100\nG0 Z20\nG0 X[#5063]\nM2\n";
-    for (int with_fixture = 1; with_fixture >= 0; with_fixture--) {
-        fm_tool_spec tool = flat_tool(20, 40, 1);
-        fm_tool_table table = {1, &tool};
-        fm_job_check check;
-        fm_job_check_default(&check);
-        check.options.machine.start[2] = 20;
-        if (with_fixture) {
-            check.fixtures[0] = "check/jaw_scaled.hf";
-            check.fixture_count = 1;
-        }
-        fm_job_spec spec;
-        fm_job_spec_default(&spec);
-        spec.program_text = prog;
-        spec.program_length = strlen(prog);
-        spec.program_name = "probe.ngc";
-        spec.stock_spec = "box:0,0,-20,50,50,0";
-        spec.tools = &table;
-        spec.stock.voxel_mm = 0.5;
-        spec.stock.band_voxels = fm_check_band_voxels(&check.options, 0.5);
-        spec.check = &check;
-        fm_motion last;
-        memset(&last, 0, sizeof last);
-        fm_job_hooks hooks = {.user = &last, .on_motion = record_motion};
-        fm_job_result res;
-        fm_error err;
-        fm_error_clear(&err);
-        fm_status st = fm_job_run(&spec, &hooks, &res, &err);
-        if (!with_fixture) {
-            fprintf(stderr, "  without the fixture: %s\n", st == FM_OK ? "ok" : err.message);
-            CHECK(st != FM_OK);
-            if (st == FM_OK) {
-                fm_stock_free(res.stock);
-                fm_check_free(res.check);
-            }
-            continue;
-        }
-        if (st != FM_OK) fprintf(stderr, "job: %s\n", err.message);
-        CHECK(st == FM_OK);
-        if (st != FM_OK) continue;
-        fprintf(stderr, "  probe found Z %.6f\n", last.end[0]);
+    const char *down = "G21 G90\nG0 Z20\nG0 X70 Y25\nG38.2 Z-15 F100\nG0 Z20\nG0 X[#5063]\nM2\n";
+    const char *side = "G21 G90\nG0 Z20\nG0 X40 Y25\nG0 Z5\nG38.3 X100 F100\nG0 Z20\n"
+                       "G0 X[#5061] Y[#5070 * 10]\nM2\n";
+    fm_motion last;
+    fm_check *c = NULL;
+    fm_error err;
+    fm_status st = probe_run(down, 1, &last, &c, &err);
+    if (st != FM_OK) fprintf(stderr, "job: %s\n", err.message);
+    CHECK(st == FM_OK);
+    if (st == FM_OK) {
+        fprintf(stderr, "  probing down found Z %.6f\n", last.end[0]);
         CHECK_NEAR(last.end[0], 10.0, 0.01);
-        dump(res.check);
+        dump(c);
         /* stopped at the surface: not into the jaw */
-        CHECK(fm_check_count_severity(res.check, FM_CHECK_ERROR) == 0);
-        fm_stock_free(res.stock);
-        fm_check_free(res.check);
+        CHECK(fm_check_count_severity(c, FM_CHECK_ERROR) == 0);
+        fm_check_free(c);
+    }
+    st = probe_run(down, 0, &last, &c, &err);
+    fprintf(stderr, "  without the fixture: %s\n", st == FM_OK ? "ok" : err.message);
+    CHECK(st != FM_OK);
+    fm_check_free(c);
+
+    st = probe_run(side, 1, &last, &c, &err);
+    if (st != FM_OK) fprintf(stderr, "job: %s\n", err.message);
+    CHECK(st == FM_OK);
+    if (st == FM_OK) {
+        fprintf(stderr, "  probing sideways found X %.6f (#5070 %g)\n", last.end[0],
+                last.end[1] / 10);
+        CHECK_NEAR(last.end[0], 57.0, 0.01);
+        CHECK_NEAR(last.end[1], 10.0, 1e-9);
+        CHECK(fm_check_count_severity(c, FM_CHECK_ERROR) == 0);
+        fm_check_free(c);
+    }
+    st = probe_run(side, 0, &last, &c, &err);
+    CHECK(st == FM_OK);
+    if (st == FM_OK) {
+        fprintf(stderr, "  without the fixture: X %.6f (#5070 %g)\n", last.end[0],
+                last.end[1] / 10);
+        CHECK_NEAR(last.end[0], 100.0, 1e-9);
+        CHECK_NEAR(last.end[1], 0.0, 1e-9);
+        fm_check_free(c);
     }
 }
 
