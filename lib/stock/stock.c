@@ -81,6 +81,13 @@ typedef struct shape_ctx {
     double a[3], b[3]; /* box: centre, half sizes; cylinder: x, y, r / z0, z1 */
 } shape_ctx;
 
+/* max and min of finite values (or -inf) without libm's calls: fmax and
+ * fmin are not inlined without -ffinite-math-only, and this runs for every
+ * voxel of a new stock's boundary leaves (a quarter of the set-up of a job
+ * on a 0.1 mm box). */
+static inline double max2(double a, double b) { return a > b ? a : b; }
+static inline double min2(double a, double b) { return a < b ? a : b; }
+
 /* Exact signed distance, positive inside. */
 static double shape_value(const shape_ctx *c, double x, double y, double z)
 {
@@ -92,11 +99,11 @@ static double shape_value(const shape_ctx *c, double x, double y, double z)
     } else {
         dx = hypot(x - c->a[0], y - c->a[1]) - c->a[2];
         dy = -INFINITY;
-        dz = fmax(c->b[0] - z, z - c->b[1]);
+        dz = max2(c->b[0] - z, z - c->b[1]);
     }
-    const double ox = fmax(dx, 0), oy = fmax(dy, 0), oz = fmax(dz, 0);
+    const double ox = max2(dx, 0), oy = max2(dy, 0), oz = max2(dz, 0);
     const double outside = sqrt(ox * ox + oy * oy + oz * oz);
-    const double inside = fmin(fmax(dx, fmax(dy, dz)), 0);
+    const double inside = min2(max2(dx, max2(dy, dz)), 0);
     return -(outside + inside);
 }
 
