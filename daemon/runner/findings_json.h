@@ -8,6 +8,8 @@
 #include <jansson.h>
 
 #include "check/check.h"
+/* The machine file reader (fm_check_machine_load) lives in machine.c. */
+#include "machine.h"
 
 /* One finding (new reference); an uncertain one carries "points". */
 json_t *fm_finding_json(const fm_check_finding *finding);
@@ -15,14 +17,5 @@ json_t *fm_finding_json(const fm_check_finding *finding);
 json_t *fm_findings_json_array(const fm_check *check);
 /* {"findings": [...], "errors": n, "warnings": n} (new reference). */
 json_t *fm_findings_json(const fm_check *check);
-
-/* A machine file (docs/check.md): {"limits": {"x": [lo, hi], "y": [...],
- * "z": [...]}, "rapid_rate": mm/min, "start": [x, y, z]}; every member is
- * optional. FM_ERR_INPUT names the file and the member when it is wrong. */
-fm_status fm_check_machine_load(const char *path, fm_check_machine *machine, fm_error *err);
-/* The same from a JSON value (the daemon's options.check.machine); name
- * stands for the file in messages. */
-fm_status fm_check_machine_from_json(json_t *root, const char *name, fm_check_machine *machine,
-                                     fm_error *err);
 
 #endif

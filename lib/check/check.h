@@ -61,6 +61,7 @@ typedef struct fm_check_machine {
      * for the caller's job spec; the check itself does not use them. */
     double reference_points[4][3];
     int reference_point_count;
+    fm_machine chain;        /* rotary axes (lib/sweep), with their travel limits; none: 3-axis */
 } fm_check_machine;
 
 typedef struct fm_check_options {

@@ -1,5 +1,5 @@
-/* fuzz_machine.c: libFuzzer target for the collision check's machine file
- * reader (fm_check_machine_load in daemon/runner/findings_json.c: jansson's file
+/* fuzz_machine.c: libFuzzer target for the machine file reader
+ * (fm_check_machine_load in daemon/runner/machine.c: jansson's file
  * reader, then fm_check_machine_from_json, which the daemon also uses for a
  * job's options.check.machine). The reader takes a path, so each input is
  * written to one unlinked temporary file, opened through /proc/self/fd. Any
@@ -14,12 +14,14 @@
 
 #include "fuzz_input_file.h"
 
-#include "findings_json.h"
+#include "runner/machine.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-/* What lib/check relies on: finite numbers, lo <= hi on a limited axis, a
- * rapid rate that is 0 (not given) or above 0. */
+/* What lib/check and lib/sweep rely on: finite numbers, lo <= hi on a
+ * limited axis, a rapid rate that is 0 (not given) or above 0; at most
+ * three rotary axes with distinct letters, unit directions, a known link,
+ * and TCP only with rotary axes. */
 static void check_machine(const fm_check_machine *m)
 {
     for (int a = 0; a < 3; a++) {
@@ -30,6 +32,22 @@ static void check_machine(const fm_check_machine *m)
         if (!isfinite(m->start[a])) abort();
     }
     if (!(isfinite(m->rapid_rate) && m->rapid_rate >= 0)) abort();
+    const fm_machine *c = &m->chain;
+    if (c->rotary_count < 0 || c->rotary_count > FM_MACHINE_MAX_ROTARY) abort();
+    if (c->tcp && c->rotary_count == 0) abort();
+    for (int i = 0; i < c->rotary_count; i++) {
+        const fm_rotary_axis *r = &c->rotary[i];
+        if (r->letter < 0 || r->letter > 2) abort();
+        for (int j = 0; j < i; j++)
+            if (c->rotary[j].letter == r->letter) abort();
+        if (r->carries != FM_ROTARY_TABLE && r->carries != FM_ROTARY_HEAD) abort();
+        double n = sqrt(r->around[0] * r->around[0] + r->around[1] * r->around[1] + r->around[2] * r->around[2]);
+        if (!(fabs(n - 1) < 1e-9)) abort();
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(r->through[k])) abort();
+        if (!isfinite(r->pivot_length)) abort();
+        if (r->has_limits && !(r->limit_lo <= r->limit_hi)) abort();
+    }
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)

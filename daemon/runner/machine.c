@@ -1,0 +1,227 @@
+/* machine.c: the machine file reader (docs/check.md "Machine file"): travel
+ * limits, rapid rate and start position for the check, and the kinematic
+ * chain (rotary axes, TCP) that the G-code front end and the sweep use.
+ * Every member is optional; a wrong one is an input error naming the file
+ * and the member. */
+#include "machine.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "sweep/sweep.h"
+
+static int number(json_t *v, double *out)
+{
+    if (!json_is_number(v)) return 0;
+    *out = json_number_value(v);
+    return isfinite(*out);
+}
+
+static int triple(json_t *v, double out[3])
+{
+    return json_is_array(v) && json_array_size(v) == 3 && number(json_array_get(v, 0), &out[0]) &&
+           number(json_array_get(v, 1), &out[1]) && number(json_array_get(v, 2), &out[2]);
+}
+
+static int axis_letter(const char *s)
+{
+    if (!s[0] || s[1]) return -1;
+    char c = s[0];
+    return c == 'a' || c == 'A' ? 0 : c == 'b' || c == 'B' ? 1 : c == 'c' || c == 'C' ? 2 : -1;
+}
+
+static fm_status read_rotary(json_t *arr, const char *path, fm_machine *mc, fm_error *err)
+{
+    if (!json_is_array(arr))
+        return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                           "\"rotary\" is an array of axes in chain order from the base: "
+                           "[{\"axis\": \"a\", \"around\": [1, 0, 0], \"carries\": \"table\"}, ...]");
+    if (json_array_size(arr) > FM_MACHINE_MAX_ROTARY)
+        return fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "rotary: at most %d axes (a, b, c), not %zu",
+                           FM_MACHINE_MAX_ROTARY, json_array_size(arr));
+    size_t i;
+    json_t *ax;
+    json_array_foreach(arr, i, ax)
+    {
+        fm_rotary_axis *r = &mc->rotary[i];
+        memset(r, 0, sizeof *r);
+        r->letter = -1;
+        r->carries = (fm_rotary_link)-1;
+        if (!json_is_object(ax))
+            return fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "rotary[%zu]: expected an object", i);
+        int has_around = 0;
+        const char *key;
+        json_t *v;
+        json_object_foreach(ax, key, v)
+        {
+            if (!strcmp(key, "axis")) {
+                if (!json_is_string(v) || (r->letter = axis_letter(json_string_value(v))) < 0)
+                    return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                       "rotary[%zu].axis: expected \"a\", \"b\" or \"c\"", i);
+            } else if (!strcmp(key, "around")) {
+                if (!triple(v, r->around))
+                    return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                       "rotary[%zu].around: expected a direction [x, y, z]", i);
+                has_around = 1;
+            } else if (!strcmp(key, "through")) {
+                if (!triple(v, r->through))
+                    return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                       "rotary[%zu].through: expected a point [x, y, z] in mm", i);
+            } else if (!strcmp(key, "carries")) {
+                const char *c = json_is_string(v) ? json_string_value(v) : "";
+                if (!strcmp(c, "table")) r->carries = FM_ROTARY_TABLE;
+                else if (!strcmp(c, "head")) r->carries = FM_ROTARY_HEAD;
+                else
+                    return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                       "rotary[%zu].carries: expected \"table\" or \"head\"", i);
+            } else if (!strcmp(key, "pivot_length")) {
+                if (!number(v, &r->pivot_length))
+                    return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                       "rotary[%zu].pivot_length: expected mm (pivot to spindle gauge line)",
+                                       i);
+            } else if (!strcmp(key, "limits")) {
+                if (!json_is_array(v) || json_array_size(v) != 2 || !number(json_array_get(v, 0), &r->limit_lo) ||
+                    !number(json_array_get(v, 1), &r->limit_hi) || !(r->limit_lo <= r->limit_hi))
+                    return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                       "rotary[%zu].limits: expected [lo, hi] in degrees, lo <= hi", i);
+                r->has_limits = 1;
+            } else if (!strcmp(key, "wrapped")) {
+                if (!json_is_boolean(v))
+                    return fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "rotary[%zu].wrapped: expected true or false",
+                                       i);
+                r->wrapped = json_is_true(v);
+            } else if (strcmp(key, "name") && strcmp(key, "comment")) {
+                return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                   "rotary[%zu]: unknown member \"%s\" (axis, around, through, carries, "
+                                   "pivot_length, limits, wrapped, name, comment)",
+                                   i, key);
+            }
+        }
+        if (r->letter < 0 || !has_around || (int)r->carries < 0)
+            return fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "rotary[%zu]: \"axis\", \"around\" and \"carries\" are required",
+                               i);
+        if (r->carries == FM_ROTARY_TABLE && r->pivot_length != 0)
+            return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                               "rotary[%zu].pivot_length: only head axes have a pivot length; a table axis's "
+                               "line is placed by \"through\"",
+                               i);
+        mc->rotary_count = (int)i + 1;
+    }
+    fm_error verr;
+    fm_status st = fm_machine_validate(mc, &verr);
+    if (st != FM_OK) return fm_error_at(err, st, path, 0, 0, "rotary: %.400s", verr.message);
+    return st;
+}
+
+fm_status fm_check_machine_load(const char *path, fm_check_machine *m, fm_error *err)
+{
+    memset(m, 0, sizeof *m);
+    json_error_t je;
+    json_t *root = json_load_file(path, JSON_REJECT_DUPLICATES, &je);
+    if (!root) {
+        if (je.line <= 0)
+            return fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "cannot read the machine file: %s", je.text);
+        return fm_error_at(err, FM_ERR_INPUT, path, je.line, je.column, "%s", je.text);
+    }
+    fm_status st = fm_check_machine_from_json(root, path, m, err);
+    json_decref(root);
+    return st;
+}
+
+fm_status fm_check_machine_from_json(json_t *root, const char *path, fm_check_machine *m, fm_error *err)
+{
+    memset(m, 0, sizeof *m);
+    fm_status st = FM_OK;
+    if (!json_is_object(root)) {
+        st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "a machine file is a JSON object");
+        goto done;
+    }
+    const char *key;
+    json_t *val;
+    json_object_foreach(root, key, val)
+    {
+        if (!strcmp(key, "limits")) {
+            if (!json_is_object(val)) {
+                st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "\"limits\" is an object {\"x\": [lo, hi], ...}");
+                goto done;
+            }
+            const char *ax;
+            json_t *lim;
+            json_object_foreach(val, ax, lim)
+            {
+                int a = !strcmp(ax, "x") || !strcmp(ax, "X")   ? 0
+                        : !strcmp(ax, "y") || !strcmp(ax, "Y") ? 1
+                        : !strcmp(ax, "z") || !strcmp(ax, "Z") ? 2
+                                                               : -1;
+                if (axis_letter(ax) >= 0) {
+                    st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                     "limits.%s: a rotary axis's limits go with the axis: \"rotary\": "
+                                     "[{\"axis\": \"%s\", ..., \"limits\": [lo, hi]}]",
+                                     ax, ax);
+                    goto done;
+                }
+                double lo, hi;
+                if (a < 0 || !json_is_array(lim) || json_array_size(lim) != 2 ||
+                    !number(json_array_get(lim, 0), &lo) || !number(json_array_get(lim, 1), &hi) || !(lo <= hi)) {
+                    st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                     "limits.%s: expected one of x, y, z with [lo, hi] in mm, "
+                                     "lo <= hi",
+                                     ax);
+                    goto done;
+                }
+                m->has_limit[a] = 1;
+                m->limit_lo[a] = lo;
+                m->limit_hi[a] = hi;
+            }
+        } else if (!strcmp(key, "rapid_rate")) {
+            if (!number(val, &m->rapid_rate) || !(m->rapid_rate > 0)) {
+                st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "rapid_rate: expected mm/min above 0");
+                goto done;
+            }
+        } else if (!strcmp(key, "start")) {
+            if (!triple(val, m->start)) {
+                st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "start: expected [x, y, z] in mm");
+                goto done;
+            }
+        } else if (!strcmp(key, "reference_points")) {
+            size_t n = json_is_array(val) ? json_array_size(val) : 0;
+            int ok = n >= 1 && n <= 4;
+            for (size_t i = 0; ok && i < n; i++) ok = triple(json_array_get(val, i), m->reference_points[i]);
+            if (!ok) {
+                st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                 "reference_points: expected 1 to 4 points [x, y, z] in mm (G28, "
+                                 "then G30 P2-P4)");
+                goto done;
+            }
+            m->reference_point_count = (int)n;
+        } else if (!strcmp(key, "tcp")) {
+            if (!json_is_boolean(val)) {
+                st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                 "tcp: expected true (tool centre point control) or false");
+                goto done;
+            }
+            m->chain.tcp = json_is_true(val);
+        } else if (!strcmp(key, "rotary")) {
+            if ((st = read_rotary(val, path, &m->chain, err)) != FM_OK) goto done;
+        } else if (strcmp(key, "units") && strcmp(key, "name") && strcmp(key, "comment")) {
+            st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                             "unknown member \"%s\" (limits, rapid_rate, start, reference_points, tcp, rotary, "
+                             "units, name, comment)",
+                             key);
+            goto done;
+        }
+    }
+    json_t *u = json_object_get(root, "units");
+    if (u && (!json_is_string(u) || strcmp(json_string_value(u), "mm"))) {
+        st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "units: only \"mm\" is understood");
+        goto done;
+    }
+    if (m->chain.tcp && m->chain.rotary_count == 0) {
+        st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "tcp: true needs rotary axes (\"rotary\": [...])");
+        goto done;
+    }
+done:
+    if (st != FM_OK) memset(m, 0, sizeof *m);
+    return st;
+}
