@@ -202,6 +202,7 @@ int fm_cmd_check(int argc, char **argv)
         }
         if (opt.machine.rapid_rate > 0) spec.rapid_rate = opt.machine.rapid_rate;
         memcpy(spec.reference_points, opt.machine.reference_points, sizeof spec.reference_points);
+        spec.machine = &opt.machine.chain; /* A B C words turn its rotary axes */
     }
     if (rapid_rate > 0) spec.rapid_rate = rapid_rate;
 

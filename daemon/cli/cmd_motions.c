@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "runner/machine.h"
 #include "toolpaths/gcode/gcode.h"
 #include "toolpaths/tooltable/tooltable.h"
 #include "toolpaths/traj/traj.h"
@@ -17,7 +18,8 @@ static void usage(FILE *out)
             "usage: frepmill motions PROGRAM [--tools TOOLS] [--format jsonl]\n"
             "                        [--rapid-rate MM_PER_MIN] [--skip N] [--inch]\n"
             "                        [--block-delete] [--subroutine-path DIRS] [--messages]\n"
-            "                        [--dialect linuxcnc|fanuc] [--calculator-input]\n\n"
+            "                        [--dialect linuxcnc|fanuc] [--calculator-input]\n"
+            "                        [--machine FILE.json]\n\n"
             "Interpret a G-code program (LinuxCNC dialect, or Fanuc/Haas with --dialect\n"
             "fanuc; docs/gcode.md), or a parametric trajectory\n"
             "(PROGRAM.json, docs/trajectory.md), and print one motion per line:\n"
@@ -30,6 +32,9 @@ static void usage(FILE *out)
             "folders (':'-separated) holding NAME.ngc files for o<NAME> call (Fanuc:\n"
             "O1234.nc for M98 P1234). --calculator-input reads Fanuc numbers without a\n"
             "decimal point as whole mm (X5 = 5 mm, not 0.005).\n"
+            "A B C words (degrees) give \"rotary\":[a,b,c] at the end of the motion; with\n"
+            "--machine (docs/check.md) they turn its rotary axes and each motion also has\n"
+            "\"tcp\" and \"tool_axis\" (workpiece frame, both ends).\n"
             "--messages also prints (debug,...) and (msg,...) texts in order as\n"
             "  {\"kind\":\"message\",\"line\":12,\"text\":\"...\"}\n"
             "Exit status: 0 ok, 2 bad input, 3 limit exceeded, 4 I/O error.\n");
@@ -57,6 +62,16 @@ static int print_motion(void *user, const fm_motion *m)
     if (m->kind == FM_MOTION_ARC)
         fprintf(out, "\"center\":[%.6f,%.6f,%.6f],\"axis\":\"%c\",\"turns\":%d,", m->center[0],
                 m->center[1], m->center[2], "xyz"[m->plane_axis], m->turns);
+    /* Rotary axes: the end values (degrees, with their offsets) when the
+     * program moved any or the machine has them; the tool axis in the
+     * workpiece frame at both ends with a machine. */
+    const double *r0 = m->rotary_start, *r1 = m->rotary_end;
+    if (m->machine || r0[0] || r0[1] || r0[2] || r1[0] || r1[1] || r1[2])
+        fprintf(out, "\"rotary\":[%.6f,%.6f,%.6f],", r1[0], r1[1], r1[2]);
+    if (m->machine)
+        fprintf(out, "\"tcp\":%d,\"tool_axis\":[[%.6f,%.6f,%.6f],[%.6f,%.6f,%.6f]],", m->tcp,
+                m->axis_start[0], m->axis_start[1], m->axis_start[2], m->axis_end[0], m->axis_end[1],
+                m->axis_end[2]);
     fprintf(out,
             "\"feed\":%.6f,\"tool\":%d,\"spindle\":%.6f,\"tip_offset\":[%.6f,%.6f,%.6f],"
             "\"t\":[%.6f,%.6f]}\n",
@@ -81,7 +96,9 @@ static void print_message(void *user, int line, const char *text)
 
 int fm_cmd_motions(int argc, char **argv)
 {
-    const char *program = NULL, *tools_path = NULL;
+    const char *program = NULL, *tools_path = NULL, *machine_path = NULL;
+    fm_check_machine machine;
+    int rapid_given = 0;
     fm_gcode_options opt;
     fm_gcode_options_default(&opt);
     for (int i = 1; i < argc; i++) {
@@ -99,6 +116,7 @@ int fm_cmd_motions(int argc, char **argv)
         } else if (!strcmp(a, "--rapid-rate") && i + 1 < argc) {
             char *end;
             opt.rapid_rate = strtod(argv[++i], &end);
+            rapid_given = 1;
             if (*end || !(opt.rapid_rate > 0)) {
                 fprintf(stderr, "frepmill motions: --rapid-rate '%s'; expected mm/min > 0\n",
                         argv[i]);
@@ -111,6 +129,8 @@ int fm_cmd_motions(int argc, char **argv)
                 fprintf(stderr, "frepmill motions: --skip '%s'; expected a count >= 0\n", argv[i]);
                 return 2;
             }
+        } else if (!strcmp(a, "--machine") && i + 1 < argc) {
+            machine_path = argv[++i];
         } else if (!strcmp(a, "--inch")) {
             opt.start_inch = 1;
         } else if (!strcmp(a, "--block-delete")) {
@@ -152,6 +172,16 @@ int fm_cmd_motions(int argc, char **argv)
             return (int)err.code;
         }
         opt.tools = &table;
+    }
+    if (machine_path) {
+        if (fm_check_machine_load(machine_path, &machine, &err)) {
+            fprintf(stderr, "%s\n", fm_error_format(&err, msg, sizeof msg));
+            fm_tool_table_free(&table);
+            return (int)err.code;
+        }
+        opt.machine = &machine.chain;
+        memcpy(opt.reference_points, machine.reference_points, sizeof opt.reference_points);
+        if (machine.rapid_rate > 0 && !rapid_given) opt.rapid_rate = machine.rapid_rate;
     }
     static char outbuf[1 << 16];
     setvbuf(stdout, outbuf, _IOFBF, sizeof outbuf);

@@ -26,7 +26,7 @@ static void usage(FILE *out)
             "                         [--out FILE]... [--report FILE.json] [--progress]\n"
             "                         [--band VOXELS] [--memory-budget MB] [--threads N]\n"
             "                         [--rapid-rate MM_PER_MIN] [--batch DIAMETERS]\n"
-            "                         [--check [--fixture FILE]... [--machine FILE.json]]\n"
+            "                         [--machine FILE.json] [--check [--fixture FILE]...]\n"
             "                         [--png FILE] [--png-size WxH] [--color depth|tool|none]\n"
             "                         [--dialect linuxcnc|fanuc] [--subroutine-path DIRS]\n"
             "                         [--calculator-input]\n"
@@ -37,16 +37,17 @@ static void usage(FILE *out)
             "--voxel   voxel edge in mm (default 0.1)\n"
             "--out     final stock; format by extension: %s (may be given several times)\n"
             "--report  JSON report (default: none; `-` for standard output)\n"
+            "--machine the machine (docs/check.md): rotary axes that A B C words turn, TCP,\n"
+            "          rapid rate (times the whole job), Fanuc reference points, limits for --check\n"
             "--check   also run the collision check in the same pass (at the check's own\n"
             "          0.5 mm voxel, as `frepmill check`); the report gets its \"findings\"\n"
-            "--machine travel limits, start and rapid rate (the rapid rate times the whole job)\n"
             "--png     a shaded isometric picture with the toolpath (same as --out FILE.png)\n"
             "--color   mesh and picture colours: depth below the stock top (default), the tool\n"
             "          that cut last, or none\n"
             "--dialect the G-code's dialect (default linuxcnc; docs/gcode.md)\n"
             "--subroutine-path  ':'-separated folders of subroutine files (NAME.ngc, Fanuc O1234.nc)\n"
             "--calculator-input Fanuc: X5 is 5 mm, not 0.005 (DPI / Haas setting 162)\n"
-            "--machine's reference_points are Fanuc's G28/G30 reference points\n"
+
             "Exit status: 0 success, 2 bad input, 3 resource limit, 4 I/O error.\n",
             fm_output_formats());
 }
@@ -251,31 +252,34 @@ int fm_cmd_simulate(int argc, char **argv)
         return 2;
     }
 
-    if ((fixture_count || machine_path) && !want_check) {
-        fprintf(stderr, "frepmill simulate: --fixture and --machine need --check\n");
+    if (fixture_count && !want_check) {
+        fprintf(stderr, "frepmill simulate: --fixture needs --check\n");
         return 2;
+    }
+    /* The machine: its rotary axes move the tool for the cut, its rapid
+     * rate times the job (as in `frepmill check`), its reference points
+     * serve Fanuc's G28/G30, and the check gets its limits. */
+    fm_job_check check;
+    fm_job_check_default(&check);
+    if (machine_path) {
+        fm_error merr;
+        fm_error_clear(&merr);
+        if (fm_check_machine_load(machine_path, &check.options.machine, &merr) != FM_OK) {
+            char buf[1024];
+            fprintf(stderr, "frepmill simulate: %s\n", fm_error_format(&merr, buf, sizeof buf));
+            return exit_status(merr.code);
+        }
+        if (check.options.machine.rapid_rate > 0 && !rapid_rate_given)
+            spec.rapid_rate = check.options.machine.rapid_rate;
+        memcpy(spec.reference_points, check.options.machine.reference_points,
+               sizeof spec.reference_points);
+        spec.machine = &check.options.machine.chain;
     }
     /* The check runs in the simulation's own pass on a grid of its own
      * voxel (job.h), so its findings are those of `frepmill check`. */
-    fm_job_check check;
-    fm_job_check_default(&check);
     if (want_check) {
         for (int i = 0; i < fixture_count; i++) check.fixtures[i] = fixtures[i];
         check.fixture_count = fixture_count;
-        if (machine_path) {
-            fm_error cerr;
-            fm_error_clear(&cerr);
-            if (fm_check_machine_load(machine_path, &check.options.machine, &cerr) != FM_OK) {
-                char buf[1024];
-                fprintf(stderr, "frepmill simulate: %s\n", fm_error_format(&cerr, buf, sizeof buf));
-                return 2;
-            }
-            /* the machine's rapid rate times the job, as in `frepmill check` */
-            if (check.options.machine.rapid_rate > 0 && !rapid_rate_given)
-                spec.rapid_rate = check.options.machine.rapid_rate;
-            memcpy(spec.reference_points, check.options.machine.reference_points,
-                   sizeof spec.reference_points);
-        }
         spec.check = &check;
     }
 

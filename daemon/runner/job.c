@@ -352,6 +352,7 @@ static fm_status run_program(const fm_job_spec *spec, const fm_tool_table *tools
     gopt.subroutine_path = spec->subroutine_path;
     memcpy(gopt.reference_points, spec->reference_points, sizeof gopt.reference_points);
     gopt.calculator_input = spec->calculator_input;
+    gopt.machine = spec->machine;
     if (spec->program_path)
         return fm_gcode_run_file(spec->program_path, &gopt, sink, user, NULL, err);
     return fm_gcode_run_string(spec->program_text, spec->program_length,

@@ -79,6 +79,9 @@ typedef struct fm_job_spec {
     const char *subroutine_path;
     double reference_points[4][3];
     int calculator_input;     /* Fanuc: X5 is 5 mm, not 0.005 */
+    /* The machine's rotary axes (docs/check.md "Machine file"); NULL: 3-axis.
+     * The G-code front end turns A B C words into joint values with it. */
+    const fm_machine *machine;
 
     /* The collision check (NULL: none). When resuming, the check's own
      * grid is cut from the start, the motions before skip_motions

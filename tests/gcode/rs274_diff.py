@@ -7,7 +7,8 @@ RIGID_TAP, NURBS_FEED, DWELL, MESSAGE) with positions in the active program
 coordinate system and units, and announces offsets with SET_G5X_OFFSET /
 SET_G92_OFFSET / SET_XY_ROTATION and units with USE_LENGTH_UNITS. This
 script converts those to machine millimetres and compares every motion's
-kind, end point, arc centre, axis and turns with frepmill's JSON lines
+kind, end point, arc centre, axis and turns, and the rotary axes A, B, C
+(degrees, with their G5x and G92 offsets), with frepmill's JSON lines
 within the precision rs274 prints (4 decimals of program units), and the
 texts of (debug,...) and (msg,...) comments in order. rs274 prints no
 geometry for NURBS_FEED (G5, G5.1, G5.2/G5.3): those are compared by kind
@@ -141,6 +142,8 @@ def rs274_run(program, tbl_inch, ini_path):
     g5x = [0.0, 0.0, 0.0]
     g92 = [0.0, 0.0, 0.0]
     rotation = 0.0
+    g5x_abc = [0.0, 0.0, 0.0]
+    g92_abc = [0.0, 0.0, 0.0]
     plane = "XY"
     pos = [0.0, 0.0, 0.0]  # machine mm of the last point
     out, messages = [], []
@@ -148,6 +151,10 @@ def rs274_run(program, tbl_inch, ini_path):
     def mach(p):
         x, y = rot(p[0] * unit + g92[0], p[1] * unit + g92[1], rotation)
         return [x + g5x[0], y + g5x[1], p[2] * unit + g92[2] + g5x[2]]
+
+    def abc(v):
+        # degrees: no unit conversion
+        return [v[i] + g5x_abc[i] + g92_abc[i] for i in range(3)]
 
     for line in res.stdout.splitlines():
         m = CALL.match(line)
@@ -166,14 +173,16 @@ def rs274_run(program, tbl_inch, ini_path):
         nums = [float(v) for v in re.findall(r"[-+]?\d+\.\d+|[-+]?\d+", args)]
         if name == "SET_G5X_OFFSET":
             g5x = [v * unit for v in nums[1:4]]
+            g5x_abc = nums[4:7]
         elif name == "SET_G92_OFFSET":
             g92 = [v * unit for v in nums[0:3]]
+            g92_abc = nums[3:6]
         elif name == "SET_XY_ROTATION":
             rotation = nums[0]
         elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED"):
             end = mach(nums[0:3])
             out.append({"kind": "rapid" if name == "STRAIGHT_TRAVERSE" else "line", "end": end,
-                        "tol": 3e-4 * unit})
+                        "rotary": abc(nums[3:6]), "tol": 3e-4 * unit})
             pos = end
         elif name == "RIGID_TAP":
             # in to the point, then out to where it started
@@ -195,7 +204,7 @@ def rs274_run(program, tbl_inch, ini_path):
             cen_m = mach(cen)
             cen_m[axis] = pos[axis] if pos else float("nan")
             out.append({"kind": "arc", "end": end, "center": cen_m, "turns": int(turns),
-                        "axis": "xyz"[axis], "tol": 3e-4 * unit})
+                        "axis": "xyz"[axis], "rotary": abc(nums[6:9]), "tol": 3e-4 * unit})
             pos = end
         elif name == "DWELL":
             out.append({"kind": "dwell", "seconds": nums[0], "tol": 3e-4 * unit})
@@ -243,6 +252,9 @@ def compare(ref, got, ref_msgs, got_msgs):
             continue
         if any(abs(a - b) > tol for a, b in zip(r["end"], g["end"])):
             problems.append("%s: end rs274 %s, frepmill %s" % (where, r["end"], g["end"]))
+        g_abc = g.get("rotary", [0.0, 0.0, 0.0])
+        if "rotary" in r and any(abs(a - b) > 3e-4 for a, b in zip(r["rotary"], g_abc)):
+            problems.append("%s: A B C rs274 %s, frepmill %s" % (where, r["rotary"], g_abc))
         if r["kind"] == "arc":
             if r["turns"] != g["turns"] or r["axis"] != g["axis"]:
                 problems.append("%s: turns/axis rs274 %d %s, frepmill %d %s"

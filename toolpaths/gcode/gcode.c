@@ -138,6 +138,7 @@ static fm_status interp_init(gc_interp *g, const char *text, size_t len, const c
     if (g->opt.max_iterations <= 0) g->opt.max_iterations = 10000000L;
     if (g->opt.max_call_depth <= 0) g->opt.max_call_depth = 64;
     if (g->opt.max_program_bytes == 0) g->opt.max_program_bytes = (size_t)256 << 20;
+    gc_rot_start(g);
     g->err = err;
     g->name = name ? name : "";
     g->text = text;

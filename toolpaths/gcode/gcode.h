@@ -64,6 +64,10 @@ typedef struct fm_gcode_options {
      * the least input increment (X5 = 0.005 mm, 0.0005 in), as Fanuc and Haas
      * do out of the box. */
     int calculator_input;
+    /* The machine's rotary axes (docs/check.md "Machine file"): A B C words
+     * turn them and motions carry their joint values. NULL: the words are
+     * followed (as rs274 prints them) but move nothing. Must outlive the run. */
+    const fm_machine *machine;
 } fm_gcode_options;
 
 /* Fill *opt with the defaults above. */

@@ -124,7 +124,7 @@ gc_group gc_g_group(int code)
     case GC_G20: case GC_G21: return GC_GROUP_UNITS;
     case GC_G40: case GC_G41: case GC_G42: case GC_G41_1: case GC_G42_1:
         return GC_GROUP_CUTTER_COMP;
-    case GC_G43: case GC_G43_1: case GC_G49: return GC_GROUP_TOOL_LENGTH;
+    case GC_G43: case GC_G43_1: case GC_G43_4: case GC_G49: return GC_GROUP_TOOL_LENGTH;
     case GC_G98: case GC_G99: return GC_GROUP_RETURN_MODE;
     case GC_G54: case GC_G55: case GC_G56: case GC_G57: case GC_G58: case GC_G59: case GC_G59_1:
     case GC_G59_2: case GC_G59_3:

@@ -25,7 +25,7 @@ gc_group gc_fanuc_g_group(int code)
     case GC_G93: case GC_G94: return GC_GROUP_FEED_MODE;
     case GC_G20: case GC_G21: return GC_GROUP_UNITS;
     case GC_G40: return GC_GROUP_CUTTER_COMP;
-    case GC_G43: case GC_G44: case GC_G49: return GC_GROUP_TOOL_LENGTH;
+    case GC_G43: case GC_G43_4: case GC_G44: case GC_G49: return GC_GROUP_TOOL_LENGTH;
     case GC_G98: case GC_G99: return GC_GROUP_RETURN_MODE;
     case GC_G54: case GC_G55: case GC_G56: case GC_G57: case GC_G58: case GC_G59: case GC_G54_1:
         return GC_GROUP_COORD_SYSTEM;

@@ -137,6 +137,14 @@ void gc_fanuc_target(gc_interp *g, const gc_fanuc_block *fb, double end[3])
     const gc_block *b = &fb->b;
     int a, bb, c;
     gc_plane_axes(g->plane, &a, &bb, &c);
+    /* A B C in degrees: the rotary axes (gcode_rotary.c) */
+    int rgiven[3];
+    double rvalue[3];
+    for (int i = 0; i < 3; i++) {
+        rgiven[i] = b->has[L("abc"[i])];
+        rvalue[i] = rgiven[i] ? gc_fanuc_angle(g, fb, "abc"[i]) : 0;
+    }
+    gc_rot_target(g, rgiven, rvalue);
     for (int i = 0; i < 3; i++) {
         char l = axis_letter[i];
         if (f->polar && (i == a || i == bb)) continue;
@@ -310,13 +318,16 @@ static fm_status tool_length(gc_interp *g, const gc_fanuc_block *fb, int code, i
         if ((st = gc_check_tool(g, (int)h, b->col[L('h')], "H"))) return st;
         f->h = (int)h;
     }
+    /* G43.4: G43 with tool centre point control on (gcode_rotary.c); G49 off */
+    if (code == GC_G43_4 && (st = gc_rot_tcp(g, 1, col))) return st;
+    if (code == GC_G49) gc_rot_tcp(g, 0, col);
+    if (code == GC_G43_4) code = GC_G43;
     if (code != GC_G_NONE) f->tool_length_mode = code;
     if (code == GC_G_NONE && !b->has[L('h')]) return FM_OK;
     double len = f->h ? gc_tool_length_mm(g, f->h) / g->unit : 0.0;
     double nv[3] = {0, 0, 0};
     if (f->tool_length_mode == GC_G43) nv[2] = len;
     else if (f->tool_length_mode == GC_G44) nv[2] = -len;
-    (void)col;
     if (nv[2] != g->tlo[2]) *changed = 1;
     gc_set_tlo(g, nv);
     return FM_OK;

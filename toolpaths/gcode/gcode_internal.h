@@ -34,7 +34,7 @@ typedef enum gc_gcode {
     GC_G31 = 310, GC_G33 = 330, GC_G33_1 = 331, GC_G37 = 370,
     GC_G38_2 = 382, GC_G38_3 = 383, GC_G38_4 = 384, GC_G38_5 = 385,
     GC_G40 = 400, GC_G41 = 410, GC_G41_1 = 411, GC_G42 = 420, GC_G42_1 = 421,
-    GC_G43 = 430, GC_G43_1 = 431, GC_G43_2 = 432, GC_G44 = 440, GC_G49 = 490,
+    GC_G43 = 430, GC_G43_1 = 431, GC_G43_2 = 432, GC_G43_4 = 434, GC_G44 = 440, GC_G49 = 490,
     GC_G50 = 500, GC_G50_1 = 501, GC_G51 = 510, GC_G51_1 = 511, GC_G52 = 520, GC_G53 = 530,
     GC_G54 = 540, GC_G55 = 550, GC_G56 = 560, GC_G57 = 570, GC_G58 = 580, GC_G59 = 590,
     GC_G54_1 = 541, GC_G59_1 = 591, GC_G59_2 = 592, GC_G59_3 = 593,
@@ -262,6 +262,10 @@ typedef struct gc_interp {
      * comparisons in cycles and arcs round exactly as rs274 does */
     double pos[3];      /* current point, program units and coordinates (rs274 prints these) */
     double g5x[3], g92[3], tlo[3];
+    /* rotary axes A B C (gcode_rotary.c): program degrees now and at the end
+     * of the pending move, their G5x and G92 offsets, TCP on */
+    double rot[3], rot_next[3], rot_g5x[3], rot_g92[3];
+    int tcp;
     int cs;             /* 1..9: G54..G59.3 */
     double unit;        /* mm per program unit: 1 or 25.4 */
     gc_plane plane;
@@ -500,5 +504,22 @@ int gc_get_named(gc_interp *g, const char *name, double *v);
 int gc_table_get(const gc_table *t, const char *key, double *v);
 int gc_table_set(gc_table *t, const char *key, double v);
 void gc_table_free(gc_table *t);
+
+/* ---- rotary axes A, B, C (gcode_rotary.c) ---- */
+
+void gc_rot_start(gc_interp *g);
+/* rot_next from the block's A B C words (gc_find_ends calls it). */
+fm_status gc_rot_find_ends(gc_interp *g, const gc_block *b, int g53);
+/* The same from values already read (the Fanuc dialect's angles). */
+void gc_rot_target(gc_interp *g, const int given[3], const double value[3]);
+void gc_rot_hold(gc_interp *g);                 /* no rotary motion pending */
+double gc_rot_degrees(const gc_interp *g);      /* the pending move's rotary length */
+void gc_rot_emit(gc_interp *g, fm_motion *m);   /* joint values, machine, TCP; commits rot_next */
+void gc_rot_set_g5x(gc_interp *g, int base);
+void gc_rot_g10(gc_interp *g, const gc_block *b, int l, int base);
+void gc_rot_g92(gc_interp *g, const gc_block *b, int code);
+void gc_rot_home(gc_interp *g, const gc_block *b, int base);
+void gc_rot_store_home(gc_interp *g, int base);
+fm_status gc_rot_tcp(gc_interp *g, int on, int col);
 
 #endif

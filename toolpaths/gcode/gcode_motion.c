@@ -64,6 +64,7 @@ fm_status gc_emit_motion(gc_interp *g, fm_motion *m, double seconds)
     m->index = g->motion_index++;
     memcpy(g->mpos, m->end, sizeof g->mpos);
     memcpy(g->canon, m->end, sizeof g->canon);
+    gc_rot_emit(g, m);
     if (m->index >= g->opt.skip_motions && g->sink && g->sink(g->user, m)) g->stop = 1;
     return FM_OK;
 }
@@ -98,9 +99,14 @@ fm_status gc_move_line(gc_interp *g, int rapid, const double to[3])
     double len = sqrt((m.end[0] - m.start[0]) * (m.end[0] - m.start[0]) +
                       (m.end[1] - m.start[1]) * (m.end[1] - m.start[1]) +
                       (m.end[2] - m.start[2]) * (m.end[2] - m.start[2]));
-    double sec;
+    double sec, turn = gc_rot_degrees(g);
     if (rapid) {
-        sec = len / g->opt.rapid_rate * 60.0;
+        /* rotary axes at the same rate in degrees per minute, coordinated */
+        sec = fmax(len, turn) / g->opt.rapid_rate * 60.0;
+    } else if (len == 0 && turn > 0 && !g->inverse_time) {
+        /* only rotary axes move: F is degrees per minute (LinuxCNC) */
+        sec = turn / g->feed * 60.0;
+        m.feed = g->feed;
     } else {
         sec = gc_feed_seconds(g, len, &m.feed);
     }
@@ -169,6 +175,8 @@ fm_status gc_move_arc(gc_interp *g, const double to[3], const double center_ab[2
 fm_status gc_find_ends(gc_interp *g, const gc_block *b, int g53, double end[3])
 {
     const char ax[3] = {'x', 'y', 'z'};
+    fm_status rst = gc_rot_find_ends(g, b, g53); /* A B C */
+    if (rst) return rst;
     int polar = b->has_radius || b->has_theta;
     if (g53) {
         if (polar)

@@ -86,6 +86,7 @@ void gc_set_g5x(gc_interp *g, int cs)
         g->rotation = rot;
         gc_from_machine(g, m, g->pos);
     }
+    gc_rot_set_g5x(g, base);
     g->cs = cs;
     g->params[GC_PARAM_COORD_SYSTEM] = cs;
 }
@@ -192,6 +193,7 @@ fm_status gc_exec_g10(gc_interp *g, const gc_block *b, int col)
         if (b->has[L('y')] || t != 0) g->params[base + 1] = ny;
         if (b->has[L('z')]) g->params[base + 2] = nz;
     }
+    gc_rot_g10(g, b, (int)l, base);
     if (cs == g->cs) gc_set_g5x(g, cs);
     return FM_OK;
 }
@@ -209,6 +211,7 @@ fm_status gc_exec_g92(gc_interp *g, const gc_block *b, int code, int col)
             g->g92[i] = w;
             g->params[GC_PARAM_G92 + i] = w;
         }
+        gc_rot_g92(g, b, code);
         g->params[GC_PARAM_G92_ENABLED] = 1;
         return FM_OK;
     }
@@ -222,6 +225,7 @@ fm_status gc_exec_g92(gc_interp *g, const gc_block *b, int code, int col)
             g->pos[i] = w;
             g->params[GC_PARAM_G92 + i] = g->g92[i];
         }
+        gc_rot_g92(g, b, code);
         g->params[GC_PARAM_G92_ENABLED] = 1;
         return FM_OK;
     }
@@ -233,6 +237,7 @@ fm_status gc_exec_g92(gc_interp *g, const gc_block *b, int code, int col)
         g->g92[i] = nv[i];
         if (code == GC_G92_1) g->params[GC_PARAM_G92 + i] = 0;
     }
+    gc_rot_g92(g, b, code);
     g->params[GC_PARAM_G92_ENABLED] = code == GC_G92_3;
     return FM_OK;
 }
@@ -255,6 +260,7 @@ fm_status gc_exec_home(gc_interp *g, const gc_block *b, int code)
         else if (!any && gc_block_has_axis(b)) home[i] = mid[i];
         else home[i] = stored[i];
     }
+    gc_rot_home(g, b, base);
     return gc_move_line(g, 1, home);
 }
 
@@ -264,6 +270,7 @@ void gc_store_home(gc_interp *g, int code)
     double m[3];
     gc_to_machine(g, g->pos, m);
     for (int i = 0; i < 3; i++) g->params[base + i] = m[i] + g->tlo[i] * g->unit;
+    gc_rot_store_home(g, base);
 }
 
 /* G43 H (the table's length of tool H, or of the spindle tool without H),
@@ -271,7 +278,9 @@ void gc_store_home(gc_interp *g, int code)
 fm_status gc_exec_tool_length(gc_interp *g, const gc_block *b, int code, int col)
 {
     fm_status st;
-    if (code == GC_G43) {
+    if (code == GC_G43 || code == GC_G43_4) {
+        /* G43.4: the same length offset, and tool centre point control on */
+        if (code == GC_G43_4 && (st = gc_rot_tcp(g, 1, col))) return st;
         int h = g->tool;
         if (HAS(b, 'h') && (st = gc_int_word(g, b, 'h', &h))) return st;
         if ((st = gc_check_tool(g, h, HAS(b, 'h') ? COL(b, 'h') : col, "H"))) return st;
@@ -286,6 +295,7 @@ fm_status gc_exec_tool_length(gc_interp *g, const gc_block *b, int code, int col
     } else if (code == GC_G49) {
         double nv[3] = {0, 0, 0};
         gc_set_tlo(g, nv);
+        gc_rot_tcp(g, 0, col);
     }
     return FM_OK;
 }
