@@ -4,6 +4,7 @@
 #include "outputs.h"
 
 #include "job.h"
+#include "sweep/sweep.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -11,7 +12,7 @@
 #include <string.h>
 
 #define OUT_PI 3.14159265358979323846
-/* Arcs are drawn with a chord every 5 degrees at most. */
+/* Arcs and rotary moves are drawn with a chord every 5 degrees at most. */
 #define OUT_ARC_STEP (OUT_PI / 36)
 #define OUT_PARAM_SAMPLES 32
 
@@ -108,70 +109,20 @@ static void add_point(fm_toolpath *p, const double xyz[3])
     p->have_last = 1;
 }
 
-/* The two in-plane axes of an arc, in the right-handed order LinuxCNC
- * uses for G17 (X, Y), G18 (Z, X) and G19 (Y, Z). */
-static void plane_axes(int plane_axis, int *a, int *b)
-{
-    *a = (plane_axis + 1) % 3;
-    *b = (plane_axis + 2) % 3;
-}
-
-static void add_arc(fm_toolpath *p, const fm_motion *m, const double off[3])
-{
-    int a, b, n = m->plane_axis;
-    plane_axes(n, &a, &b);
-    double sa = m->start[a] - m->center[a], sb = m->start[b] - m->center[b];
-    double ea = m->end[a] - m->center[a], eb = m->end[b] - m->center[b];
-    double r0 = hypot(sa, sb), r1 = hypot(ea, eb);
-    double th0 = atan2(sb, sa), th1 = atan2(eb, ea);
-    int turns = m->turns == 0 ? 1 : m->turns;
-    double sweep;
-    if (turns > 0) {
-        sweep = th1 - th0;
-        while (sweep <= 1e-12) sweep += 2 * OUT_PI;
-        sweep += 2 * OUT_PI * (turns - 1);
-    } else {
-        sweep = th1 - th0;
-        while (sweep >= -1e-12) sweep -= 2 * OUT_PI;
-        sweep -= 2 * OUT_PI * (-turns - 1);
-    }
-    int steps = (int)ceil(fabs(sweep) / OUT_ARC_STEP);
-    if (steps < 1) steps = 1;
-    if (steps > 100000) steps = 100000;
-    for (int i = 1; i <= steps; i++) {
-        double u = (double)i / steps, th = th0 + u * sweep, r = r0 + u * (r1 - r0);
-        double q[3];
-        q[a] = m->center[a] + r * cos(th);
-        q[b] = m->center[b] + r * sin(th);
-        q[n] = m->start[n] + u * (m->end[n] - m->start[n]);
-        for (int k = 0; k < 3; k++) q[k] += off[k];
-        add_point(p, q);
-    }
-}
-
+/* Every motion kind through lib/sweep's motion geometry: the tool tip in
+ * the workpiece frame at OUT_ARC_STEP of arc or of any rotary joint per
+ * piece, parametric paths in OUT_PARAM_SAMPLES pieces, lines whole. */
 void fm_toolpath_add(fm_toolpath *path, const fm_motion *m)
 {
     if (!path || path->truncated || m->kind == FM_MOTION_DWELL) return;
-    double start[3], end[3];
-    for (int k = 0; k < 3; k++) {
-        start[k] = m->start[k] + m->tip_offset[k];
-        end[k] = m->end[k] + m->tip_offset[k];
+    double tip[3], axis[3];
+    fm_motion_pose_at(m, 0, tip, axis);
+    if (!begin_line(path, m->kind == FM_MOTION_RAPID, tip)) return;
+    int pieces = fm_motion_pieces(m, OUT_ARC_STEP, OUT_PARAM_SAMPLES, 100000);
+    for (int i = 1; i <= pieces; i++) {
+        fm_motion_pose_at(m, (double)i / pieces, tip, axis);
+        add_point(path, tip);
     }
-    if (m->kind == FM_MOTION_PARAM && m->path) {
-        double pos[3], axis[3];
-        m->path->pose(m->path->ctx, m->t0, pos, axis);
-        if (!begin_line(path, 0, pos)) return;
-        for (int i = 1; i <= OUT_PARAM_SAMPLES; i++) {
-            m->path->pose(m->path->ctx, m->t0 + (m->t1 - m->t0) * i / OUT_PARAM_SAMPLES, pos, axis);
-            add_point(path, pos);
-        }
-        return;
-    }
-    if (!begin_line(path, m->kind == FM_MOTION_RAPID, start)) return;
-    if (m->kind == FM_MOTION_ARC)
-        add_arc(path, m, m->tip_offset);
-    else
-        add_point(path, end);
 }
 
 /* ------------------------------------------------------------ writing -- */

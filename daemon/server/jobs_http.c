@@ -14,6 +14,7 @@
 
 #include "jobs_check.h"
 #include "jobs_internal.h"
+#include "sweep/sweep.h"
 #include "toolpaths/gcode/gcode.h"
 #include "toolpaths/tooltable/tooltable.h"
 #include "toolpaths/traj/traj.h"
@@ -349,50 +350,22 @@ static int tp_sink(void *user, const fm_motion *m)
         return 1;
     }
     long first = c->point_count;
-    double p[3];
+    double p[3], axis[3];
     int kind = m->kind == FM_MOTION_RAPID ? 0
                : m->kind == FM_MOTION_LINE ? 1
                : m->kind == FM_MOTION_ARC  ? 2
                : m->kind == FM_MOTION_PARAM ? 3
                                            : 4;
-    if (kind == 3 && m->path && m->path->pose) {
-        for (int i = 0; i <= 32; i++) {
-            double axis[3];
-            m->path->pose(m->path->ctx, m->t0 + (m->t1 - m->t0) * i / 32.0, p, axis);
-            tp_point(c, p);
-        }
-    } else if (kind == 2) {
-        /* The plane (u, v) with u x v = +plane_axis. */
-        int a = m->plane_axis, u = (a + 1) % 3, v = (a + 2) % 3;
-        double su = m->start[u] - m->center[u], sv = m->start[v] - m->center[v];
-        double eu = m->end[u] - m->center[u], ev = m->end[v] - m->center[v];
-        double a0 = atan2(sv, su), a1 = atan2(ev, eu);
-        double r0 = hypot(su, sv), r1 = hypot(eu, ev);
-        double d = a1 - a0, two_pi = 2.0 * M_PI;
-        int turns = m->turns ? m->turns : 1;
-        if (turns > 0) {
-            while (d <= 1e-12) d += two_pi;
-            d += (turns - 1) * two_pi;
-        } else {
-            while (d >= -1e-12) d -= two_pi;
-            d += (turns + 1) * two_pi;
-        }
-        int n = (int)ceil(fabs(d) / (5.0 * M_PI / 180.0));
-        if (n < 2) n = 2;
-        if (n > 20000) n = 20000;
-        for (int i = 0; i <= n; i++) {
-            double f = (double)i / n, ang = a0 + d * f, r = r0 + (r1 - r0) * f;
-            p[u] = m->center[u] + r * cos(ang);
-            p[v] = m->center[v] + r * sin(ang);
-            p[a] = m->start[a] + (m->end[a] - m->start[a]) * f;
-            for (int k = 0; k < 3; k++) p[k] += m->tip_offset[k];
-            tp_point(c, p);
-        }
-    } else {
-        for (int k = 0; k < 3; k++) p[k] = m->start[k] + m->tip_offset[k];
+    /* lib/sweep's motion geometry: the tool tip in the workpiece frame,
+     * arcs and rotary moves every 5 degrees, parametric paths in 32 pieces */
+    if (kind == 4) {
+        fm_motion_pose_at(m, 0, p, axis);
         tp_point(c, p);
-        if (kind != 4) {
-            for (int k = 0; k < 3; k++) p[k] = m->end[k] + m->tip_offset[k];
+    } else {
+        int n = fm_motion_pieces(m, 5.0 * M_PI / 180.0, 32, 20000);
+        if (kind == 2 && n < 2) n = 2;
+        for (int i = 0; i <= n; i++) {
+            fm_motion_pose_at(m, (double)i / n, p, axis);
             tp_point(c, p);
         }
     }
