@@ -391,8 +391,43 @@ static fm_status check_start(fm_check *c, const fm_motion *first, const fm_tool 
     return FM_OK;
 }
 
+/* A rotary joint beyond its travel: the joints move linearly in joint
+ * space from start to end (with TCP too), so the ends bound the travel.
+ * Wrapped axes roll over and have no travel to leave. penetration_mm is
+ * the overrun in degrees. */
+static fm_status check_rotary_travel(fm_check *c, const fm_motion *m, fm_error *err)
+{
+    const fm_machine *chain = &c->opt.machine.chain;
+    double worst = 0;
+    int end_out = 0;
+    for (int i = 0; i < chain->rotary_count; i++) {
+        const fm_rotary_axis *r = &chain->rotary[i];
+        if (!r->has_limits || r->wrapped || r->letter < 0 || r->letter > 2) continue;
+        double s = m->rotary_start[r->letter], e = m->rotary_end[r->letter];
+        double over = fmax(fmax(r->limit_lo - fmin(s, e), fmax(s, e) - r->limit_hi), 0);
+        if (over > worst) {
+            worst = over;
+            end_out = e < r->limit_lo || e > r->limit_hi;
+        }
+    }
+    if (worst <= 0) return FM_OK;
+    const double *p = end_out ? m->end : m->start;
+    fm_check_finding f;
+    memset(&f, 0, sizeof f);
+    f.severity = FM_CHECK_ERROR;
+    f.line = m->line;
+    f.block = m->block;
+    f.time_s = m->t0;
+    memcpy(f.position, p, sizeof f.position);
+    memcpy(f.contact, p, sizeof f.contact);
+    f.penetration_mm = worst;
+    return record(c, FM_CHECK_TRAVEL_LIMIT, FM_CHECK_PART_FLUTES, -1, &f, err);
+}
+
 static fm_status check_travel(fm_check *c, const fm_motion *m, fm_error *err)
 {
+    fm_status st = check_rotary_travel(c, m, err);
+    if (st != FM_OK) return st;
     const fm_check_machine *mc = &c->opt.machine;
     double lo[3], hi[3];
     check_motion_point_bounds(m, lo, hi);

@@ -66,6 +66,8 @@ static fm_check *check_program(const char *program, const double lo[3], const do
     spec.stock.voxel_mm = 0.5;
     spec.stock.band_voxels = fm_check_band_voxels(&check.options, 0.5);
     spec.check = &check;
+    /* as frepmill check does: A B C words turn the machine's rotary axes */
+    if (check.options.machine.chain.rotary_count) spec.machine = &check.options.machine.chain;
     fm_job_result res;
     fm_status st = fm_job_run(&spec, NULL, &res, &err);
     if (st != FM_OK) fprintf(stderr, "job: %s\n", err.message);
@@ -374,6 +376,48 @@ static void test_spindle_plunge_travel(void)
     fm_check_free(c);
 }
 
+/* Rotary travel (issue 17): A carries the table about X, limits [-30, 90]
+ * degrees. Line 3 turns A to 60 (inside), line 4 from 60 to 120 (30 over),
+ * line 5 from 120 to -45 (30 over at its start, 15 at its end): one
+ * finding from line 4 to line 5, 30 degrees over. The tool stays at Z100,
+ * beyond the block's reach from X (sqrt(50^2 + 20^2) = 53.9 mm). A second
+ * run with the axis wrapped: no travel to leave, no finding. */
+static void test_rotary_travel(void)
+{
+    for (int wrapped = 0; wrapped <= 1; wrapped++) {
+        fm_check_options opt;
+        fm_check_options_default(&opt);
+        opt.machine.start[2] = 100;
+        fm_rotary_axis *a = &opt.machine.chain.rotary[0];
+        opt.machine.chain.rotary_count = 1;
+        a->letter = 0;
+        a->carries = FM_ROTARY_TABLE;
+        a->around[0] = 1;
+        a->has_limits = 1;
+        a->limit_lo = -30;
+        a->limit_hi = 90;
+        a->wrapped = wrapped;
+        const char *prog = "G21 G90\nG0 Z100\nG0 A60\nG0 A120\nG0 A-45\n";
+        fm_check *c = check_program(prog, box_lo, box_hi, flat_tool(20, 40, 1), &opt, NULL);
+        if (!c) return;
+        dump(c);
+        if (wrapped) {
+            CHECK(fm_check_count(c) == 0);
+        } else {
+            CHECK(fm_check_count(c) == 1);
+            const fm_check_finding *f = fm_check_count(c) ? fm_check_get(c, 0) : NULL;
+            if (f) {
+                CHECK(f->kind == FM_CHECK_TRAVEL_LIMIT);
+                CHECK(f->line == 4);
+                CHECK(f->last_line == 5);
+                CHECK(f->motions == 2);
+                CHECK_NEAR(f->penetration_mm, 30.0, 1e-9);
+            }
+        }
+        fm_check_free(c);
+    }
+}
+
 /* A rapid diving across the block (a line neither level nor along the
  * axis: lib/sweep's concave search) with the sweeps' searches allowed two
  * evaluations per point: they stop before their proofs close, and the
@@ -523,6 +567,7 @@ int main(int argc, char **argv)
     if (wanted(argc, argv, "fixture")) test_fixture_clamp();
     if (wanted(argc, argv, "start")) test_start_in_stock();
     if (wanted(argc, argv, "spindle_plunge_travel")) test_spindle_plunge_travel();
+    if (wanted(argc, argv, "rotary_travel")) test_rotary_travel();
     if (wanted(argc, argv, "uncertain")) test_uncertain();
     if (wanted(argc, argv, "probe_fixture")) test_probe_fixture();
     fprintf(stderr, "%d checks, %d failures\n", fm_test_checks, fm_test_failures);
