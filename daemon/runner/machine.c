@@ -114,6 +114,64 @@ static fm_status read_rotary(json_t *arr, const char *path, fm_machine *mc, fm_e
     return st;
 }
 
+/* "components": [{"model": FILE.hf|FILE.stl, "link": L}]: solids of the
+ * machine on the link that carries the workpiece (the last table axis of
+ * the chain, or "table" when no rotary axis carries the table), which stay
+ * put in the workpiece frame: the check treats them as fixtures whose
+ * contacts are machine_contact. Components on other links move against
+ * the workpiece and are not handled yet: refused, not ignored. */
+static fm_status read_components(json_t *val, const char *path, fm_check_machine *m, fm_error *err)
+{
+    size_t n = json_is_array(val) ? json_array_size(val) : 0;
+    if (!json_is_array(val) || n > FM_CHECK_MAX_COMPONENTS)
+        return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                           "components: expected an array of at most %d {\"model\": FILE, \"link\": L}",
+                           FM_CHECK_MAX_COMPONENTS);
+    const char *work_link = "table";
+    static const char *const letters[3] = {"a", "b", "c"};
+    for (int i = 0; i < m->chain.rotary_count; i++)
+        if (m->chain.rotary[i].carries == FM_ROTARY_TABLE && (unsigned)m->chain.rotary[i].letter < 3)
+            work_link = letters[m->chain.rotary[i].letter];
+    for (size_t i = 0; i < n; i++) {
+        json_t *c = json_array_get(val, i);
+        if (!json_is_object(c))
+            return fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "components[%zu]: expected an object", i);
+        const char *model = NULL, *link = NULL, *key;
+        json_t *v;
+        json_object_foreach(c, key, v)
+        {
+            if (!strcmp(key, "model") && json_is_string(v)) {
+                model = json_string_value(v);
+            } else if (!strcmp(key, "link") && json_is_string(v)) {
+                link = json_string_value(v);
+            } else if (strcmp(key, "name") && strcmp(key, "comment")) {
+                return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                   "components[%zu]: unknown or mistyped member \"%s\" (model and link "
+                                   "are strings; name, comment)",
+                                   i, key);
+            }
+        }
+        if (!model || !link)
+            return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                               "components[%zu]: \"model\" (a .hf or .stl file) and \"link\" are required", i);
+        size_t len = strlen(model);
+        if (len >= FM_CHECK_COMPONENT_PATH ||
+            !((len > 3 && !strcmp(model + len - 3, ".hf")) || (len > 4 && !strcmp(model + len - 4, ".stl"))))
+            return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                               "components[%zu].model: a .hf model or an .stl mesh (path under %d bytes)", i,
+                               FM_CHECK_COMPONENT_PATH);
+        if (strcmp(link, work_link))
+            return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                               "components[%zu].link \"%.16s\": only components on the link that carries the "
+                               "workpiece (here \"%s\") are supported; components moving against the "
+                               "workpiece are not handled yet",
+                               i, link, work_link);
+        memcpy(m->component_path[i], model, len + 1);
+        m->component_count = (int)i + 1;
+    }
+    return FM_OK;
+}
+
 fm_status fm_check_machine_load(const char *path, fm_check_machine *m, fm_error *err)
 {
     memset(m, 0, sizeof *m);
@@ -204,14 +262,18 @@ fm_status fm_check_machine_from_json(json_t *root, const char *path, fm_check_ma
             m->chain.tcp = json_is_true(val);
         } else if (!strcmp(key, "rotary")) {
             if ((st = read_rotary(val, path, &m->chain, err)) != FM_OK) goto done;
+        } else if (!strcmp(key, "components")) {
+            /* read after the loop: the chain decides which link is the workpiece's */
         } else if (strcmp(key, "units") && strcmp(key, "name") && strcmp(key, "comment")) {
             st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
                              "unknown member \"%s\" (limits, rapid_rate, start, reference_points, tcp, rotary, "
-                             "units, name, comment)",
+                             "components, units, name, comment)",
                              key);
             goto done;
         }
     }
+    json_t *comp = json_object_get(root, "components");
+    if (comp && (st = read_components(comp, path, m, err)) != FM_OK) goto done;
     json_t *u = json_object_get(root, "units");
     if (u && (!json_is_string(u) || strcmp(json_string_value(u), "mm"))) {
         st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "units: only \"mm\" is understood");

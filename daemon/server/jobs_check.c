@@ -43,6 +43,11 @@ static int parse_options(json_t *check, fm_job_check *in, fm_http_error *err)
             if (fm_check_machine_from_json(v, "options.check.machine", &in->options.machine,
                                            &ferr) != FM_OK)
                 return fm_http_error_set(err, 400, "bad_value", "%s", ferr.message);
+            /* a component names a model file on this machine: not from a client */
+            if (in->options.machine.component_count)
+                return fm_http_error_set(err, 400, "bad_value",
+                                         "options.check.machine.components name files on the server; "
+                                         "give machine components as fixtures");
             continue;
         }
         int ok = isfinite(d);

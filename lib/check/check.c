@@ -39,7 +39,7 @@ const char *fm_check_kind_name(fm_check_kind kind)
     static const char *const names[FM_CHECK_KIND_COUNT] = {
         "rapid_into_stock",  "shank_contact",   "holder_contact", "fixture_contact",
         "non_center_plunge", "spindle_off_cut", "travel_limit",   "start_in_stock",
-        "uncertain"};
+        "uncertain",         "machine_contact"};
     return (unsigned)kind < FM_CHECK_KIND_COUNT ? names[kind] : "unknown";
 }
 
@@ -232,7 +232,9 @@ static fm_status record(fm_check *c, fm_check_kind kind, fm_check_part part, int
     }
     fm_check_finding *f = &c->findings[c->finding_count];
     *f = *hit;
-    f->kind = kind;
+    f->kind = kind == FM_CHECK_FIXTURE_CONTACT && c->fixtures[fixture].machine
+                  ? FM_CHECK_MACHINE_CONTACT
+                  : kind;
     f->part = part;
     f->fixture = kind == FM_CHECK_FIXTURE_CONTACT ? fixture : -1;
     f->last_line = hit->line;

@@ -38,6 +38,7 @@ typedef enum fm_check_kind {
     FM_CHECK_TRAVEL_LIMIT,         /* a programmed point outside the machine's travel */
     FM_CHECK_START_IN_STOCK,       /* the tool at the start position is in the stock */
     FM_CHECK_UNCERTAIN,            /* a search stopped at its budget where it mattered */
+    FM_CHECK_MACHINE_CONTACT,      /* any part meets a machine component (a table, a rotary table) */
     FM_CHECK_KIND_COUNT
 } fm_check_kind;
 
@@ -52,6 +53,9 @@ typedef enum fm_check_part {
 
 /* A machine: travel limits of the programmed point in machine coordinates,
  * and where the tool tip is before the first motion. */
+#define FM_CHECK_MAX_COMPONENTS 8
+#define FM_CHECK_COMPONENT_PATH 512
+
 typedef struct fm_check_machine {
     int has_limit[3];        /* 0: that axis is not limited */
     double limit_lo[3], limit_hi[3];
@@ -62,6 +66,12 @@ typedef struct fm_check_machine {
     double reference_points[4][3];
     int reference_point_count;
     fm_machine chain;        /* rotary axes (lib/sweep), with their travel limits; none: 3-axis */
+    /* Machine components (a .hf model or an .stl mesh, workpiece
+     * coordinates at all joints 0) on the link that carries the workpiece:
+     * they stay put in the workpiece frame and the caller adds them as
+     * fixtures marked with fm_check_set_fixture_machine. */
+    int component_count;
+    char component_path[FM_CHECK_MAX_COMPONENTS][FM_CHECK_COMPONENT_PATH];
 } fm_check_machine;
 
 typedef struct fm_check_options {
@@ -92,7 +102,7 @@ typedef struct fm_check_finding {
     fm_check_kind kind;
     fm_check_severity severity;
     fm_check_part part;
-    int fixture;            /* FM_CHECK_FIXTURE_CONTACT: index of the fixture; else -1 */
+    int fixture;            /* FIXTURE_/MACHINE_CONTACT: index of the fixture; else -1 */
     int line;               /* source line where it first happens (0: before the first motion) */
     long block;             /* N number there, -1 if none */
     double time_s;          /* program time of the first contact */
@@ -130,6 +140,9 @@ fm_status fm_check_add_fixture_hf(fm_check *check, const char *path, const char 
 fm_status fm_check_add_fixture_stl(fm_check *check, const char *path, double voxel_mm,
                                    fm_error *err);
 size_t fm_check_fixture_count(const fm_check *check);
+/* The fixture (index in the order added) is a machine component: contacts
+ * with it are FM_CHECK_MACHINE_CONTACT rather than fixture contacts. */
+void fm_check_set_fixture_machine(fm_check *check, size_t fixture);
 /* The largest signed distance (mm, positive inside) at p over the
  * fixtures: the distance to the nearest fixture's surface outside them all.
  * True within the grids' band (32 voxels), and beyond it no larger in size

@@ -27,6 +27,7 @@ typedef struct check_workers {
 typedef struct check_fixture {
     char name[256];
     fm_stock *grid; /* true distances in its band, mm */
+    int machine;    /* a machine component: its contacts are machine_contact */
 } check_fixture;
 
 void check_fixture_free(check_fixture *fx);

@@ -182,6 +182,11 @@ done:
     return st;
 }
 
+void fm_check_set_fixture_machine(fm_check *c, size_t fixture)
+{
+    if (fixture < c->fixture_count) c->fixtures[fixture].machine = 1;
+}
+
 fm_status fm_check_add_fixture_stl(fm_check *c, const char *path, double voxel_mm, fm_error *err)
 {
     check_fixture *fx = new_fixture(c, path, err);

@@ -48,6 +48,15 @@ static void check_machine(const fm_check_machine *m)
         if (!isfinite(r->pivot_length)) abort();
         if (r->has_limits && !(r->limit_lo <= r->limit_hi)) abort();
     }
+    /* components: NUL-terminated .hf / .stl paths */
+    if (m->component_count < 0 || m->component_count > FM_CHECK_MAX_COMPONENTS) abort();
+    for (int i = 0; i < m->component_count; i++) {
+        const char *p = m->component_path[i];
+        const char *end = memchr(p, '\0', FM_CHECK_COMPONENT_PATH);
+        if (!end) abort();
+        size_t n = (size_t)(end - p);
+        if (!((n > 3 && !strcmp(p + n - 3, ".hf")) || (n > 4 && !strcmp(p + n - 4, ".stl")))) abort();
+    }
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)

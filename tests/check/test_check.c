@@ -418,6 +418,58 @@ static void test_rotary_travel(void)
     }
 }
 
+/* Machine contact on an AC trunnion (issue 17): A carries the table about
+ * X, C the platter about Z (both through the origin), TCP on. The platter
+ * (check/platter.hf, a machine component on C's link) is a disc of radius
+ * 80, z -30..-10; the 40 x 40 x 20 block sits on it (z -10..10). The tool:
+ * flutes 0..20, shank to 40 (radius 3), a 40 mm holder 30 mm long above.
+ * Line 3 turns A to 90 with the tip held at (0, 0, 150): the table turns
+ * +90 degrees about X, so in the workpiece frame the tool axis is
+ * R_x(-90) z = +Y. Line 4 moves the tip to Y25 (5 mm off the block's
+ * face y = 20, the tool pointing away from it), line 5 lowers it to Z2:
+ * the holder (x -20..20, y 65..95, z 2 +- 20) then goes 8 mm below the
+ * platter's top at its deepest (z = -18: 8 to the top, 12 to the bottom,
+ * at least 15 to the rim where y <= 65); the flutes and shank stay 9 mm
+ * above it (lowest z = 2 - 3) and 5 mm off the block. One finding:
+ * machine_contact of the holder at line 5, 8 mm deep (a face parallel to
+ * the platter's top: within a voxel). */
+static void test_machine_contact(void)
+{
+    fm_check_options opt;
+    fm_check_options_default(&opt);
+    opt.machine.start[2] = 150;
+    fm_machine *m = &opt.machine.chain;
+    m->rotary_count = 2;
+    m->tcp = 1;
+    m->rotary[0].letter = 0;
+    m->rotary[0].carries = FM_ROTARY_TABLE;
+    m->rotary[0].around[0] = 1;
+    m->rotary[1].letter = 2;
+    m->rotary[1].carries = FM_ROTARY_TABLE;
+    m->rotary[1].around[2] = 1;
+    opt.machine.component_count = 1;
+    snprintf(opt.machine.component_path[0], sizeof opt.machine.component_path[0],
+             "check/platter.hf");
+    fm_tool_spec tool = flat_tool(20, 40, 1);
+    tool.holder[0] = (fm_holder_segment){40, 40, 30};
+    const double lo[3] = {-20, -20, -10}, hi[3] = {20, 20, 10};
+    const char *prog = "G21 G90\nG0 Z150\nG0 A90\nG0 Y25\nG0 Z2\n";
+    fm_check *c = check_program(prog, lo, hi, tool, &opt, NULL);
+    if (!c) return;
+    dump(c);
+    CHECK(fm_check_count(c) == 1);
+    const fm_check_finding *f = fm_check_count(c) ? fm_check_get(c, 0) : NULL;
+    if (f) {
+        CHECK(f->kind == FM_CHECK_MACHINE_CONTACT);
+        CHECK(f->part == FM_CHECK_PART_HOLDER);
+        CHECK(f->severity == FM_CHECK_ERROR);
+        CHECK(f->line == 5);
+        CHECK(f->fixture == 0);
+        CHECK_NEAR(f->penetration_mm, 8.0, voxel);
+    }
+    fm_check_free(c);
+}
+
 /* A rapid diving across the block (a line neither level nor along the
  * axis: lib/sweep's concave search) with the sweeps' searches allowed two
  * evaluations per point: they stop before their proofs close, and the
@@ -568,6 +620,7 @@ int main(int argc, char **argv)
     if (wanted(argc, argv, "start")) test_start_in_stock();
     if (wanted(argc, argv, "spindle_plunge_travel")) test_spindle_plunge_travel();
     if (wanted(argc, argv, "rotary_travel")) test_rotary_travel();
+    if (wanted(argc, argv, "machine_contact")) test_machine_contact();
     if (wanted(argc, argv, "uncertain")) test_uncertain();
     if (wanted(argc, argv, "probe_fixture")) test_probe_fixture();
     fprintf(stderr, "%d checks, %d failures\n", fm_test_checks, fm_test_failures);

@@ -5,6 +5,7 @@
 #include "runner/machine.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 static fm_status load_text(const char *text, fm_check_machine *m, fm_error *err)
 {
@@ -47,6 +48,20 @@ static void check_trunnion(void)
     CHECK_NEAR(m.chain.rotary[1].around[1], 1, 1e-15);
     CHECK_NEAR(m.chain.rotary[1].pivot_length, 150, 0);
     CHECK(!m.chain.tcp);
+    /* components on the workpiece's link: the last table axis (C here,
+     * after A), or "table" with no table axis */
+    st = load_text("{\"rotary\": [{\"axis\": \"a\", \"around\": [1, 0, 0], \"carries\": \"table\"},"
+                   " {\"axis\": \"c\", \"around\": [0, 0, 1], \"carries\": \"table\"}],"
+                   " \"components\": [{\"name\": \"platter\", \"model\": \"p.hf\", \"link\": \"c\"},"
+                   " {\"model\": \"base.stl\", \"link\": \"c\"}]}",
+                   &m, &err);
+    CHECK(st == FM_OK);
+    CHECK(m.component_count == 2);
+    CHECK(!strcmp(m.component_path[0], "p.hf") && !strcmp(m.component_path[1], "base.stl"));
+    st = load_text("{\"rotary\": [{\"axis\": \"b\", \"around\": [0, 1, 0], \"carries\": \"head\"}],"
+                   " \"components\": [{\"model\": \"vise.stl\", \"link\": \"table\"}]}",
+                   &m, &err);
+    CHECK(st == FM_OK && m.component_count == 1);
 }
 
 static void check_errors(void)
@@ -73,6 +88,13 @@ static void check_errors(void)
         {"{\"tcp\": 1}", "tcp: expected"},
         {"{\"limits\": {\"a\": [0, 90]}}", "go with the axis"},
         {"{\"rapid_rate\": 1, \"rapid_rate\": 2}", "duplicate"},
+        {"{\"rotary\": [{\"axis\": \"a\", \"around\": [1, 0, 0], \"carries\": \"table\"},"
+         " {\"axis\": \"c\", \"around\": [0, 0, 1], \"carries\": \"table\"}],"
+         " \"components\": [{\"model\": \"cradle.stl\", \"link\": \"a\"}]}",
+         "components[0].link \"a\": only components on the link that carries the workpiece (here \"c\")"},
+        {"{\"components\": [{\"model\": \"t.step\", \"link\": \"table\"}]}", "components[0].model"},
+        {"{\"components\": [{\"model\": \"t.hf\"}]}", "are required"},
+        {"{\"components\": {}}", "components: expected an array"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         fm_check_machine m;
