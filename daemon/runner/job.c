@@ -18,6 +18,7 @@
 
 #include "frep/frep.h"
 #include "probe.h"
+#include "stock_spec.h"
 #include "toolpaths/gcode/gcode.h"
 #include "hf/hf.h"
 #include "sweep/sweep.h"
@@ -25,9 +26,6 @@
 #include "toolpaths/traj/traj.h"
 
 #define JOB_MAX_BATCH 256
-/* Stock models given as HyperFun are searched for within this cube (mm). */
-#define JOB_MODEL_SEARCH_MM 2000.0
-#define JOB_MODEL_MAX_BOXES 4000000u
 
 void fm_job_check_default(fm_job_check *check)
 {
@@ -58,25 +56,7 @@ static double now_s(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* ------------------------------------------------------------- stock -- */
-
-/* Parse exactly n comma-separated finite numbers. */
-static int parse_numbers(const char *s, double *out, int n)
-{
-    for (int i = 0; i < n; i++) {
-        char *end;
-        errno = 0;
-        out[i] = strtod(s, &end);
-        if (end == s || errno == ERANGE || !isfinite(out[i])) return 0;
-        s = end;
-        while (isspace((unsigned char)*s)) s++;
-        if (i < n - 1) {
-            if (*s != ',') return 0;
-            s++;
-        }
-    }
-    return *s == '\0';
-}
+/* ------------------------------------------------------------- paths -- */
 
 int fm_path_has_extension(const char *path, const char *ext)
 {
@@ -85,128 +65,6 @@ int fm_path_has_extension(const char *path, const char *ext)
     for (size_t i = 0; i < e; i++)
         if (tolower((unsigned char)path[n - e + i]) != tolower((unsigned char)ext[i])) return 0;
     return 1;
-}
-
-static fm_stock *stock_from_model(const char *path, const fm_stock_options *opt, fm_error *err)
-{
-    fm_graph *g = fm_graph_new(0);
-    if (!g) {
-        fm_error_set(err, FM_ERR_LIMIT, "out of memory");
-        return NULL;
-    }
-    fm_stock *stock = NULL;
-    fm_tape *tape = NULL, *raw_tape = NULL;
-    fm_evaluator *ev = NULL;
-    fm_field field;
-    memset(&field, 0, sizeof field);
-    fm_hf_model model;
-    if (fm_hf_compile_file(g, path, NULL, &model, err) != FM_OK) goto done;
-    if (model.dimension > 3) {
-        fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
-                    "the stock model '%s' is %dD; a stock is a 3D object (x[3])", model.name,
-                    model.dimension);
-        goto done;
-    }
-    /* HyperFun functions are rarely distances (hfSphere is R^2 - r^2), and
-     * the stock's narrow band needs first-order distances: normalize
-     * (Shapiro eq. 4.9). */
-    fm_node root = fm_normalize(g, model.root);
-    if (!root) {
-        *err = *fm_graph_error(g);
-        goto done;
-    }
-    tape = fm_tape_compile(g, root, err);
-    if (!tape) goto done;
-    /* The bounds are searched on the model itself: it has the same sign as
-     * its normalization, whose interval bounds are much looser. */
-    raw_tape = fm_tape_compile(g, model.root, err);
-    if (!raw_tape) goto done;
-    ev = fm_evaluator_new(raw_tape, err);
-    if (!ev) goto done;
-    double voxel = opt && opt->voxel_mm > 0 ? opt->voxel_mm : 0.1;
-    fm_inside_bounds s;
-    fm_interval start[3];
-    for (int a = 0; a < 3; a++) start[a] = (fm_interval){-JOB_MODEL_SEARCH_MM, JOB_MODEL_SEARCH_MM};
-    double min_size = fmax(voxel, 2 * JOB_MODEL_SEARCH_MM / 1024.0);
-    if (fm_find_inside_bounds(ev, start, min_size, JOB_MODEL_MAX_BOXES, &s) != FM_OK) {
-        fm_error_at(err, FM_ERR_LIMIT, path, 0, 0,
-                    "the stock model's boundary is too complex to bound (over %u boxes)",
-                    JOB_MODEL_MAX_BOXES);
-        goto done;
-    }
-    if (!s.found) {
-        fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
-                    "the stock model '%s' is empty within +-%.0f mm", model.name,
-                    JOB_MODEL_SEARCH_MM);
-        goto done;
-    }
-    for (int a = 0; a < 3; a++) {
-        if (s.lo[a] <= -JOB_MODEL_SEARCH_MM || s.hi[a] >= JOB_MODEL_SEARCH_MM) {
-            fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
-                        "the stock model '%s' is not bounded within +-%.0f mm along %c; "
-                        "intersect it with a block",
-                        model.name, JOB_MODEL_SEARCH_MM, "xyz"[a]);
-            goto done;
-        }
-        s.lo[a] -= 4 * voxel;
-        s.hi[a] += 4 * voxel;
-    }
-    if (fm_field_from_tape(&field, tape, s.lo, s.hi, 0.0, err) != FM_OK) goto done;
-    stock = fm_stock_new_from_field(&field, opt, err);
-    fm_field_release(&field);
-done:
-    fm_evaluator_free(ev);
-    fm_tape_free(raw_tape);
-    fm_tape_free(tape);
-    fm_graph_free(g);
-    return stock;
-}
-
-fm_stock *fm_job_make_stock(const char *spec, const fm_stock_options *opt, fm_error *err)
-{
-    double v[6];
-    if (!spec || !*spec) {
-        fm_error_set(err, FM_ERR_INPUT, "no stock given (--stock box:X0,Y0,Z0,X1,Y1,Z1, "
-                                        "cylinder:X,Y,Z0,Z1,R, or a .hf, .stl or .vdb file)");
-        return NULL;
-    }
-    if (!strncmp(spec, "box:", 4)) {
-        if (!parse_numbers(spec + 4, v, 6)) {
-            fm_error_set(err, FM_ERR_INPUT,
-                         "stock '%s': expected box:X0,Y0,Z0,X1,Y1,Z1 (six numbers in mm)", spec);
-            return NULL;
-        }
-        for (int a = 0; a < 3; a++)
-            if (!(v[a] < v[a + 3])) {
-                fm_error_set(err, FM_ERR_INPUT,
-                             "stock '%s': the box's %c range is empty (%g >= %g); give the "
-                             "lower corner first",
-                             spec, "XYZ"[a], v[a], v[a + 3]);
-                return NULL;
-            }
-        return fm_stock_new_box(v, v + 3, opt, err);
-    }
-    if (!strncmp(spec, "cylinder:", 9)) {
-        if (!parse_numbers(spec + 9, v, 5)) {
-            fm_error_set(err, FM_ERR_INPUT,
-                         "stock '%s': expected cylinder:X,Y,Z0,Z1,R (five numbers in mm)", spec);
-            return NULL;
-        }
-        if (!(v[2] < v[3]) || !(v[4] > 0)) {
-            fm_error_set(err, FM_ERR_INPUT,
-                         "stock '%s': the cylinder needs Z0 < Z1 and a radius above 0", spec);
-            return NULL;
-        }
-        return fm_stock_new_cylinder(v[0], v[1], v[2], v[3], v[4], opt, err);
-    }
-    if (fm_path_has_extension(spec, ".hf")) return stock_from_model(spec, opt, err);
-    if (fm_path_has_extension(spec, ".stl")) return fm_stock_new_from_stl(spec, opt, err);
-    if (fm_path_has_extension(spec, ".vdb")) return fm_stock_load_vdb(spec, opt, err);
-    fm_error_set(err, FM_ERR_INPUT,
-                 "stock '%s' is not box:X0,Y0,Z0,X1,Y1,Z1, cylinder:X,Y,Z0,Z1,R, or a .hf, "
-                 ".stl or .vdb file",
-                 spec);
-    return NULL;
 }
 
 /* ------------------------------------------------------------- tools -- */
@@ -360,6 +218,19 @@ static fm_status run_program(const fm_job_spec *spec, const fm_tool_table *tools
                                user, NULL, err);
 }
 
+fm_status fm_job_interpret(const fm_job_spec *spec, fm_motion_sink sink, void *user,
+                           fm_error *err)
+{
+    if (spec->tools) return run_program(spec, spec->tools, sink, user, NULL, err);
+    fm_tool_table table;
+    memset(&table, 0, sizeof table);
+    fm_status st = spec->tools_path ? fm_tooltable_load(spec->tools_path, &table, err)
+                                    : fm_error_set(err, FM_ERR_INPUT, "no tool table given");
+    if (st == FM_OK) st = run_program(spec, &table, sink, user, NULL, err);
+    fm_tool_table_free(&table);
+    return st;
+}
+
 /* -------------------------------------------------------- first pass -- */
 
 typedef struct survey {
@@ -487,6 +358,8 @@ static void mark_line(cutter *c, int line)
     }
 }
 
+static void report(cutter *c, const fm_motion *last);
+
 static fm_status flush_batch(cutter *c)
 {
     if (c->batch_count == 0) return FM_OK;
@@ -526,8 +399,18 @@ static fm_status flush_batch(cutter *c)
     c->batch_count = 0;
     c->batch_length = 0;
     c->batch_tool = NULL;
+    report(c, last);
+    return FM_OK;
+}
 
+/* Tell the progress hook where the job is after motion last (nothing is
+ * pending in the batch). */
+static void report(cutter *c, const fm_motion *last)
+{
     fm_job_progress *p = &c->progress;
+    /* A live job's count says what is cut (a program's counts what the
+     * front end has given, for its progress bar). */
+    if (c->spec->program_kind == FM_PROGRAM_LIVE) p->motions_done = last->index + 1;
     p->program_time = last->t1;
     p->line = last->line;
     p->block = last->block;
@@ -538,7 +421,6 @@ static fm_status flush_batch(cutter *c)
     p->elapsed_s = now_s() - c->started;
     p->stock = c->stock;
     if (c->hooks && c->hooks->progress && c->hooks->progress(c->hooks->user, p)) c->stopped = 1;
-    return FM_OK;
 }
 
 /* Relate the motion to the check's grid (all earlier motions cut from it
@@ -635,12 +517,12 @@ static fm_status cut_probe(void *user, const fm_motion *move, int toward, int *t
 /* "box:X0,Y0,Z0,X1,Y1,Z1": the check gets the exact initial stock. */
 static int box_of_spec(const char *spec, double lo[3], double hi[3])
 {
-    double v[6];
-    if (!spec || strncmp(spec, "box:", 4) || !parse_numbers(spec + 4, v, 6)) return 0;
-    for (int a = 0; a < 3; a++) {
-        lo[a] = v[a];
-        hi[a] = v[a + 3];
-    }
+    fm_stock_spec shape;
+    if (!spec || fm_stock_spec_parse(spec, &shape, NULL) != FM_OK ||
+        shape.shape != FM_STOCK_SHAPE_BOX)
+        return 0;
+    memcpy(lo, shape.lo, sizeof shape.lo);
+    memcpy(hi, shape.hi, sizeof shape.hi);
     return 1;
 }
 
@@ -726,6 +608,36 @@ static void free_check(cutter *c)
     c->check = NULL;
 }
 
+/* Live jobs: motions from the source until it ends, through the same cut
+ * as a program's. Whenever no motion is waiting, what is held is cut and
+ * reported (idle), so the stock follows the machine; a position that cuts
+ * nothing is reported too, so the status follows it. */
+static fm_status run_source(cutter *c)
+{
+    const fm_job_motion_source *src = c->spec->source;
+    if (!src || !src->next) return fm_error_set(c->err, FM_ERR_INPUT, "a live job has no source");
+    for (;;) {
+        fm_motion m;
+        int more = 0;
+        memset(&m, 0, sizeof m);
+        int r = src->next(src->user, &m, &more);
+        if (r < 0) c->stopped = 1;
+        if (r <= 0) return FM_OK;
+        c->progress.motions_total = m.index + 1;
+        if (m.t1 > c->progress.program_time_total) c->progress.program_time_total = m.t1;
+        if (cut_sink(c, &m)) return c->status;
+        if (more) continue;
+        c->progress.idle = 1;
+        fm_status st = flush_batch(c);
+        if (st == FM_OK && !c->stopped && m.index >= c->spec->skip_motions &&
+            c->progress.resume_from <= m.index)
+            report(c, &m);
+        c->progress.idle = 0;
+        if (st != FM_OK) return st;
+        if (c->stopped) return FM_OK;
+    }
+}
+
 /* ---------------------------------------------------------------- run -- */
 
 fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_result *result,
@@ -744,7 +656,8 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     /* First pass: the whole program is checked before anything is cut, and
      * its length gives the progress its denominator. */
     survey sv = {0};
-    st = run_program(spec, tools.use, survey_sink, &sv, NULL, err);
+    int live = spec->program_kind == FM_PROGRAM_LIVE;
+    st = live ? FM_OK : run_program(spec, tools.use, survey_sink, &sv, NULL, err);
     if (st != FM_OK) {
         free_tools(&tools);
         fm_stock_free(spec->resume_stock);
@@ -790,7 +703,8 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     c->progress.block = -1;
 
     if (spec->check) st = setup_check(c, &sv, err);
-    if (st == FM_OK) st = run_program(spec, tools.use, cut_sink, c, cut_probe, err);
+    if (st == FM_OK)
+        st = live ? run_source(c) : run_program(spec, tools.use, cut_sink, c, cut_probe, err);
     if (st == FM_OK) st = c->status;
     if (st == FM_OK && !c->stopped) st = flush_batch(c);
     if (st != FM_OK) {
@@ -817,9 +731,9 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     double area = 0;
     fm_error area_err;
     if (fm_stock_surface_area(stock, &area, &area_err) == FM_OK) result->surface_area_mm2 = area;
-    result->motions = sv.motions;
+    result->motions = live ? c->progress.motions_total : sv.motions;
     result->blocks = c->blocks;
-    result->program_time_s = sv.time_total;
+    result->program_time_s = live ? c->progress.program_time_total : sv.time_total;
     result->voxel_mm = fm_stock_voxel_size(stock);
     memcpy(result->initial_lo, initial_lo, sizeof initial_lo);
     memcpy(result->initial_hi, initial_hi, sizeof initial_hi);

@@ -17,8 +17,22 @@
 typedef enum fm_program_kind {
     FM_PROGRAM_AUTO = 0, /* by extension: .json is a trajectory, anything else G-code */
     FM_PROGRAM_GCODE,
-    FM_PROGRAM_TRAJECTORY
+    FM_PROGRAM_TRAJECTORY,
+    FM_PROGRAM_LIVE      /* motions from a controller (fm_job_spec.source) */
 } fm_program_kind;
+
+/* Where a live job's motions come from: the daemon's queue of controller
+ * positions (Modbus live mode). next() waits for the next motion and fills
+ * *out (kind, start, end, tool, feed, t0, t1, line, index: the source
+ * numbers its motions from 0 and times them); it returns 1 for a motion, 0
+ * when the source has ended, -1 to stop the job (FM_OK, result.stopped).
+ * *more says whether another motion is already waiting: when none is, the
+ * runner cuts what it holds and reports progress before asking again, so
+ * the stock follows the machine. */
+typedef struct fm_job_motion_source {
+    void *user;
+    int (*next)(void *user, fm_motion *out, int *more);
+} fm_job_motion_source;
 
 /* The collision check (lib/check), run in the same pass as the cut
  * (DESIGN.md, "Checking in the same pass"): every motion is related to the
@@ -87,6 +101,14 @@ typedef struct fm_job_spec {
      * grid is cut from the start, the motions before skip_motions
      * included, so that its findings are those of a run from the start. */
     const fm_job_check *check;
+
+    /* Live mode (program_kind FM_PROGRAM_LIVE): the motions' source. */
+    const fm_job_motion_source *source;
+
+    /* Room for what is coming; unset means "not given". */
+    const char *design_path;     /* design part to compare with (issue 16) */
+    double design_tolerance_mm;  /* issue 16 */
+    double stop_at_s;            /* issue 16: stop at this program time */
 } fm_job_spec;
 
 void fm_job_spec_default(fm_job_spec *spec);
@@ -111,6 +133,9 @@ typedef struct fm_job_progress {
     /* The stock after this cut, valid only during the callback, which runs
      * on the job's thread between cuts: the place to snapshot it. */
     fm_stock *stock;
+    /* Live jobs: no motion is waiting now (the stock has caught up with
+     * the machine): the moment to publish what changed. */
+    int idle;
 } fm_job_progress;
 
 typedef struct fm_job_hooks {
@@ -167,6 +192,12 @@ typedef struct fm_job_result {
  * FM_ERR_LIMIT a budget. hooks may be NULL. */
 fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_result *result,
                      fm_error *err);
+
+/* Interpret the spec's program (G-code or trajectory, with its tools and
+ * rapid rate) into motions for sink, touching no stock: the toolpath the
+ * run cuts. */
+fm_status fm_job_interpret(const fm_job_spec *spec, fm_motion_sink sink, void *user,
+                           fm_error *err);
 
 /* Parse and create the stock of a spec string (also used by `frepmill
  * check`). */

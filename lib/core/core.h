@@ -16,13 +16,17 @@ typedef enum fm_status {
 } fm_status;
 
 /* Where an error happened in the user's input. line and column are 1-based;
- * 0 means unknown. file may be empty. */
+ * 0 means unknown. file may be empty. reason is a stable machine-readable
+ * word for APIs ("not_found", "unknown_key", ...; empty when none): the
+ * daemon's protocols map it to their own codes (an HTTP status, a Modbus
+ * error register value). */
 typedef struct fm_error {
     fm_status code;
     int line;
     int column;
     char file[256];
     char message[512];
+    char reason[32];
 } fm_error;
 
 /* Fill err (if not NULL) and return code. The message is printf-formatted. */
@@ -41,6 +45,14 @@ fm_status fm_error_at(fm_error *err, fm_status code, const char *file, int line,
     ;
 
 void fm_error_clear(fm_error *err);
+
+/* fm_error_set with a reason (see fm_error). */
+fm_status fm_error_set_reason(fm_error *err, fm_status code, const char *reason, const char *fmt,
+                              ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
 
 /* "file:line:column: message" (the parts that are known) into buf. */
 const char *fm_error_format(const fm_error *err, char *buf, size_t size);

@@ -23,6 +23,7 @@ fm_status fm_error_set(fm_error *err, fm_status code, const char *fmt, ...)
         err->line = 0;
         err->column = 0;
         err->file[0] = '\0';
+        err->reason[0] = '\0';
         vsnprintf(err->message, sizeof err->message, fmt, ap);
         va_end(ap);
     }
@@ -39,6 +40,7 @@ fm_status fm_error_at(fm_error *err, fm_status code, const char *file, int line,
         err->line = line;
         err->column = column;
         copy_string(err->file, sizeof err->file, file);
+        err->reason[0] = '\0';
         vsnprintf(err->message, sizeof err->message, fmt, ap);
         va_end(ap);
     }
@@ -48,6 +50,23 @@ fm_status fm_error_at(fm_error *err, fm_status code, const char *file, int line,
 void fm_error_clear(fm_error *err)
 {
     if (err) memset(err, 0, sizeof *err);
+}
+
+fm_status fm_error_set_reason(fm_error *err, fm_status code, const char *reason, const char *fmt,
+                              ...)
+{
+    if (err) {
+        va_list ap;
+        va_start(ap, fmt);
+        err->code = code;
+        err->line = 0;
+        err->column = 0;
+        err->file[0] = '\0';
+        copy_string(err->reason, sizeof err->reason, reason);
+        vsnprintf(err->message, sizeof err->message, fmt, ap);
+        va_end(ap);
+    }
+    return code;
 }
 
 const char *fm_error_format(const fm_error *err, char *buf, size_t size)

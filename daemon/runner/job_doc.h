@@ -1,0 +1,123 @@
+/* job_doc.h: the job document. A job is one JSON object; this file and
+ * job_doc.c are where it is defined, parsed and validated, once, into the
+ * run spec the job runner takes (fm_job_spec, job.h). The daemon's HTTP API
+ * (POST /v1/jobs, POST /v1/check), its job store (spec.json), Modbus live
+ * mode and `frepmill simulate|check --job FILE` all read jobs through here.
+ *
+ *   {
+ *     "stock":   "box:X0,Y0,Z0,X1,Y1,Z1" | "cylinder:X,Y,Z0,Z1,R"      (mm)
+ *                | {"hyperfun": TEXT} | {"stl_base64": BASE64}         (inline models)
+ *                | "FILE.hf" | "FILE.stl" | "FILE.vdb"                 (files: CLI only)
+ *     "voxel":   MM                                  (default 0.1; 0.001..100)
+ *     "tools":   {...}                               (the JSON tool table, docs/tooltable.md)
+ *     "program": {"gcode": TEXT} | {"trajectory": {...}}               (docs/trajectory.md)
+ *                | {"live": {"feed": MM_PER_MIN}}    (positions from a controller; the daemon
+ *                                                     makes these, POST /v1/jobs refuses them)
+ *     "fixtures": [{"hyperfun": TEXT | "stl_base64": BASE64, "name": TEXT}, ...]  (at most 64)
+ *     "machine": {"limits": {"x": [LO, HI], ...}, "rapid_rate": MM_PER_MIN,
+ *                 "start": [X, Y, Z]}                (docs/check.md's machine file)
+ *     "options": {
+ *       "name": TEXT, "band": 2..32, "batch": -1..1000, "rapid_rate": MM_PER_MIN,
+ *       "memory_budget_mb": MB, "threads": 0..1024, "color": "tool" | "none",
+ *       "check": false | {"clearance", "rapid_clearance", "tolerance", "max_ramp", "voxel",
+ *                         "machine": {...}  (the same as the top-level "machine")}
+ *     }
+ *   }
+ *
+ * Unknown keys anywhere are refused (a typo must not be silently ignored).
+ * The rapid rate of the run is options.rapid_rate, else the machine's, else
+ * 5000 mm/min: the same rule for the CLI, the check and the daemon, so one
+ * program and machine give one set of findings.
+ *
+ * Room for what is coming (fields in fm_job_spec, keys here when they land):
+ * "options.dialect" and "options.subroutine_path" (G-code dialects,
+ * issues 15 and 20), "design", "options.tolerance", "options.stop_at"
+ * (design comparison, issue 16), machine kinematics under "machine"
+ * (issue 17). */
+#ifndef FM_JOB_DOC_H
+#define FM_JOB_DOC_H
+
+#include <jansson.h>
+#include <stddef.h>
+
+#include "core/core.h"
+#include "job.h"
+
+/* The largest text (program, tool table, model) inside a job, bytes. */
+#define FM_JOB_DOC_MAX_TEXT ((size_t)256 << 20)
+
+typedef struct fm_job_doc_rules {
+    /* Stocks and tools that name files on this machine are refused unless
+     * set: a network client must never make the daemon read its files. */
+    int allow_files;
+    /* Live programs are made by the daemon itself (Modbus live mode). */
+    int allow_live;
+} fm_job_doc_rules;
+
+/* An inline model of the document (the stock or a fixture). */
+typedef struct fm_job_model {
+    int is_stl;        /* 1: STL bytes (decoded base64); 0: HyperFun text */
+    char *data;        /* owned */
+    size_t size;
+    char name[129];
+} fm_job_model;
+
+typedef struct fm_job_doc {
+    /* The run spec; its pointers point into this document. Inline models
+     * must be written to files (fm_job_doc_materialize) before it runs. */
+    fm_job_spec spec;
+    /* The canonical JSON: every key present, defaults filled in. The store
+     * writes it and reads it back through fm_job_doc_parse. */
+    json_t *json;
+    char name[129];
+    double memory_budget_mb;   /* options.memory_budget_mb, 0 if absent */
+    int threads_given;         /* options.threads was given */
+    int color_tool;            /* options.color: 1 "tool" (default), 0 "none" */
+    double live_feed;          /* program.live.feed, mm/min */
+    /* The check's options, machine and fixtures; spec.check points here
+     * unless options.check is false. */
+    fm_job_check check;
+    int check_enabled;
+    int has_machine;           /* "machine" (or options.check.machine) was given */
+    /* Owned storage behind spec. */
+    fm_tool_table tools;
+    char *program;             /* G-code text or the trajectory's JSON */
+    size_t program_length;
+    char *stock_text;          /* the spec string, or the materialized model's path */
+    fm_job_model stock_model;  /* an inline stock model (size 0 if none) */
+    fm_job_model fixtures[FM_JOB_MAX_FIXTURES];
+    char *fixture_paths[FM_JOB_MAX_FIXTURES];
+} fm_job_doc;
+
+/* Parse and validate text (len bytes) into *out (free with
+ * fm_job_doc_free). On error *out is NULL and err has FM_ERR_INPUT (or
+ * FM_ERR_LIMIT for sizes), the reason ("bad_json", "missing_key",
+ * "unknown_key", "bad_type", "bad_value", "bad_stock", "bad_program",
+ * "bad_fixture", "bad_tools", "too_large") and, for JSON syntax errors, the
+ * line and column in text. rules may be NULL (the strict network rules). */
+fm_status fm_job_doc_parse(const char *text, size_t len, const fm_job_doc_rules *rules,
+                           fm_job_doc **out, fm_error *err);
+/* The same from a JSON value (a reference is not taken). */
+fm_status fm_job_doc_from_json(json_t *value, const fm_job_doc_rules *rules, fm_job_doc **out,
+                               fm_error *err);
+void fm_job_doc_free(fm_job_doc *doc);
+
+/* lib/stock and lib/check read models from files: once the owner of the
+ * document (the daemon's job store) has written an inline model to a file,
+ * it points the spec at it. */
+fm_status fm_job_doc_set_stock_file(fm_job_doc *doc, const char *path, fm_error *err);
+fm_status fm_job_doc_set_fixture_file(fm_job_doc *doc, int i, const char *path, fm_error *err);
+
+/* Would the stock's grid exceed budget bytes? Known before anything is
+ * built for box and cylinder stocks only (others pass and meet the budget
+ * when built). FM_ERR_LIMIT, reason "memory_budget", when over. */
+fm_status fm_job_doc_check_memory(const fm_job_doc *doc, size_t budget, fm_error *err);
+
+/* The bytes of the program (G-code text or trajectory JSON). */
+size_t fm_job_doc_program_bytes(const fm_job_doc *doc);
+
+/* Decode standard base64 (padding optional, no whitespace but line breaks)
+ * into a malloc'd buffer. 0 on success, -1 for invalid text. */
+int fm_base64_decode(const char *in, size_t len, uint8_t **out, size_t *out_len);
+
+#endif

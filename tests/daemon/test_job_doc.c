@@ -1,0 +1,308 @@
+/* test_job_doc.c: unit tests of the job document (daemon/runner/job_doc.h)
+ * and the stock-spec parser: canonical form and defaults, every refusal
+ * with its reason (the API code of docs/api.md; HTTP's statuses for them
+ * are tested in tests/http) and fm_status, line and column
+ * of syntax errors, the network rules (files, HyperFun tools, live
+ * programs), the run spec a document makes (rapid rate from the options,
+ * the machine or the default), base64 (RFC 4648 test vectors) and stock
+ * shapes with values worked out by hand. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "runner/job_doc.h"
+#include "runner/stock_spec.h"
+#include "test.h"
+
+static const char *TOOLS = "{\"units\": \"mm\", \"tools\": [{\"number\": 1, \"shape\": \"flat\", "
+                           "\"diameter\": 6, \"flute_length\": 20, \"length\": 40}]}";
+
+static fm_job_doc *parse_with(const char *text, const fm_job_doc_rules *rules, fm_error *err)
+{
+    fm_error_clear(err);
+    fm_job_doc *doc = NULL;
+    if (fm_job_doc_parse(text, strlen(text), rules, &doc, err) != FM_OK) return NULL;
+    return doc;
+}
+
+static fm_job_doc *parse(const char *text, fm_error *err)
+{
+    return parse_with(text, NULL, err);
+}
+
+static void test_job_ok(void)
+{
+    char text[1024];
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-30,100,60,0\", \"tools\": %s, \"program\": {\"gcode\": \"G0 X1\"}}",
+             TOOLS);
+    fm_error err;
+    fm_job_doc *doc = parse(text, &err);
+    CHECK(doc != NULL);
+    if (!doc) return;
+    /* Defaults filled in: voxel 0.1 (the CLI's), empty fixtures and options. */
+    CHECK_NEAR(json_number_value(json_object_get(doc->json, "voxel")), 0.1, 0);
+    CHECK(json_array_size(json_object_get(doc->json, "fixtures")) == 0);
+    CHECK(json_object_size(json_object_get(doc->json, "options")) == 0);
+    CHECK(!strcmp(json_string_value(json_object_get(doc->json, "stock")), "box:0,0,-30,100,60,0"));
+    /* The run spec. */
+    CHECK_NEAR(doc->spec.stock.voxel_mm, 0.1, 0);
+    CHECK(doc->spec.program_kind == FM_PROGRAM_GCODE);
+    CHECK(doc->spec.program_length == 5 && !memcmp(doc->spec.program_text, "G0 X1", 5));
+    CHECK(doc->spec.tools == &doc->tools && doc->tools.count == 1);
+    CHECK(doc->spec.stock_spec && !strcmp(doc->spec.stock_spec, "box:0,0,-30,100,60,0"));
+    CHECK(doc->spec.check == &doc->check && doc->color_tool == 1);
+    CHECK_NEAR(doc->spec.rapid_rate, 5000, 0);
+    /* The canonical form parses to itself. */
+    char *again = json_dumps(doc->json, JSON_COMPACT);
+    fm_job_doc *doc2 = parse(again, &err);
+    CHECK(doc2 && json_equal(doc->json, doc2->json));
+    free(again);
+    fm_job_doc_free(doc2);
+    fm_job_doc_free(doc);
+    /* options.color: "tool" and "none" are the two mesh colourings */
+    const char *colors[2] = {"tool", "none"};
+    for (int i = 0; i < 2; i++) {
+        snprintf(text, sizeof text,
+                 "{\"stock\": \"box:0,0,-30,100,60,0\", \"tools\": %s, \"program\": {\"gcode\": "
+                 "\"G0 X1\"}, \"options\": {\"color\": \"%s\"}}",
+                 TOOLS, colors[i]);
+        doc = parse(text, &err);
+        CHECK(doc != NULL && doc->color_tool == (i == 0));
+        fm_job_doc_free(doc);
+    }
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-30,100,60,0\", \"tools\": %s, \"program\": {\"gcode\": "
+             "\"G0 X1\"}, \"options\": {\"color\": \"rainbow\"}}",
+             TOOLS);
+    doc = parse(text, &err);
+    CHECK(doc == NULL && err.code == FM_ERR_INPUT && !strcmp(err.reason, "bad_value"));
+    CHECK_STR_CONTAINS(err.message, "options.color must be \"tool\"");
+    fm_job_doc_free(doc);
+}
+
+/* The refusal's fm_status (400s are FM_ERR_INPUT, 413s FM_ERR_LIMIT in
+ * docs/api.md) and reason. */
+static void expect_error(const char *text, int status, const char *code)
+{
+    fm_error err;
+    fm_job_doc *doc = parse(text, &err);
+    fm_status want = status == 413 ? FM_ERR_LIMIT : FM_ERR_INPUT;
+    CHECK(doc == NULL);
+    CHECK(err.code == want);
+    CHECK(!strcmp(err.reason, code));
+    if (doc || err.code != want || strcmp(err.reason, code))
+        fprintf(stderr, "  for %s: got %d %s (%s)\n", text, (int)err.code, err.reason, err.message);
+    fm_job_doc_free(doc);
+}
+
+static void test_job_errors(void)
+{
+    char text[2048];
+    expect_error("", 400, "bad_json");
+    expect_error("[1, 2]", 400, "bad_job");
+    expect_error("{\"stock\": \"box:0,0,0,1,1,1\"}", 400, "missing_key");
+    snprintf(text, sizeof text, "{\"stock\": \"/etc/passwd\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
+    expect_error(text, 400, "bad_stock");
+    snprintf(text, sizeof text, "{\"stock\": \"/srv/part.vdb\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
+    expect_error(text, 400, "bad_stock"); /* a file on the server */
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
+    expect_error(text, 400, "bad_stock"); /* five numbers: refused now, not when it runs */
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,-1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
+    expect_error(text, 400, "bad_stock"); /* empty x range */
+    snprintf(text, sizeof text, "{\"stock\": \"cylinder:0,0,0,10,-2\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
+    expect_error(text, 400, "bad_stock");
+    snprintf(text, sizeof text, "{\"stock\": {\"stl_base64\": \"@@@@\"}, \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
+    expect_error(text, 400, "bad_stock");
+    snprintf(text, sizeof text, "{\"stock\": {\"hyperfun\": \"x\", \"stl_base64\": \"AAAA\"}, \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
+    expect_error(text, 400, "bad_stock");
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"voxel\": 0, \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
+    expect_error(text, 400, "bad_value");
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"voxel\": \"fine\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
+    expect_error(text, 400, "bad_type");
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\", \"trajectory\": {}}}", TOOLS);
+    expect_error(text, 400, "bad_program");
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"basic\": \"10 PRINT\"}}", TOOLS);
+    expect_error(text, 400, "unknown_key");
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"options\": {\"band\": 1}}", TOOLS);
+    expect_error(text, 400, "bad_value");
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"options\": {\"band\": 2.5}}", TOOLS);
+    expect_error(text, 400, "bad_type");
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"options\": {\"color\": \"depth\"}}", TOOLS);
+    expect_error(text, 400, "bad_value");
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"options\": {\"color\": 1}}", TOOLS);
+    expect_error(text, 400, "bad_value");
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"fixtures\": [{\"stl\": \"x\"}]}", TOOLS);
+    expect_error(text, 400, "bad_fixture");
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"stock\": \"box:0,0,0,2,2,2\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
+    expect_error(text, 400, "bad_json"); /* duplicate key */
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": {\"units\": \"mm\", \"tools\": [{\"number\": 1}]}, \"program\": {\"gcode\": \"G0\"}}");
+    expect_error(text, 400, "bad_tools");
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": {\"units\": \"mm\", \"tools\": [{\"number\": 2, \"shape\": \"hyperfun\", \"file\": \"/etc/passwd\", \"diameter\": 6, \"flute_length\": 10, \"length\": 40}]}, \"program\": {\"gcode\": \"G0\"}}");
+    expect_error(text, 400, "bad_tools"); /* a file on the server */
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"options\": {\"check\": {\"clearence\": 1}}}", TOOLS);
+    expect_error(text, 400, "unknown_key");
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"options\": {\"check\": {\"tolerance\": -1}}}", TOOLS);
+    expect_error(text, 400, "bad_value");
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"machine\": {\"rapid_rate\": 100}, \"options\": {\"check\": {\"machine\": {\"rapid_rate\": 200}}}}", TOOLS);
+    expect_error(text, 400, "bad_job"); /* the machine twice */
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"machine\": {\"rapid_rate\": -5}}", TOOLS);
+    expect_error(text, 400, "bad_value");
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"live\": {}}}", TOOLS);
+    expect_error(text, 400, "bad_program"); /* live jobs are the daemon's own */
+
+    /* 65 fixtures: one over the limit. */
+    char *many = malloc(65 * 40 + 1024);
+    if (many) {
+        int n = snprintf(many, 1024, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"fixtures\": [", TOOLS);
+        for (int i = 0; i < 65; i++)
+            n += sprintf(many + n, "%s{\"hyperfun\": \"x\"}", i ? ", " : "");
+        sprintf(many + n, "]}");
+        expect_error(many, 413, "too_large");
+        free(many);
+    }
+
+    /* Line and column of a syntax error: the '}' on line 3, column 12. */
+    fm_error err;
+    fm_job_doc *doc = parse("{\n  \"stock\": \"box:0,0,0,1,1,1\",\n  \"voxel\": }", &err);
+    CHECK(doc == NULL && err.line == 3 && err.column == 12);
+    if (err.line != 3 || err.column != 12) fprintf(stderr, "  line %d column %d\n", err.line, err.column);
+}
+
+/* The rapid rate a run takes: options.rapid_rate, else the machine's, else
+ * 5000 mm/min; the same with the machine under options.check. */
+static void test_rapid_rate(void)
+{
+    char text[1024];
+    fm_error err;
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"machine\": {\"rapid_rate\": 12000}}", TOOLS);
+    fm_job_doc *doc = parse(text, &err);
+    CHECK(doc && doc->has_machine && doc->spec.rapid_rate == 12000);
+    fm_job_doc_free(doc);
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"options\": {\"check\": {\"machine\": {\"rapid_rate\": 8000}}}}", TOOLS);
+    doc = parse(text, &err);
+    CHECK(doc && doc->has_machine && doc->spec.rapid_rate == 8000);
+    fm_job_doc_free(doc);
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"machine\": {\"rapid_rate\": 12000}, \"options\": {\"rapid_rate\": 3000}}", TOOLS);
+    doc = parse(text, &err);
+    CHECK(doc && doc->spec.rapid_rate == 3000 && doc->check.options.machine.rapid_rate == 12000);
+    /* the canonical form keeps the machine */
+    CHECK(doc && json_is_object(json_object_get(doc->json, "machine")));
+    fm_job_doc_free(doc);
+}
+
+static void test_rules_and_parts(void)
+{
+    char text[2048];
+    fm_error err;
+    /* The daemon's own documents may name files and be live. */
+    const fm_job_doc_rules own = {.allow_files = 1, .allow_live = 1};
+    snprintf(text, sizeof text, "{\"stock\": \"/srv/part.vdb\", \"tools\": %s, \"program\": {\"live\": {\"feed\": 600}}, \"options\": {\"check\": false}}", TOOLS);
+    fm_job_doc *doc = parse_with(text, &own, &err);
+    CHECK(doc && doc->spec.program_kind == FM_PROGRAM_LIVE && doc->live_feed == 600);
+    CHECK(doc && !strcmp(doc->spec.stock_spec, "/srv/part.vdb") && !doc->spec.check);
+    fm_job_doc_free(doc);
+    /* An inline STL stock: 84 bytes of zeros are the smallest binary STL
+     * (80-byte header, 0 triangles) = 112 base64 characters. */
+    char b64[120];
+    memset(b64, 'A', 112);
+    b64[112] = '\0';
+    snprintf(text, sizeof text,
+             "{\"stock\": {\"stl_base64\": \"%s\"}, \"tools\": %s, \"program\": {\"trajectory\": "
+             "{\"a\": 1}}, \"fixtures\": [{\"hyperfun\": \"my_model(x[3], a[1]) { my_model = 1; }\", "
+             "\"name\": \"vise\"}]}",
+             b64, TOOLS);
+    doc = parse(text, &err);
+    CHECK(doc != NULL);
+    if (doc) {
+        CHECK(doc->stock_model.is_stl && doc->stock_model.size == 84);
+        CHECK(doc->spec.stock_spec == NULL); /* until written to a file */
+        CHECK(doc->check.fixture_count == 1 && !doc->fixtures[0].is_stl);
+        CHECK(!strcmp(doc->fixtures[0].name, "vise"));
+        CHECK(doc->spec.program_kind == FM_PROGRAM_TRAJECTORY);
+        CHECK(fm_job_doc_set_stock_file(doc, "/tmp/x/stock.stl", &err) == FM_OK);
+        CHECK(fm_job_doc_set_fixture_file(doc, 0, "/tmp/x/fixture0.hf", &err) == FM_OK);
+        CHECK(!strcmp(doc->spec.stock_spec, "/tmp/x/stock.stl"));
+        CHECK(!strcmp(doc->check.fixtures[0], "/tmp/x/fixture0.hf"));
+        CHECK(fm_job_doc_set_fixture_file(doc, 1, "/tmp/x/f1.hf", &err) != FM_OK);
+    }
+    fm_job_doc_free(doc);
+    /* 83 bytes are too short for an STL. */
+    memset(b64, 'A', 108);
+    memcpy(b64 + 108, "AA==", 5); /* 81 + 2 bytes */
+    snprintf(text, sizeof text, "{\"stock\": {\"stl_base64\": \"%s\"}, \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", b64, TOOLS);
+    doc = parse(text, &err);
+    CHECK(doc == NULL && !strcmp(err.reason, "bad_stock"));
+}
+
+/* A 100 x 60 x 30 mm box at 0.001 mm needs more than any budget: refused
+ * with its reason before anything is built. */
+static void test_memory(void)
+{
+    char text[1024];
+    fm_error err;
+    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,-30,100,60,0\", \"voxel\": 0.001, \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
+    fm_job_doc *doc = parse(text, &err);
+    CHECK(doc != NULL);
+    if (!doc) return;
+    CHECK(fm_job_doc_check_memory(doc, (size_t)1 << 30, &err) == FM_ERR_LIMIT &&
+          !strcmp(err.reason, "memory_budget"));
+    doc->spec.stock.voxel_mm = 1;
+    CHECK(fm_job_doc_check_memory(doc, (size_t)1 << 30, &err) == FM_OK);
+    fm_job_doc_free(doc);
+}
+
+static void test_stock_spec(void)
+{
+    fm_stock_spec s;
+    fm_error err;
+    CHECK(fm_stock_spec_parse("box:0,0,-30,100,60,0", &s, &err) == FM_OK);
+    CHECK(s.shape == FM_STOCK_SHAPE_BOX && s.lo[2] == -30 && s.hi[0] == 100 && s.hi[1] == 60);
+    /* 2 (100*60 + 60*30 + 100*30) */
+    CHECK_NEAR(fm_stock_spec_projected_area(&s), 21600, 1e-9);
+    CHECK(fm_stock_spec_parse("cylinder:5, 6, -10, 10, 4", &s, &err) == FM_OK);
+    CHECK(s.shape == FM_STOCK_SHAPE_CYLINDER && s.radius == 4 && s.axis[0] == 5 && s.axis[1] == 6);
+    CHECK(s.lo[0] == 1 && s.hi[0] == 9 && s.lo[1] == 2 && s.hi[1] == 10 && s.lo[2] == -10 && s.hi[2] == 10);
+    /* caps 2 pi r^2 on z, the side 2 r h on each of x and y, twice */
+    CHECK_NEAR(fm_stock_spec_projected_area(&s), 2 * 3.14159265358979 * 16 + 8 * 4 * 20, 1e-6);
+    CHECK(fm_stock_spec_parse("part.STL", &s, &err) == FM_OK && s.shape == FM_STOCK_SHAPE_STL);
+    CHECK(fm_stock_spec_projected_area(&s) < 0);
+    CHECK(fm_stock_spec_parse("model.hf", &s, &err) == FM_OK && s.shape == FM_STOCK_SHAPE_HYPERFUN);
+    CHECK(fm_stock_spec_parse("snap.vdb", &s, &err) == FM_OK && s.shape == FM_STOCK_SHAPE_SNAPSHOT);
+    CHECK(fm_stock_spec_parse("box:1,2,3,4,5", &s, &err) == FM_ERR_INPUT);
+    CHECK(fm_stock_spec_parse("box:1,2,3,4,5,6,7", &s, &err) == FM_ERR_INPUT);
+    CHECK(fm_stock_spec_parse("box:0,0,0,1,1,nan", &s, &err) == FM_ERR_INPUT);
+    CHECK(fm_stock_spec_parse("sphere:0,0,0,1", &s, &err) == FM_ERR_INPUT);
+    CHECK(fm_stock_spec_parse("", &s, &err) == FM_ERR_INPUT);
+}
+
+static void test_base64(void)
+{
+    /* RFC 4648 section 10 test vectors. */
+    static const char *const plain[] = {"", "f", "fo", "foo", "foob", "fooba", "foobar"};
+    static const char *const coded[] = {"", "Zg==", "Zm8=", "Zm9v", "Zm9vYg==", "Zm9vYmE=", "Zm9vYmFy"};
+    for (int i = 0; i < 7; i++) {
+        uint8_t *out;
+        size_t n;
+        CHECK(fm_base64_decode(coded[i], strlen(coded[i]), &out, &n) == 0);
+        CHECK(n == strlen(plain[i]) && (n == 0 || !memcmp(out, plain[i], n)));
+        free(out);
+    }
+    uint8_t *out;
+    size_t n;
+    CHECK(fm_base64_decode("Zm9v!", 5, &out, &n) == -1);
+    CHECK(fm_base64_decode("Zg==Zg==", 8, &out, &n) == -1); /* data after padding */
+    CHECK(fm_base64_decode("Zh==", 4, &out, &n) == -1);     /* non-zero pad bits */
+}
+
+int main(void)
+{
+    test_job_ok();
+    test_job_errors();
+    test_rapid_rate();
+    test_rules_and_parts();
+    test_memory();
+    test_stock_spec();
+    test_base64();
+    return test_summary("job_doc");
+}
