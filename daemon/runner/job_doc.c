@@ -12,11 +12,13 @@
 
 #include "machine.h"
 #include "stock_spec.h"
+#include "toolpaths/gcode/gcode.h"
 #include "toolpaths/tooltable/tooltable.h"
 
 /* The longest stock spec string (a box or cylinder, or a file path). */
 #define DOC_STOCK_TEXT_MAX 4096
 #define DOC_NAME_MAX 128
+#define DOC_PATH_LIST_MAX 4096
 
 /* ------------------------------------------------------------- base64 -- */
 
@@ -306,7 +308,7 @@ static fm_status parse_program(fm_job_doc *doc, json_t *program, const fm_job_do
 }
 
 static fm_status parse_machine(fm_job_doc *doc, json_t *machine, const char *where,
-                               fm_error *err)
+                               const fm_job_doc_rules *rules, fm_error *err)
 {
     if (doc->has_machine)
         return refuse(err, "bad_job",
@@ -317,12 +319,19 @@ static fm_status parse_machine(fm_job_doc *doc, json_t *machine, const char *whe
     fm_error_clear(&merr);
     if (fm_check_machine_from_json(machine, where, &doc->check.options.machine, &merr) != FM_OK)
         return refuse(err, "bad_value", "%s", merr.message);
+    /* a component names a model file on this machine: not from a client */
+    if (doc->check.options.machine.component_count && !rules->allow_files)
+        return refuse(err, "bad_value",
+                      "%s.components name files on the server; not accepted over the network "
+                      "(give machine components as fixtures)",
+                      where);
     doc->has_machine = 1;
     return FM_OK;
 }
 
 /* options.check: false, or an object of lib/check's options. */
-static fm_status parse_check(fm_job_doc *doc, json_t *check, fm_error *err)
+static fm_status parse_check(fm_job_doc *doc, json_t *check, const fm_job_doc_rules *rules,
+                             fm_error *err)
 {
     doc->check_enabled = 1;
     if (!check || json_is_true(check)) return FM_OK;
@@ -338,7 +347,7 @@ static fm_status parse_check(fm_job_doc *doc, json_t *check, fm_error *err)
     json_t *v;
     json_object_foreach(check, key, v) {
         if (!strcmp(key, "machine")) {
-            fm_status st = parse_machine(doc, v, "options.check.machine", err);
+            fm_status st = parse_machine(doc, v, "options.check.machine", rules, err);
             if (st != FM_OK) return st;
             continue;
         }
@@ -369,14 +378,68 @@ static fm_status parse_check(fm_job_doc *doc, json_t *check, fm_error *err)
     return FM_OK;
 }
 
-static fm_status parse_options(fm_job_doc *doc, json_t *options, fm_error *err)
+/* The G-code keys of options: dialect, subroutine_path, calculator_input;
+ * the server's defaults (rules) where the job gives none. */
+static fm_status parse_gcode_options(fm_job_doc *doc, json_t *options,
+                                     const fm_job_doc_rules *rules, fm_error *err)
 {
     fm_job_spec *spec = &doc->spec;
-    if (!options) return parse_check(doc, NULL, err);
-    if (!json_is_object(options)) return refuse(err, "bad_type", "options must be an object");
-    static const char *const keys[] = {"name",    "band",  "batch", "rapid_rate", "memory_budget_mb",
-                                       "threads", "check", "color", NULL};
-    fm_status st = only_keys(options, keys, "options", err);
+    json_t *v = options ? json_object_get(options, "dialect") : NULL;
+    const char *dialect = rules->dialect;
+    if (v) {
+        if (!json_is_string(v))
+            return refuse(err, "bad_type", "options.dialect must be a string");
+        dialect = json_string_value(v);
+    }
+    if (dialect) {
+        fm_gcode_dialect d;
+        if (!fm_gcode_dialect_parse(dialect, &d))
+            return refuse(err, "bad_value",
+                          "options.dialect \"%.32s\": expected \"linuxcnc\" or \"fanuc\"",
+                          dialect);
+        snprintf(doc->dialect, sizeof doc->dialect, "%s", fm_gcode_dialect_name(d));
+        spec->dialect = doc->dialect;
+    }
+    v = options ? json_object_get(options, "subroutine_path") : NULL;
+    if (v) {
+        fm_status st = text_ok(v, "options.subroutine_path", DOC_PATH_LIST_MAX, err);
+        if (st != FM_OK) return st;
+        /* Folders are files on this machine: a network client must never
+         * make the daemon read them (its own setting names them). */
+        if (!rules->allow_files)
+            return refuse(err, "bad_value",
+                          "options.subroutine_path names folders on the server; not accepted "
+                          "over the network (the daemon's subroutine_path setting names them)");
+        doc->subroutine_path = dup_bytes(json_string_value(v), json_string_length(v));
+    } else if (rules->subroutine_path && rules->subroutine_path[0]) {
+        doc->subroutine_path = dup_bytes(rules->subroutine_path, strlen(rules->subroutine_path));
+    }
+    if ((v || (rules->subroutine_path && rules->subroutine_path[0])) && !doc->subroutine_path)
+        return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    spec->subroutine_path = doc->subroutine_path;
+    v = options ? json_object_get(options, "calculator_input") : NULL;
+    if (v) {
+        if (!json_is_boolean(v))
+            return refuse(err, "bad_type", "options.calculator_input must be true or false");
+        spec->calculator_input = json_is_true(v);
+    }
+    return FM_OK;
+}
+
+static fm_status parse_options(fm_job_doc *doc, json_t *options, const fm_job_doc_rules *rules,
+                               fm_error *err)
+{
+    fm_job_spec *spec = &doc->spec;
+    if (options && !json_is_object(options))
+        return refuse(err, "bad_type", "options must be an object");
+    fm_status st = parse_gcode_options(doc, options, rules, err);
+    if (st != FM_OK) return st;
+    if (!options) return parse_check(doc, NULL, rules, err);
+    static const char *const keys[] = {"name",    "band",    "batch",
+                                       "rapid_rate", "memory_budget_mb", "threads",
+                                       "check",   "color",   "dialect",
+                                       "subroutine_path", "calculator_input", NULL};
+    st = only_keys(options, keys, "options", err);
     if (st != FM_OK) return st;
     json_t *v;
     if ((v = json_object_get(options, "name"))) {
@@ -407,7 +470,7 @@ static fm_status parse_options(fm_job_doc *doc, json_t *options, fm_error *err)
         if ((st = integer_in(v, "options.threads", 0, 1024, &spec->stock.threads, err))) return st;
         doc->threads_given = 1;
     }
-    return parse_check(doc, json_object_get(options, "check"), err);
+    return parse_check(doc, json_object_get(options, "check"), rules, err);
 }
 
 static fm_status parse_fixtures(fm_job_doc *doc, json_t *fixtures, fm_error *err)
@@ -437,6 +500,7 @@ void fm_job_doc_free(fm_job_doc *doc)
     fm_tool_table_free(&doc->tools);
     free(doc->program);
     free(doc->stock_text);
+    free(doc->subroutine_path);
     free(doc->stock_model.data);
     for (int i = 0; i < FM_JOB_MAX_FIXTURES; i++) {
         free(doc->fixtures[i].data);
@@ -448,7 +512,7 @@ void fm_job_doc_free(fm_job_doc *doc)
 fm_status fm_job_doc_from_json(json_t *job, const fm_job_doc_rules *rules_in, fm_job_doc **out,
                                fm_error *err)
 {
-    static const fm_job_doc_rules strict = {0, 0};
+    static const fm_job_doc_rules strict = {0};
     const fm_job_doc_rules *rules = rules_in ? rules_in : &strict;
     *out = NULL;
     if (!json_is_object(job)) return refuse(err, "bad_job", "the job must be a JSON object");
@@ -475,15 +539,22 @@ fm_status fm_job_doc_from_json(json_t *job, const fm_job_doc_rules *rules_in, fm
     if ((st = parse_tools(doc, json_object_get(job, "tools"), rules, err))) goto fail;
     if ((st = parse_program(doc, json_object_get(job, "program"), rules, err))) goto fail;
     if ((v = json_object_get(job, "fixtures")) && (st = parse_fixtures(doc, v, err))) goto fail;
-    if ((v = json_object_get(job, "machine")) && (st = parse_machine(doc, v, "machine", err)))
+    if ((v = json_object_get(job, "machine")) && (st = parse_machine(doc, v, "machine", rules, err)))
         goto fail;
     json_t *options = json_object_get(job, "options");
-    if ((st = parse_options(doc, options, err))) goto fail;
+    if ((st = parse_options(doc, options, rules, err))) goto fail;
     /* The machine's rapid rate times the whole job unless the options give
      * one: the rule of `frepmill check --machine` and `simulate --machine`. */
     if (doc->has_machine && doc->check.options.machine.rapid_rate > 0 &&
         !json_object_get(options, "rapid_rate"))
         doc->spec.rapid_rate = doc->check.options.machine.rapid_rate;
+    /* Its reference points are Fanuc's G28/G30 (and where the tool starts);
+     * its rotary axes move the tool, as with frepmill simulate --machine. */
+    if (doc->has_machine) {
+        memcpy(doc->spec.reference_points, doc->check.options.machine.reference_points,
+               sizeof doc->spec.reference_points);
+        doc->spec.machine = &doc->check.options.machine.chain;
+    }
 
     /* The run spec's pointers into the document. */
     doc->spec.tools = &doc->tools;

@@ -2,7 +2,8 @@
  * job_doc.c are where it is defined, parsed and validated, once, into the
  * run spec the job runner takes (fm_job_spec, job.h). The daemon's HTTP API
  * (POST /v1/jobs, POST /v1/check), its job store (spec.json), Modbus live
- * mode and `frepmill simulate|check --job FILE` all read jobs through here.
+ * mode and the Redis queue read jobs through here (the CLI builds its run
+ * spec from flags; a --job FILE option is still to come).
  *
  *   {
  *     "stock":   "box:X0,Y0,Z0,X1,Y1,Z1" | "cylinder:X,Y,Z0,Z1,R"      (mm)
@@ -15,10 +16,16 @@
  *                                                     makes these, POST /v1/jobs refuses them)
  *     "fixtures": [{"hyperfun": TEXT | "stl_base64": BASE64, "name": TEXT}, ...]  (at most 64)
  *     "machine": {"limits": {"x": [LO, HI], ...}, "rapid_rate": MM_PER_MIN,
- *                 "start": [X, Y, Z]}                (docs/check.md's machine file)
+ *                 "start": [X, Y, Z], "reference_points": [[X, Y, Z], ...]}
+ *                                                    (docs/check.md's machine file)
  *     "options": {
  *       "name": TEXT, "band": 2..32, "batch": -1..1000, "rapid_rate": MM_PER_MIN,
  *       "memory_budget_mb": MB, "threads": 0..1024, "color": "tool" | "none",
+ *       "dialect": "linuxcnc" | "fanuc"              (docs/gcode.md; default: the server's,
+ *                                                     else linuxcnc)
+ *       "subroutine_path": "DIR:DIR"                 (subprogram folders: files, CLI only;
+ *                                                     the daemon's own setting otherwise)
+ *       "calculator_input": false | true             (Fanuc: X5 is 5 mm, not 0.005)
  *       "check": false | {"clearance", "rapid_clearance", "tolerance", "max_ramp", "voxel",
  *                         "machine": {...}  (the same as the top-level "machine")}
  *     }
@@ -29,11 +36,11 @@
  * 5000 mm/min: the same rule for the CLI, the check and the daemon, so one
  * program and machine give one set of findings.
  *
+ * The machine's reference_points are the run's (Fanuc G28/G30).
+ *
  * Room for what is coming (fields in fm_job_spec, keys here when they land):
- * "options.dialect" and "options.subroutine_path" (G-code dialects,
- * issues 15 and 20), "design", "options.tolerance", "options.stop_at"
- * (design comparison, issue 16), machine kinematics under "machine"
- * (issue 17). */
+ * "design", "options.tolerance", "options.stop_at" (design comparison,
+ * issue 16), machine kinematics under "machine" (issue 17). */
 #ifndef FM_JOB_DOC_H
 #define FM_JOB_DOC_H
 
@@ -52,6 +59,10 @@ typedef struct fm_job_doc_rules {
     int allow_files;
     /* Live programs are made by the daemon itself (Modbus live mode). */
     int allow_live;
+    /* The server's defaults for jobs that give none (frepmilld's dialect
+     * and subroutine_path settings); NULL: none. */
+    const char *dialect;
+    const char *subroutine_path;
 } fm_job_doc_rules;
 
 /* An inline model of the document (the stock or a fixture). */
@@ -84,6 +95,8 @@ typedef struct fm_job_doc {
     char *program;             /* G-code text or the trajectory's JSON */
     size_t program_length;
     char *stock_text;          /* the spec string, or the materialized model's path */
+    char dialect[16];          /* spec.dialect's storage */
+    char *subroutine_path;     /* spec.subroutine_path's */
     fm_job_model stock_model;  /* an inline stock model (size 0 if none) */
     fm_job_model fixtures[FM_JOB_MAX_FIXTURES];
     char *fixture_paths[FM_JOB_MAX_FIXTURES];

@@ -295,12 +295,93 @@ static void test_base64(void)
     CHECK(fm_base64_decode("Zh==", 4, &out, &n) == -1);     /* non-zero pad bits */
 }
 
+/* options.dialect, subroutine_path, calculator_input; the server's
+ * defaults (rules) where the job gives none; the machine's reference
+ * points. */
+static void test_gcode_options(void)
+{
+    char text[1024];
+    fm_error err;
+    const char *head = "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}";
+    char fmt[256];
+    /* no dialect anywhere: the runner's default (NULL) */
+    snprintf(fmt, sizeof fmt, "%s}", head);
+    snprintf(text, sizeof text, fmt, TOOLS);
+    fm_job_doc *doc = parse(text, &err);
+    CHECK(doc && doc->spec.dialect == NULL && doc->spec.subroutine_path == NULL &&
+          doc->spec.calculator_input == 0);
+    fm_job_doc_free(doc);
+    /* the server's defaults apply... */
+    const fm_job_doc_rules server = {.dialect = "FANUC", .subroutine_path = "/srv/subs:/srv/more"};
+    doc = parse_with(text, &server, &err);
+    CHECK(doc && doc->spec.dialect && !strcmp(doc->spec.dialect, "fanuc"));
+    CHECK(doc && doc->spec.subroutine_path &&
+          !strcmp(doc->spec.subroutine_path, "/srv/subs:/srv/more"));
+    /* ...without entering the canonical form (the client's document) */
+    CHECK(doc && json_object_size(json_object_get(doc->json, "options")) == 0);
+    fm_job_doc_free(doc);
+    /* ...unless the job gives its own dialect */
+    snprintf(fmt, sizeof fmt, "%s, \"options\": {\"dialect\": \"linuxcnc\", \"calculator_input\": true}}", head);
+    snprintf(text, sizeof text, fmt, TOOLS);
+    doc = parse_with(text, &server, &err);
+    CHECK(doc && !strcmp(doc->spec.dialect, "linuxcnc") && doc->spec.calculator_input == 1);
+    CHECK(doc && !strcmp(doc->spec.subroutine_path, "/srv/subs:/srv/more"));
+    fm_job_doc_free(doc);
+    /* bad values and types */
+    const char *bad[][2] = {
+        {"\"dialect\": \"haas\"", "bad_value"},
+        {"\"dialect\": 2", "bad_type"},
+        {"\"calculator_input\": 1", "bad_type"},
+        {"\"subroutine_path\": \"\"", "bad_value"},
+        {"\"subroutine_path\": [\"/srv\"]", "bad_type"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        snprintf(fmt, sizeof fmt, "%s, \"options\": {%s}}", head, bad[i][0]);
+        snprintf(text, sizeof text, fmt, TOOLS);
+        expect_error(text, 400, bad[i][1]);
+    }
+    /* subroutine folders are files: refused over the network, the CLI's own
+     * documents may name them */
+    snprintf(fmt, sizeof fmt, "%s, \"options\": {\"subroutine_path\": \"/etc\"}}", head);
+    snprintf(text, sizeof text, fmt, TOOLS);
+    doc = parse(text, &err);
+    CHECK(doc == NULL && !strcmp(err.reason, "bad_value"));
+    CHECK_STR_CONTAINS(err.message, "options.subroutine_path names folders on the server");
+    const fm_job_doc_rules own = {.allow_files = 1, .subroutine_path = "/srv/subs"};
+    doc = parse_with(text, &own, &err);
+    CHECK(doc && !strcmp(doc->spec.subroutine_path, "/etc"));
+    fm_job_doc_free(doc);
+    /* machine components are model files: refused over the network */
+    snprintf(fmt, sizeof fmt, "%s, \"machine\": {\"components\": [{\"model\": \"vise.stl\", \"link\": \"table\"}]}}", head);
+    snprintf(text, sizeof text, fmt, TOOLS);
+    doc = parse(text, &err);
+    CHECK(doc == NULL && !strcmp(err.reason, "bad_value"));
+    CHECK_STR_CONTAINS(err.message, "machine.components name files on the server");
+    doc = parse_with(text, &own, &err);
+    CHECK(doc && doc->check.options.machine.component_count == 1);
+    fm_job_doc_free(doc);
+    /* the machine's reference points (G28, G30) reach the run spec */
+    snprintf(fmt, sizeof fmt, "%s, \"machine\": {\"reference_points\": [[1, 2, 3], [4, 5, 6]]}}", head);
+    snprintf(text, sizeof text, fmt, TOOLS);
+    doc = parse(text, &err);
+    CHECK(doc != NULL);
+    if (doc) {
+        const double want[2][3] = {{1, 2, 3}, {4, 5, 6}};
+        for (int i = 0; i < 2; i++)
+            for (int k = 0; k < 3; k++) CHECK_NEAR(doc->spec.reference_points[i][k], want[i][k], 0);
+        CHECK_NEAR(doc->spec.reference_points[2][0], 0, 0);
+        CHECK(doc->spec.machine == &doc->check.options.machine.chain);
+    }
+    fm_job_doc_free(doc);
+}
+
 int main(void)
 {
     test_job_ok();
     test_job_errors();
     test_rapid_rate();
     test_rules_and_parts();
+    test_gcode_options();
     test_memory();
     test_stock_spec();
     test_base64();
