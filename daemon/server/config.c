@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "log.h"
+#include "toolpaths/gcode/gcode.h"
 #include "queue_redis.h"
 
 void fm_daemon_config_default(fm_daemon_config *cfg)
@@ -35,6 +36,7 @@ void fm_daemon_config_default(fm_daemon_config *cfg)
     cfg->demo_voxel = 0.1;
     cfg->live_voxel = 0.25;
     cfg->live_feed = 1000;
+    snprintf(cfg->dialect, sizeof cfg->dialect, "linuxcnc");
     snprintf(cfg->queue_stream, sizeof cfg->queue_stream, "frepmill:jobs");
     snprintf(cfg->queue_group, sizeof cfg->queue_group, "frepmilld");
     cfg->queue_claim_s = 30;
@@ -77,7 +79,7 @@ static int parse_bool(const char *v, int *out)
     return 0;
 }
 
-typedef enum { K_TEXT, K_INT, K_REAL, K_BOOL, K_ADDR, K_LEVEL, K_QUEUE } key_kind;
+typedef enum { K_TEXT, K_INT, K_REAL, K_BOOL, K_ADDR, K_LEVEL, K_QUEUE, K_DIALECT } key_kind;
 
 typedef struct key_def {
     const char *name;
@@ -121,6 +123,8 @@ static const key_def keys[] = {
     TEXT("live_tools", live_tools),
     REAL("live_voxel", live_voxel, 0.01, 10),
     REAL("live_feed", live_feed, 0.001, 1e7),
+    {"dialect", K_DIALECT, offsetof(fm_daemon_config, dialect), sizeof(((fm_daemon_config *)0)->dialect), 0, 0},
+    TEXT("subroutine_path", subroutine_path),
     {"queue", K_QUEUE, offsetof(fm_daemon_config, queue), sizeof(((fm_daemon_config *)0)->queue), 0, 0},
     TEXT("queue_stream", queue_stream),
     TEXT("queue_group", queue_group),
@@ -153,6 +157,16 @@ int fm_daemon_config_set(fm_daemon_config *cfg, const char *key, const char *val
             }
         } /* fall through: stored as text */
         /* FALLTHROUGH */
+        case K_DIALECT:
+            if (k->kind == K_DIALECT) {
+                fm_gcode_dialect dialect;
+                if (!fm_gcode_dialect_parse(value, &dialect)) {
+                    snprintf(msg, msg_size, "%s = %.32s: expected linuxcnc or fanuc", key, value);
+                    return -1;
+                }
+                value = fm_gcode_dialect_name(dialect);
+            }
+            /* FALLTHROUGH */
         case K_QUEUE:
             if (k->kind == K_QUEUE && value[0] && strcmp(value, "off") != 0) {
                 fm_redis_url url;

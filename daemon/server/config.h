@@ -37,6 +37,10 @@ typedef struct fm_daemon_config {
     char live_tools[1024];
     double live_voxel;
     double live_feed;          /* mm/min: the program time given to each live move */
+    /* G-code: the dialect of jobs (docs/gcode.md: linuxcnc or fanuc) and
+     * the server's folders of subprogram files (':'-separated). */
+    char dialect[16];
+    char subroutine_path[4096];
     /* A Redis Streams job queue shared by several daemons (docs/fleet.md):
      * "" (off) or redis://[user[:password]@]host[:port][/db]. */
     char queue[1024];

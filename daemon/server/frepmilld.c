@@ -210,7 +210,9 @@ int main(int argc, char **argv)
                            .live_stock = cfg.live_stock,
                            .live_tools = cfg.live_tools,
                            .live_voxel = cfg.live_voxel,
-                           .live_feed = cfg.live_feed};
+                           .live_feed = cfg.live_feed,
+                           .dialect = cfg.dialect,
+                           .subroutine_path = cfg.subroutine_path};
     fm_jobs *jobs = fm_jobs_open(&jcfg, &err);
     if (!jobs) {
         fm_log(FM_LOG_ERROR, "cannot open the job store: %s", err.message);

@@ -29,6 +29,10 @@ typedef struct fm_jobs_config {
     const char *live_tools;
     double live_voxel;
     double live_feed;
+    /* G-code: the dialect of every job ("linuxcnc" or "fanuc"; NULL: the
+     * default) and the folders of subprogram files (NULL or "": none). */
+    const char *dialect;
+    const char *subroutine_path;
 } fm_jobs_config;
 
 typedef enum fm_job_state {

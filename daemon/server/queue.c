@@ -135,6 +135,9 @@ static void run_job(fm_jobs *jobs, job *j)
         spec.stock.threads = (int)json_integer_value(v);
     if ((v = json_object_get(options, "batch"))) spec.batch_diameters = json_number_value(v);
     if ((v = json_object_get(options, "rapid_rate"))) spec.rapid_rate = json_number_value(v);
+    /* the server's G-code settings (jobs over HTTP cannot name folders) */
+    spec.dialect = jobs->cfg.dialect;
+    spec.subroutine_path = jobs->cfg.subroutine_path;
 
     fm_tool_table table;
     memset(&table, 0, sizeof table);

@@ -1,0 +1,65 @@
+"""test_dialect.py: the daemon's G-code settings. A daemon started with
+`--dialect fanuc` runs a Fanuc program (O number line, decimal points: "X50"
+would be 0.05 mm); one started with `--subroutine-path DIR` runs a LinuxCNC
+program whose o<slot> call is found in DIR. Each cuts one slot whose volume
+is computed here in closed form: a 6 mm flat end mill 2 mm deep from
+(10,20) to (50,20): (40 * 6 + pi * 3^2) * 2 mm3. A dialect the daemon does
+not know stops its start.
+Usage: test_dialect.py FREPMILLD FREPMILL"""
+import math
+import os
+import subprocess
+import sys
+import tempfile
+
+from daemon_util import Daemon, check, submit, wait_state
+
+VOXEL = 0.1
+STOCK = "box:0,0,-10,60,40,0"
+TOOLS = {"units": "mm", "tools": [{"number": 1, "shape": "flat", "diameter": 6,
+                                   "flute_length": 20, "length": 40}]}
+SLOT = (40 * 6 + math.pi * 3 ** 2) * 2
+FANUC = ("%\nO1000 (SLOT)\nG21 G17 G40 G80 G90\nT1 M06\nG00 Z5.\nG00 X10. Y20.\n"
+         "G01 Z-2. F300.\nX50. F600.\nG00 Z5.\nM30\n%\n")
+LINUXCNC_MAIN = "G21 G17 G90\nT1 M6\nG00 Z5\nG00 X10 Y20\no<slot> call\nM2\n"
+LINUXCNC_SUB = "o<slot> sub\nG01 Z-2 F300\nG01 X50 F600\nG00 Z5\no<slot> endsub\nM2\n"
+
+
+def run(frepmilld, state, flags, program, tmp, what):
+    d = Daemon(frepmilld, state, "--workers", "1", *flags)
+    try:
+        job = {"stock": STOCK, "voxel": VOXEL, "tools": TOOLS, "program": {"gcode": program}}
+        job_id = submit(d.url, job, tmp)
+        status = wait_state(d.url, job_id, ("done", "failed", "cancelled"), 300)
+        check(status["state"] == "done", "%s: done (%s)" % (what, status.get("error")))
+        removed = status["removed_volume_mm3"]
+        # 0.5% at 0.1 mm voxels: the tolerance of test_simulate's closed forms.
+        check(abs(removed - SLOT) <= 0.005 * SLOT,
+              "%s: removed %.2f mm3 = closed form %.2f" % (what, removed, SLOT))
+    finally:
+        rc = d.stop()
+        if rc != 0:
+            print(d.read_log()[-6000:])
+    check(rc == 0, "the daemon stopped cleanly")
+
+
+def main():
+    frepmilld = sys.argv[1]
+    with tempfile.TemporaryDirectory(prefix="fm-dialect-") as tmp:
+        subs = os.path.join(tmp, "subs")
+        os.mkdir(subs)
+        with open(os.path.join(subs, "slot.ngc"), "w") as f:
+            f.write(LINUXCNC_SUB)
+        run(frepmilld, os.path.join(tmp, "a"), ["--dialect", "fanuc"], FANUC, tmp,
+            "--dialect fanuc: a Fanuc program")
+        run(frepmilld, os.path.join(tmp, "b"), ["--subroutine-path", subs], LINUXCNC_MAIN, tmp,
+            "--subroutine-path: o<slot> call found in the configured folder")
+        out = subprocess.run([frepmilld, "--dialect", "haas", "--state-dir",
+                              os.path.join(tmp, "c")], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, timeout=30)
+        check(out.returncode != 0 and b"expected linuxcnc or fanuc" in out.stderr,
+              "--dialect haas stops the start (%s)" % out.stderr.decode().strip())
+
+
+if __name__ == "__main__":
+    main()
