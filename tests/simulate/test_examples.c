@@ -2,7 +2,9 @@
  * (examples/cast_stock.hf) as a stock, whose grid volume must match a
  * direct integration of the model; and the corner-rounding form cutter
  * (examples/form_cutter.hf) as a custom tool, whose plunge and slot must
- * remove the volumes its documented profile gives in closed form. Run from
+ * remove the volumes its documented profile gives in closed form; the
+ * 4-axis indexer example (examples/indexer_4axis.ngc on its machine) against
+ * the hexagon's closed form plus its ring groove integrated here. Run from
  * tests/ (ctest does). */
 #include <math.h>
 #include <stdio.h>
@@ -12,6 +14,7 @@
 #include "frep/frep.h"
 #include "hf/hf.h"
 #include "job.h"
+#include "runner/machine.h"
 #include "test.h"
 #include "toolpaths/tooltable/tooltable.h"
 
@@ -81,6 +84,29 @@ static double chord(double h)
     return 2 * form_radius(h);
 }
 
+/* The ring groove of indexer_4axis.ngc: a 6 mm ball whose centre stands 20
+ * mm from the bar's axis at x = 80 while A turns once sweeps the disc
+ * (x - 80)^2 + (r - 20)^2 <= 9 revolved about X; the material there is the
+ * hexagon of inradius d, whose polar radius is d / cos(phi) with phi the
+ * angle from the nearest flat's normal. Removed: the integral over x and
+ * theta of r dr from the disc's inner radius to the hexagon. */
+static double hex_groove_volume(double d)
+{
+    const int nx = 1200, nt = 7200;
+    double sum = 0, dx = 6.0 / nx, dt = 2 * PI / nt;
+    for (int i = 0; i < nx; i++) {
+        double x = -3 + (i + 0.5) * dx;
+        double r_lo = 20 - sqrt(9 - x * x);
+        for (int j = 0; j < nt; j++) {
+            double t = (j + 0.5) * dt;
+            double phi = fmod(t, PI / 3) - PI / 6;
+            double h = d / cos(phi);
+            if (h > r_lo) sum += 0.5 * (h * h - r_lo * r_lo);
+        }
+    }
+    return sum * dx * dt;
+}
+
 static double run(const char *program, const char *stock, const fm_tool_table *tools, double voxel,
                   double *initial)
 {
@@ -144,6 +170,47 @@ int main(void)
                     "box:40,20,-6,80,40,0", &form, 0.1, NULL);
     printf("form cutter slot: removed %.3f mm3, profile %.3f mm3\n", v2, slot);
     CHECK(fabs(v2 - slot) <= 0.005 * slot);
+
+    /* The 4-axis indexer example: six flats 17.32 mm from the axis of the
+     * 100 mm bar of radius 20 leave a hexagon (its corners, 17.32 / cos 30
+     * = 19.9994 from the axis, lie inside the bar): 100 (400 pi - 2 sqrt(3)
+     * d^2) removed, plus the ring groove. */
+    {
+        fm_tool_table rt;
+        fm_check_machine machine;
+        fm_status st = fm_tooltable_load("../examples/rotary_tools.json", &rt, &err);
+        int have_tools = st == FM_OK;
+        if (st == FM_OK) st = fm_check_machine_load("../examples/indexer_machine.json", &machine, &err);
+        CHECK(st == FM_OK);
+        if (st != FM_OK) {
+            if (have_tools) fm_tool_table_free(&rt);
+            fprintf(stderr, "indexer example: %s\n", fm_error_format(&err, buf, sizeof buf));
+        } else {
+            fm_job_spec spec;
+            fm_job_spec_default(&spec);
+            spec.program_path = "../examples/indexer_4axis.ngc";
+            spec.program_name = spec.program_path;
+            spec.stock_spec = "../examples/round_bar.hf";
+            spec.tools = &rt;
+            spec.stock.voxel_mm = 0.2;
+            spec.machine = &machine.chain;
+            fm_job_result result;
+            st = fm_job_run(&spec, NULL, &result, &err);
+            CHECK(st == FM_OK);
+            if (st != FM_OK) {
+                fprintf(stderr, "indexer example: %s\n", fm_error_format(&err, buf, sizeof buf));
+            } else {
+                double d = 17.32;
+                double groove = hex_groove_volume(d);
+                double want = 100 * (400 * PI - 2 * sqrt(3.0) * d * d) + groove;
+                printf("indexer example: removed %.1f mm3, closed form + groove %.1f mm3 (groove %.1f)\n",
+                       result.removed_volume_mm3, want, groove);
+                CHECK(fabs(result.removed_volume_mm3 - want) <= 0.005 * want);
+                fm_stock_free(result.stock);
+            }
+            fm_tool_table_free(&rt);
+        }
+    }
 
     fm_tool_table_free(&flat);
     fm_tool_table_free(&form);
