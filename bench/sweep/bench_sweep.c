@@ -5,6 +5,7 @@
  * 0.8 mm leaves (8 voxels of 0.1 mm). Usage: bench_sweep [points]. */
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 #include "sweep/sweep_cases.h"
@@ -131,6 +132,34 @@ int main(int argc, char **argv)
         bench("ball-10mm", "short-3D", &m, &t.flutes, n);
         m = sc_line(0, 0, 0, 0.8, 0.5, 0);
         bench("ball-10mm", "short-XY", &m, &t.flutes, n);
+    }
+    /* Issue 17: a 5-axis move on an AC trunnion (A about X, C about Z,
+     * through the origin) against the 3-axis move of the same tip path
+     * (the 13 mm XY line): A 0 -> 20, C 0 -> 45 degrees, with TCP (the tip
+     * on the line) and without (the joints linear). */
+    fm_machine trt;
+    memset(&trt, 0, sizeof trt);
+    trt.rotary_count = 2;
+    trt.rotary[0].letter = 0;
+    trt.rotary[0].around[0] = 1;
+    trt.rotary[1].letter = 2;
+    trt.rotary[1].around[2] = 1;
+    static const fm_tool_shape shapes[2] = {FM_TOOL_FLAT, FM_TOOL_BALL};
+    static const char *const names[2] = {"flat-6mm", "ball-6mm"};
+    for (int c = 0; c < 2; c++) {
+        fm_tool_spec spec = sc_spec(shapes[c]);
+        fm_tool tool;
+        if (fm_tool_build(&spec, &tool, NULL) != FM_OK) continue;
+        fm_motion m = sc_line(0, 0, 0, 12, 5, 0);
+        bench(names[c], "3-axis", &m, &tool.flutes, n);
+        for (int tcp = 1; tcp >= 0; tcp--) {
+            fm_motion r = m;
+            r.machine = &trt;
+            r.rotary_end[0] = 20;
+            r.rotary_end[2] = 45;
+            r.tcp = tcp;
+            bench(names[c], tcp ? "5-axis-tcp" : "5-axis", &r, &tool.flutes, n);
+        }
     }
     return 0;
 }
