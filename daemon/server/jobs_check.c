@@ -149,6 +149,7 @@ fm_status fm_jobs_check_prepare(json_t *spec, const char *dir, fm_jobs_check_set
 }
 
 fm_status fm_jobs_check_run(json_t *spec, const char *dir, size_t memory_budget,
+                            const char *dialect, const char *subroutine_path,
                             fm_jobs_check_result *out, fm_error *err)
 {
     memset(out, 0, sizeof *out);
@@ -173,6 +174,8 @@ fm_status fm_jobs_check_run(json_t *spec, const char *dir, size_t memory_budget,
         in->spec.rapid_rate = in->check.options.machine.rapid_rate;
     in->spec.stock.memory_budget = memory_budget;
     in->spec.stock.threads = 1; /* a request's thread; leave the cores to the jobs */
+    in->spec.dialect = dialect; /* the server's G-code settings, as for jobs */
+    in->spec.subroutine_path = subroutine_path;
 
     tools_text = json_dumps(json_object_get(spec, "tools"), JSON_INDENT(1));
     st = tools_text ? fm_tooltable_parse_json(tools_text, strlen(tools_text), "tools", &table, err)
@@ -242,7 +245,8 @@ static size_t program_bytes(json_t *spec)
     return n;
 }
 
-int fm_jobs_check_request(const char *state_dir, size_t memory_budget, json_t *request,
+int fm_jobs_check_request(const char *state_dir, size_t memory_budget, const char *dialect,
+                          const char *subroutine_path, json_t *request,
                           json_t **out, fm_http_error *err)
 {
     char *text = json_dumps(request, JSON_COMPACT);
@@ -285,7 +289,8 @@ int fm_jobs_check_request(const char *state_dir, size_t memory_budget, json_t *r
     fm_jobs_check_result res;
     fm_error ferr;
     fm_error_clear(&ferr);
-    fm_status st = fm_jobs_check_run(spec, dir, memory_budget, &res, &ferr);
+    fm_status st = fm_jobs_check_run(spec, dir, memory_budget, dialect, subroutine_path, &res,
+                                     &ferr);
     fm_store_remove_dir(dir, NULL);
     atomic_fetch_sub(&sync_running, 1);
     if (st != FM_OK) {

@@ -42,14 +42,18 @@ typedef struct fm_jobs_check_result {
 } fm_jobs_check_result;
 
 /* The check alone (check_pass.h), for POST /v1/check. memory_budget bounds
- * the grid. On failure err has the fm_status code and where. */
+ * the grid; dialect and subroutine_path are the server's G-code settings
+ * (NULL: the defaults), as for jobs. On failure err has the fm_status code
+ * and where. */
 fm_status fm_jobs_check_run(json_t *spec, const char *dir, size_t memory_budget,
+                            const char *dialect, const char *subroutine_path,
                             fm_jobs_check_result *out, fm_error *err);
 
 /* POST /v1/check: the same inputs as a job; {"findings": [...], "errors",
  * "warnings"} or an error status. state_dir holds the private temporary
  * folder. */
-int fm_jobs_check_request(const char *state_dir, size_t memory_budget, json_t *request,
+int fm_jobs_check_request(const char *state_dir, size_t memory_budget, const char *dialect,
+                          const char *subroutine_path, json_t *request,
                           json_t **out, fm_http_error *err);
 
 #endif

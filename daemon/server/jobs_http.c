@@ -452,7 +452,8 @@ static int svc_toolpath(void *ctx, const char *id, fm_http_blob *out, fm_http_er
 static int svc_check(void *ctx, json_t *request, json_t **out, fm_http_error *err)
 {
     fm_jobs *jobs = ctx;
-    return fm_jobs_check_request(jobs->state_dir, jobs->cfg.job_memory_bytes, request, out, err);
+    return fm_jobs_check_request(jobs->state_dir, jobs->cfg.job_memory_bytes, jobs->cfg.dialect,
+                                 jobs->cfg.subroutine_path, request, out, err);
 }
 
 void fm_jobs_http_service(fm_jobs *jobs, fm_http_service *out)

@@ -6,13 +6,14 @@ is computed here in closed form: a 6 mm flat end mill 2 mm deep from
 (10,20) to (50,20): (40 * 6 + pi * 3^2) * 2 mm3. A dialect the daemon does
 not know stops its start.
 Usage: test_dialect.py FREPMILLD FREPMILL"""
+import json
 import math
 import os
 import subprocess
 import sys
 import tempfile
 
-from daemon_util import Daemon, check, submit, wait_state
+from daemon_util import Daemon, check, curl_json, submit, wait_state
 
 VOXEL = 0.1
 STOCK = "box:0,0,-10,60,40,0"
@@ -36,6 +37,12 @@ def run(frepmilld, state, flags, program, tmp, what):
         # 0.5% at 0.1 mm voxels: the tolerance of test_simulate's closed forms.
         check(abs(removed - SLOT) <= 0.005 * SLOT,
               "%s: removed %.2f mm3 = closed form %.2f" % (what, removed, SLOT))
+        # POST /v1/check reads the program with the same settings (in the
+        # other dialect, or without the folder, it is an error: 400)
+        code, body = curl_json("-X", "POST", "--data-binary", json.dumps(job),
+                               d.url + "/v1/check")
+        check(code == 200 and isinstance(body.get("findings"), list),
+              "%s: POST /v1/check reads it too (%d, %s)" % (what, code, body))
     finally:
         rc = d.stop()
         if rc != 0:
