@@ -223,28 +223,21 @@ fm_status fm_sweep_new(const fm_motion *m, const fm_tool_part *part, const fm_sw
         }
         s->kind = SW_ARC;
         s->ak = k;
-        s->ai = (k + 1) % 3; /* (X, Y) about Z, (Z, X) about Y, (Y, Z) about X: right-handed */
-        s->aj = (k + 2) % 3;
-        for (int i = 0; i < 3; i++) s->ctr[i] = m->center[i] + m->tip_offset[i];
-        s->ctr[k] = m->start[k] + m->tip_offset[k];
-        double si = m->start[s->ai] - m->center[s->ai], sj = m->start[s->aj] - m->center[s->aj];
-        double ei = m->end[s->ai] - m->center[s->ai], ej = m->end[s->aj] - m->center[s->aj];
-        s->r0 = sqrt(si * si + sj * sj);
-        double r1 = sqrt(ei * ei + ej * ej);
-        if (!(s->r0 > 1e-9)) {
+        /* the arc's geometry from the one place every user reads it */
+        fm_motion_arc arc;
+        if (!fm_motion_arc_of(m, &arc)) {
             free(s);
             return fm_error_at(err, FM_ERR_INPUT, "", m->line, 0, "motion %ld: arc of zero radius", m->index);
         }
-        s->drr = r1 - s->r0;
-        s->th0 = atan2(sj, si);
-        double th1 = atan2(ej, ei);
-        double delta = m->turns > 0 ? th1 - s->th0 : s->th0 - th1;
-        delta = fmod(delta, 2 * PI);
-        if (delta < 0) delta += 2 * PI;
-        if (delta < 1e-12) delta = 2 * PI; /* same start and end angle: a full circle */
-        delta += 2 * PI * (abs(m->turns) - 1);
-        s->dth = m->turns > 0 ? delta : -delta;
-        s->dh = m->end[k] - m->start[k];
+        s->ai = arc.ai;
+        s->aj = arc.aj;
+        for (int i = 0; i < 3; i++) s->ctr[i] = arc.center[i] + m->tip_offset[i];
+        s->r0 = arc.r0;
+        double r1 = arc.r0 + arc.dr;
+        s->drr = arc.dr;
+        s->th0 = arc.th0;
+        s->dth = arc.dth;
+        s->dh = arc.dh;
         s->full_turn = fabs(s->dth) >= 2 * PI - 1e-12;
         double rmax = fmax(s->r0, r1);
         s->speed = sqrt(rmax * s->dth * rmax * s->dth + s->dh * s->dh) + fabs(s->drr);
