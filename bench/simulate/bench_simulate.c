@@ -1,17 +1,26 @@
-/* bench_simulate.c: whole programs through the job runner (daemon/runner/job.h) at
- * 0.1 mm: LinuxCNC's 3D_Chips.ngc (10 mm ball end mill, skipped when absent)
- * and a generated 50,000-motion pocket (6 mm flat end mill, zigzag clearing
- * of a 84 x 44 mm area in 12 depths of 1 mm, 0.3 mm segments). Prints
- * motions per second, band voxels per second (voxels the cuts evaluated the
- * swept field at), CPU and wall time, peak RSS, and the ratio of the job's
- * cutting time to the floor.
+/* bench_simulate.c: whole programs through the job runner (daemon/runner/job.h):
+ * LinuxCNC's 3D_Chips.ngc (10 mm ball end mill, skipped when absent), the
+ * demo pocket of deploy/demo (flat, drill and V-bit; helical entries, full
+ * circles, G81) and a generated 50,000-motion pocket (6 mm flat end mill,
+ * zigzag clearing of a 84 x 44 mm area in 12 depths of 1 mm, 0.3 mm
+ * segments). Prints, per case: wall and CPU time (user + sys), the load
+ * average before and after (the machine is shared: CPU time and
+ * instructions are the comparable figures), instructions when the kernel
+ * exposes hardware counters, peak RSS, motions and voxels per second, where
+ * the time goes, and the ratio of the job to its floor.
  *
- * The floor: the same motions, batched as the job batches them, each
- * batch's swept field rasterized alone into an empty grid
- * (fm_stock_new_from_field: interval pass and every voxel of its boundary
- * leaves), clipped to the stock's box. It is the cost of the swept volumes
- * without any stock work; the job can go below it because it skips voxels
- * the stock settles. Usage: bench_simulate [chips|pocket|all] [--no-floor]. */
+ * The floor is the work no method can avoid: every voxel whose value the
+ * cuts changed must at least be read, compared and written. Its per-voxel
+ * cost is measured here, on the final stock, by OpenVDB's bare update
+ * (value accessor read, max, setValueOnly) of the voxels the tool marks
+ * record, i.e. the leaves and voxels the cuts set that are still in the
+ * band; floor = voxels changed (summed over all cuts) x that cost, in
+ * thread-seconds. total / floor = job CPU seconds / floor.
+ *
+ * Usage: bench_simulate [chips|demo|pocket|all] [--voxel MM] [--no-floor]
+ *                       [--no-mesh] */
+#define _GNU_SOURCE /* syscall() for perf_event_open */
+#include <errno.h>
 #include <float.h>
 #include <math.h>
 #include <stdio.h>
@@ -20,6 +29,9 @@
 #include <sys/resource.h>
 #include <time.h>
 #include <unistd.h>
+#include <linux/perf_event.h>
+#include <sys/ioctl.h>
+#include <sys/syscall.h>
 
 #include "gcode/gcode.h"
 #include "job.h"
@@ -28,6 +40,11 @@
 #include "sweep/sweep.h"
 
 #define CHIPS_PATH "/usr/share/linuxcnc/ncfiles/3D_Chips.ngc"
+#ifndef FM_SOURCE_DIR
+#define FM_SOURCE_DIR "."
+#endif
+#define DEMO_PATH FM_SOURCE_DIR "/deploy/demo/pocket.ngc"
+#define DEMO_TOOLS FM_SOURCE_DIR "/deploy/demo/tools.json"
 
 static double now(void)
 {
@@ -92,91 +109,51 @@ static char *pocket_program(size_t *len)
     return t.p;
 }
 
-/* ------------------------------------------------------------ floor -- */
+/* ------------------------------------------- counters and load -- */
 
-typedef struct collect {
-    fm_motion *m;
-    size_t n, cap;
-} collect;
-
-static int collect_sink(void *user, const fm_motion *m)
+static void load_average(double l[3])
 {
-    collect *c = user;
-    if (c->n == c->cap) {
-        c->cap = c->cap ? 2 * c->cap : 4096;
-        fm_motion *p = realloc(c->m, c->cap * sizeof *p);
-        if (!p) return 1;
-        c->m = p;
-    }
-    c->m[c->n++] = *m;
-    return 0;
+    l[0] = l[1] = l[2] = -1;
+    FILE *f = fopen("/proc/loadavg", "r");
+    if (!f) return;
+    if (fscanf(f, "%lf %lf %lf", &l[0], &l[1], &l[2]) != 3) l[0] = l[1] = l[2] = -1;
+    fclose(f);
 }
 
-/* Rasterize one batch's field alone, clipped to the stock box. */
-static int floor_batch(const fm_motion *m, size_t n, const fm_tool_part *part, const double slo[3],
-                       const double shi[3])
+/* Instructions retired by this process and the threads it starts later
+ * (inherit), or -1 with the reason when the kernel gives no hardware
+ * counter (common under virtual machines). */
+static int instr_fd = -1;
+static char instr_why[128] = "";
+
+static void instructions_open(void)
 {
-    fm_field f;
-    fm_error err;
-    if (fm_sweep_field_many(&f, m, n, part, &err) != FM_OK) {
-        fprintf(stderr, "bench_simulate: %s\n", err.message);
-        return -1;
-    }
-    int empty = 0;
-    for (int a = 0; a < 3; a++) {
-        f.lo[a] = fmax(f.lo[a], slo[a] - 0.5);
-        f.hi[a] = fmin(f.hi[a], shi[a] + 0.5);
-        if (f.lo[a] > f.hi[a]) empty = 1;
-    }
-    if (!empty) {
-        fm_stock *g = fm_stock_new_from_field(&f, NULL, &err);
-        fm_stock_free(g); /* NULL when the clipped band is empty */
-    }
-    f.release(f.ctx);
-    return 0;
+    struct perf_event_attr pe;
+    memset(&pe, 0, sizeof pe);
+    pe.type = PERF_TYPE_HARDWARE;
+    pe.size = sizeof pe;
+    pe.config = PERF_COUNT_HW_INSTRUCTIONS;
+    pe.disabled = 0;
+    pe.inherit = 1;
+    pe.exclude_kernel = 1;
+    pe.exclude_hv = 1;
+    instr_fd = (int)syscall(SYS_perf_event_open, &pe, 0, -1, -1, 0);
+    if (instr_fd < 0)
+        snprintf(instr_why, sizeof instr_why, "no hardware counter (perf_event_open: %s)", strerror(errno));
 }
 
-static double run_floor(const char *path, const char *textp, size_t len, const fm_tool_table *tools,
-                        const fm_tool *tool, const double slo[3], const double shi[3])
+static double instructions_now(void)
 {
-    fm_gcode_options opt;
-    fm_gcode_options_default(&opt);
-    opt.tools = tools;
-    collect c = {0};
-    fm_error err;
-    fm_status st = path ? fm_gcode_run_file(path, &opt, collect_sink, &c, NULL, &err)
-                        : fm_gcode_run_string(textp, len, "pocket", &opt, collect_sink, &c, NULL, &err);
-    if (st != FM_OK) {
-        fprintf(stderr, "bench_simulate: %s\n", err.message);
-        free(c.m);
-        return -1;
-    }
-    /* The job's batching: consecutive motions while their path length stays
-     * under one tool diameter, at most 256, dwells not cut. */
-    double t0 = now();
-    size_t first = 0, count = 0;
-    double length = 0, limit = tool->spec.diameter;
-    for (size_t i = 0; i <= c.n; i++) {
-        int flush = i == c.n;
-        double l = 0;
-        if (!flush) {
-            if (c.m[i].kind == FM_MOTION_DWELL) continue;
-            l = fm_job_motion_length(&c.m[i]);
-            flush = count > 0 && (length + l > limit || count >= 256);
-        }
-        if (flush && count > 0) {
-            if (floor_batch(&c.m[first], count, &tool->flutes, slo, shi) != 0) break;
-            count = 0;
-            length = 0;
-        }
-        if (i == c.n) break;
-        if (count == 0) first = i;
-        count++;
-        length += l;
-    }
-    double t = now() - t0;
-    free(c.m);
-    return t;
+    uint64_t v;
+    if (instr_fd < 0 || read(instr_fd, &v, sizeof v) != (ssize_t)sizeof v) return -1;
+    return (double)v;
+}
+
+static int count_sink(void *user, const fm_motion *m)
+{
+    (void)m;
+    (*(long *)user)++;
+    return 0;
 }
 
 /* -------------------------------------------------------------- run -- */
@@ -225,63 +202,137 @@ static void mesh_figures(const char *name, fm_stock *stock)
     fm_mesh_free(mesh);
 }
 
-static void run_case(const char *name, const char *path, const char *textp, size_t len, const fm_tool_spec *ts,
-                     const char *stock_spec, const double slo[3], const double shi[3], int with_floor,
-                     int want_mesh)
+typedef struct bench_case {
+    const char *name;
+    const char *path;       /* program file, or */
+    const char *text;       /* program text */
+    size_t len;
+    const fm_tool_spec *tool; /* one-tool table, or */
+    const char *tools_path; /* a tool table file */
+    const char *stock_spec;
+} bench_case;
+
+typedef struct bench_opts {
+    double voxel;
+    int floor, mesh;
+} bench_opts;
+
+static void run_case(const bench_case *bc, const bench_opts *o)
 {
-    fm_tool_table table = {1, (fm_tool_spec *)ts};
+    fm_tool_table table = {1, (fm_tool_spec *)bc->tool};
     fm_job_spec spec;
     fm_job_spec_default(&spec);
-    spec.program_path = path;
-    spec.program_text = textp;
-    spec.program_length = len;
-    spec.program_name = name;
+    spec.program_path = bc->path;
+    spec.program_text = bc->text;
+    spec.program_length = bc->len;
+    spec.program_name = bc->name;
     spec.program_kind = FM_PROGRAM_GCODE;
-    spec.stock_spec = stock_spec;
-    spec.tools = &table;
-    spec.stock.voxel_mm = 0.1;
+    spec.stock_spec = bc->stock_spec;
+    spec.tools = bc->tool ? &table : NULL;
+    spec.tools_path = bc->tools_path;
+    spec.stock.voxel_mm = o->voxel;
     fm_job_result r;
     fm_error err;
-    double c0 = cpu_now(), w0 = now();
+    double load0[3], load1[3];
+    load_average(load0);
+    double i0 = instructions_now(), c0 = cpu_now(), w0 = now();
     fm_status st = fm_job_run(&spec, NULL, &r, &err);
-    double cpu = cpu_now() - c0, wall = now() - w0;
+    double cpu = cpu_now() - c0, wall = now() - w0, instr = instructions_now() - i0;
+    load_average(load1);
     if (st != FM_OK) {
-        fprintf(stderr, "bench_simulate %s: %s\n", name, err.message);
+        fprintf(stderr, "bench_simulate %s: %s\n", bc->name, err.message);
         return;
     }
-    printf("%s: %ld motions in %ld cuts, removed %.1f mm3, %.2f s wall, %.2f s CPU (user+sys), peak RSS %.0f MB\n",
-           name, r.motions, r.cuts, r.removed_volume_mm3, wall, cpu, r.peak_memory_bytes / 1048576.0);
-    printf("  %.0f motions/s, %.3g band voxels/s (%zu voxels evaluated in %zu leaves, %zu interval boxes)\n",
-           r.motions / wall, r.cut_stats.voxels_evaluated / wall, r.cut_stats.voxels_evaluated,
-           r.cut_stats.leaves_evaluated, r.cut_stats.intervals);
-    if (want_mesh) mesh_figures(name, r.stock);
+    const fm_stock_cut_stats *cs = &r.cut_stats;
+    printf("%s at %g mm: %ld motions in %ld cuts, removed %.1f mm3\n", bc->name, o->voxel, r.motions, r.cuts,
+           r.removed_volume_mm3);
+    printf("  %.2f s wall, %.2f s CPU (user+sys), peak RSS %.0f MB; load average %.2f before, %.2f after\n", wall,
+           cpu, r.peak_memory_bytes / 1048576.0, load0[0], load1[0]);
+    if (instr == 0 && instr_fd >= 0)
+        snprintf(instr_why, sizeof instr_why, "the hardware counter counted nothing (a virtual machine without PMU)");
+    if (instr > 0)
+        printf("  %.3g instructions (user space, all threads)\n", instr);
+    else
+        printf("  instructions: %s; use valgrind --tool=callgrind on a reduced run\n", instr_why);
+    printf("  %.0f motions/s, %.3g voxels evaluated/s; %zu voxels evaluated in %zu leaves, %zu voxels changed, "
+           "%zu interval boxes, %zu interior boxes\n",
+           r.motions / wall, cs->voxels_evaluated / wall, cs->voxels_evaluated, cs->leaves_evaluated,
+           cs->voxels_changed, cs->intervals, cs->interior_boxes);
+
+    /* Where the time goes: the parts the job's statistics time, and the
+     * set-up and final measures timed here again on their own. */
+    double t = now();
+    long nmot = 0;
+    fm_gcode_options gopt;
+    fm_gcode_options_default(&gopt);
+    fm_status gst = bc->path ? fm_gcode_run_file(bc->path, &gopt, count_sink, &nmot, NULL, &err)
+                             : fm_gcode_run_string(bc->text, bc->len, bc->name, &gopt, count_sink, &nmot, NULL, &err);
+    double t_gcode = gst == FM_OK ? now() - t : -1;
+    t = now();
+    fm_stock *fresh = fm_job_make_stock(bc->stock_spec, &spec.stock, &err);
+    double t_stock = now() - t;
+    fm_stock_free(fresh);
+    t = now();
+    double area = 0;
+    (void)fm_stock_volume(r.stock);
+    (void)fm_stock_surface_area(r.stock, &area, &err);
+    double t_measure = now() - t;
+    double t_cut = cs->time_classify_s + cs->time_voxels_s + cs->time_apply_s;
+    printf("  where the wall time goes: interpreting the program %.2f s (x2: survey and cut), making the stock "
+           "%.2f s, final volume and area %.2f s; cuts %.2f s = interval pass (serial) %.2f s + voxel pass "
+           "(parallel) %.2f s + topology and bookkeeping (serial) %.2f s; the rest (sweep set-up, batching, "
+           "report) %.2f s\n",
+           t_gcode, t_stock, t_measure, t_cut, cs->time_classify_s, cs->time_voxels_s, cs->time_apply_s,
+           wall - 2 * (t_gcode > 0 ? t_gcode : 0) - t_stock - t_measure - t_cut);
+    double share = cs->time_leaves_cpu_s > 0 ? cs->time_field_cpu_s / cs->time_leaves_cpu_s : 0;
+    printf("  voxel pass: %.0f%% in the swept field (interval bounds and values), %.0f%% in the grid work around it "
+           "(timed on one leaf job in 8; %.2f thread-s in all, inflated by preemption when the machine is loaded)\n",
+           100 * share, 100 * (1 - share), cs->time_leaves_cpu_s);
+    if (o->floor) {
+        size_t timed = 0;
+        double per = fm_stock_time_bare_update(r.stock, &timed);
+        double fl = per * (double)cs->voxels_changed;
+        if (fl > 0)
+            printf("  floor: %zu voxels changed x %.2f ns (OpenVDB accessor read, max, write; timed on %zu marked "
+                   "voxels of the final stock) = %.3f thread-s; ratio total / floor = %.1f (CPU) and %.1f (wall x "
+                   "2 cores)\n",
+                   cs->voxels_changed, per * 1e9, timed, fl, cpu / fl, 2 * wall / fl);
+    }
+    if (o->mesh) mesh_figures(bc->name, r.stock);
     fm_stock_free(r.stock);
-    if (!with_floor) return;
-    fm_tool tool;
-    if (fm_tool_build(ts, &tool, &err) != FM_OK) {
-        fprintf(stderr, "bench_simulate: %s\n", err.message);
-        return;
-    }
-    double f = run_floor(path, textp, len, &table, &tool, slo, shi);
-    if (f > 0)
-        printf("  floor (each batch's swept volume rasterized alone in the stock's box, empty grid): %.2f s;"
-               " ratio total / floor = %.2f\n", f, wall / f);
 }
 
 int main(int argc, char **argv)
 {
     setvbuf(stdout, NULL, _IOLBF, 0); /* figures appear as each run ends */
-    const char *which = argc > 1 ? argv[1] : "all";
-    int with_floor = !(argc > 2 && strcmp(argv[2], "--no-floor") == 0);
-    long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    double load = -1;
-    FILE *lf = fopen("/proc/loadavg", "r");
-    if (lf) {
-        if (fscanf(lf, "%lf", &load) != 1) load = -1;
-        fclose(lf);
+    const char *which = "all";
+    bench_opts o = {0.1, 1, 1};
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--no-floor") == 0) {
+            o.floor = 0;
+        } else if (strcmp(argv[i], "--no-mesh") == 0) {
+            o.mesh = 0;
+        } else if (strcmp(argv[i], "--voxel") == 0 && i + 1 < argc) {
+            o.voxel = atof(argv[++i]);
+        } else if (argv[i][0] != '-') {
+            which = argv[i];
+        } else {
+            fprintf(stderr, "usage: bench_simulate [chips|demo|pocket|all] [--voxel MM] [--no-floor] [--no-mesh]\n");
+            return 2;
+        }
     }
-    printf("bench_simulate: %ld cores, load average %.2f at start, voxel 0.1 mm\n", cores, load);
-    if (strcmp(which, "all") == 0 || strcmp(which, "chips") == 0) {
+    if (!(o.voxel > 0)) {
+        fprintf(stderr, "bench_simulate: --voxel needs a positive size in mm\n");
+        return 2;
+    }
+    instructions_open();
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    double load[3];
+    load_average(&load[0]);
+    printf("bench_simulate: %ld cores, load average %.2f %.2f %.2f at start, voxel %g mm\n", cores, load[0], load[1],
+           load[2], o.voxel);
+    int all = strcmp(which, "all") == 0;
+    if (all || strcmp(which, "chips") == 0) {
         if (access(CHIPS_PATH, R_OK) != 0) {
             printf("3D_Chips.ngc: skipped (%s not found; install linuxcnc-uspace's examples)\n", CHIPS_PATH);
         } else {
@@ -296,12 +347,17 @@ int main(int argc, char **argv)
             ball.holder[0].diameter = ball.holder[0].diameter_top = 30;
             ball.holder[0].length = 40;
             ball.center_cutting = 1;
-            double lo[3] = {-50, -50, -50}, hi[3] = {50, 50, 0};
-            run_case("3D_Chips.ngc", CHIPS_PATH, NULL, 0, &ball, "box:-50,-50,-50,50,50,0", lo, hi, with_floor,
-                     1);
+            bench_case bc = {"3D_Chips.ngc", CHIPS_PATH, NULL, 0, &ball, NULL, "box:-50,-50,-50,50,50,0"};
+            run_case(&bc, &o);
         }
     }
-    if (strcmp(which, "all") == 0 || strcmp(which, "pocket") == 0) {
+    if (all || strcmp(which, "demo") == 0) {
+        bench_case bc = {"demo pocket.ngc", DEMO_PATH, NULL, 0, NULL, DEMO_TOOLS, "box:0,0,-30,100,60,0"};
+        bench_opts d = o;
+        d.mesh = 0;
+        run_case(&bc, &d);
+    }
+    if (all || strcmp(which, "pocket") == 0) {
         size_t len;
         char *prog = pocket_program(&len);
         fm_tool_spec flat;
@@ -312,8 +368,10 @@ int main(int argc, char **argv)
         flat.flute_length = 20;
         flat.length = 40;
         flat.center_cutting = 1;
-        double lo[3] = {0, 0, -30}, hi[3] = {100, 60, 0};
-        run_case("pocket-50k", NULL, prog, len, &flat, "box:0,0,-30,100,60,0", lo, hi, with_floor, 0);
+        bench_case bc = {"pocket-50k", NULL, prog, len, &flat, NULL, "box:0,0,-30,100,60,0"};
+        bench_opts d = o;
+        d.mesh = 0;
+        run_case(&bc, &d);
         free(prog);
     }
     return 0;

@@ -384,6 +384,12 @@ static fm_status flush_batch(cutter *c)
             c->stats.voxels_evaluated += cs.voxels_evaluated;
             c->stats.interior_boxes += cs.interior_boxes;
             c->stats.leaves_changed += cs.leaves_changed;
+            c->stats.voxels_changed += cs.voxels_changed;
+            c->stats.time_classify_s += cs.time_classify_s;
+            c->stats.time_voxels_s += cs.time_voxels_s;
+            c->stats.time_apply_s += cs.time_apply_s;
+            c->stats.time_leaves_cpu_s += cs.time_leaves_cpu_s;
+            c->stats.time_field_cpu_s += cs.time_field_cpu_s;
             c->cuts++;
         }
     }

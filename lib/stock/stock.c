@@ -528,6 +528,26 @@ fm_status fm_stock_subtract(fm_stock *s, const fm_field *swept, const fm_stock_c
     return FM_OK;
 }
 
+double fm_stock_time_bare_update(fm_stock *s, size_t *voxels)
+{
+    size_t n = s->marks.nleaves, count = 0;
+    int32_t(*origins)[3] = n ? malloc(n * sizeof *origins) : NULL;
+    uint64_t(*sets)[8] = n ? malloc(n * sizeof *sets) : NULL;
+    double t = 0;
+    if (origins && sets) {
+        for (size_t i = 0; i < n; i++) {
+            memcpy(origins[i], s->marks.leaves[i].origin, sizeof origins[i]);
+            memcpy(sets[i], s->marks.leaves[i].set, sizeof sets[i]);
+        }
+        t = fm_vdb_time_bare_update(s->vdb, (const int32_t(*)[3])origins, (const uint64_t(*)[8])sets, n,
+                                    &count);
+    }
+    free(origins);
+    free(sets);
+    if (voxels) *voxels = count;
+    return t;
+}
+
 int fm_stock_voxel_tool(const fm_stock *s, const int32_t ijk[3], int *tool)
 {
     return fm_tool_marks_get(&s->marks, ijk, tool);

@@ -74,6 +74,12 @@ typedef struct fm_stock_cut_stats {
                                 where the stock value there is at or above the field's bound */
     size_t interior_boxes;   /* boxes found all inside the swept volume */
     size_t leaves_changed;   /* leaves whose values changed */
+    size_t voxels_changed;   /* voxels of those leaves whose value the cut changed (tiles not counted) */
+    /* Where the time went (seconds; for benchmarks): wall time of the serial interval pass, of the
+     * parallel voxel pass and of the serial topology/bookkeeping phase; thread-seconds of the leaf
+     * jobs and of the field's calls within them (estimated from one job in eight). */
+    double time_classify_s, time_voxels_s, time_apply_s;
+    double time_leaves_cpu_s, time_field_cpu_s;
 } fm_stock_cut_stats;
 
 /* stock = stock \ swept. swept is positive inside, first-order distance,
@@ -132,6 +138,14 @@ void fm_stock_set_memory_budget(fm_stock *stock, size_t bytes);
 /* Memory the grid uses now (bytes, OpenVDB's own count plus the tool
  * marks). */
 size_t fm_stock_memory_bytes(const fm_stock *stock);
+
+/* For benchmarks (the floor of bench_simulate): the cost of OpenVDB's bare
+ * update of the voxels the cuts set - read through a value accessor, max,
+ * write back - timed on one thread over the voxels the tool marks record
+ * (those still in the band whose value a cut set), best of three rounds.
+ * The stock is left unchanged. Returns seconds per voxel, 0 before any cut;
+ * *voxels (may be NULL) gets how many voxels were timed. */
+double fm_stock_time_bare_update(fm_stock *stock, size_t *voxels);
 
 /* ------------------------------------------------------------- chunks -- */
 

@@ -79,6 +79,14 @@ fm_status fm_vdb_visit(const fm_vdb *v, const int32_t lo[3], const int32_t hi[3]
  * frees both). FM_ERR_INPUT when there is no surface. */
 fm_status fm_vdb_zero_set_mesh(const fm_vdb *v, float **points, size_t *npoints, uint32_t **tris,
                                size_t *ntris, fm_error *err);
+/* For benchmarks: OpenVDB's bare update of the given voxels (bit (i & 63) of
+ * sets[j][i >> 6] marks voxel i of the leaf at origins[j]): read through a
+ * value accessor, max with -background (which never changes a value), write
+ * back with setValueOnly; timed on the calling thread, best of three rounds.
+ * Returns seconds per voxel (0 when there are none); *voxels gets their
+ * count. The grid's values are unchanged. */
+double fm_vdb_time_bare_update(fm_vdb *v, const int32_t (*origins)[3], const uint64_t (*sets)[8],
+                               size_t n, size_t *voxels);
 
 /* Serialize to a malloc'd buffer (OpenVDB stream, Blosc when available). */
 fm_status fm_vdb_write(const fm_vdb *v, unsigned char **buf, size_t *len, fm_error *err);

@@ -15,6 +15,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <vector>
@@ -142,6 +143,9 @@ struct Classifier {
     }
 };
 
+/* One leaf job in this many is timed for the statistics. */
+constexpr size_t JOB_SAMPLE = 8;
+
 enum : uint8_t { ACT_NONE = 0, ACT_CHANGED, ACT_NEW_LEAF, ACT_TILE_OUT, ACT_TILE_IN };
 
 struct JobResult {
@@ -149,30 +153,59 @@ struct JobResult {
     uint64_t set[LEAF_SIZE / 64] = {}; /* subtract: voxels whose value the cut set */
     size_t evaluated = 0; /* voxels the field was evaluated at */
     size_t intervals = 0; /* interval evaluations over octants of the leaf */
-    double before = 0, after = 0; /* volume in voxels */
+    size_t changed_voxels = 0; /* voxels whose value changed */
+    double removed = 0; /* subtract: inside volume before - after, in voxels */
+    double job_s = 0, field_s = 0; /* timed jobs only: the whole job, the field calls in it */
     uint8_t action = ACT_NONE;
 };
 
+inline double seconds_now()
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+/* The field clamped to the band, F-rep sign, as the grid stores it; NaN
+ * counts as outside. */
+inline float clamp_to_band(double f, float bg)
+{
+    if (!(f == f)) return -bg;
+    return (float)std::min<double>(bg, std::max<double>(-bg, f));
+}
+
+/* Is the leaf (values and activity) now one uniform tile: no active voxel
+ * and every value on one side? Returns 0 (no), -1 (inside), +1 (outside). */
+int uniform_sign(const float *vals, const Leaf::NodeMaskType &mask)
+{
+    if (!mask.isOff()) return 0;
+    int neg = 0;
+    for (int i = 0; i < LEAF_SIZE; i++) neg += vals[i] < 0;
+    return neg == LEAF_SIZE ? -1 : neg == 0 ? 1 : 0;
+}
+
 /* Evaluate one leaf: build: phi = clamp(-f); subtract: phi = max(phi_stock,
  * clamp(f)) = stock \ field. Existing leaves are updated in place (each job
- * owns its leaf, so jobs run in parallel); new leaves are returned. */
+ * owns its leaf, so jobs run in parallel); new leaves are returned. When
+ * timed, how long the job and its field calls took is recorded (the
+ * benchmark's breakdown samples jobs; clock reads cost too much for all). */
 void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, const LeafJob &job,
-             JobResult &res)
+             JobResult &res, bool timed)
 {
+    const double t_start = timed ? seconds_now() : 0;
+    double t_field = 0;
     const float bg = v->background;
-    /* the stock's values read from the buffer once, not by getValue per
-     * voxel (each call checks for out-of-core data) */
-    const float *stock = mode == Mode::subtract && job.leaf ? job.leaf->buffer().data() : nullptr;
-    double x[LEAF_SIZE], y[LEAF_SIZE], z[LEAF_SIZE], f[LEAF_SIZE];
-    int todo[LEAF_SIZE];
-    int n = 0;
+    /* the stock's values read and written in the buffer, not by getValue
+     * per voxel (each call checks for out-of-core data) */
+    float *stock = mode == Mode::subtract && job.leaf ? job.leaf->buffer().data() : nullptr;
+    double x[LEAF_SIZE], y[LEAF_SIZE], z[LEAF_SIZE], fv[LEAF_SIZE];
+    int todo[LEAF_SIZE], full[LEAF_SIZE];
+    int n = 0, nfull = 0;
     if (mode == Mode::build) {
         for (int i = 0; i < LEAF_SIZE; i++) todo[n++] = i;
     } else {
         /* phi = max(a, clamp(f)) keeps a wherever a >= the field's upper
          * bound (or the band): already cut there, or deeper in the stock
-         * than the cut can reach. Those voxels need no evaluation; f = -bg
-         * stands for them. Where the leaf's bound leaves some, the bounds of
+         * than the cut can reach. Those voxels need no evaluation and are
+         * not touched. Where the leaf's bound leaves some, the bounds of
          * its eight 4^3 octants, each asked for only when it has a voxel
          * the leaf's bound did not settle, settle more. The result is the
          * same as evaluating every voxel. */
@@ -184,7 +217,6 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
             for (int k = 0; k < 64; k++) {
                 const int i = ((ox + (k >> 4)) << 6) | ((oy + ((k >> 2) & 3)) << 3) | (oz + (k & 3));
                 const double a = stock ? stock[i] : -bg;
-                f[i] = -bg;
                 if (a < cap) cand[nc++] = i;
             }
             if (nc == 0) continue;
@@ -194,18 +226,19 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
                 box[k].lo = v->origin[k] + v->voxel * o[k];
                 box[k].hi = v->origin[k] + v->voxel * (o[k] + 3);
             }
+            const double t0 = timed ? seconds_now() : 0;
             const fm_interval r = field->interval(field->ctx, worker, box);
+            if (timed) t_field += seconds_now() - t0;
             res.intervals++;
             const double octcap = std::min<double>(cap, r.hi);
             for (int k = 0; k < nc; k++) {
                 const int i = cand[k];
                 const double a = stock ? stock[i] : -bg;
                 if (a >= octcap) continue;
-                if (r.lo >= bg) {
-                    f[i] = bg; /* deep inside the cut: clamped to the band anyway */
-                    continue;
-                }
-                todo[n++] = i;
+                if (r.lo >= bg)
+                    full[nfull++] = i; /* deep inside the cut: clamped to the band anyway */
+                else
+                    todo[n++] = i;
             }
         }
     }
@@ -215,77 +248,85 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
         y[k] = v->origin[1] + v->voxel * (job.origin.y() + ((i >> 3) & 7));
         z[k] = v->origin[2] + v->voxel * (job.origin.z() + (i & 7));
     }
-    double fv[LEAF_SIZE];
-    if (n > 0) field->batch(field->ctx, worker, (size_t)n, x, y, z, fv);
-    for (int k = 0; k < n; k++) f[todo[k]] = fv[k];
+    if (n > 0) {
+        const double t0 = timed ? seconds_now() : 0;
+        field->batch(field->ctx, worker, (size_t)n, x, y, z, fv);
+        if (timed) t_field += seconds_now() - t0;
+    }
     res.evaluated = (size_t)n;
 
-    const double inv = 1.0 / v->voxel;
-    float out[LEAF_SIZE];
-    bool active[LEAF_SIZE];
-    bool changed = false;
-    int n_active = 0, n_neg = 0;
-    double before = 0, after = 0;
-    for (int i = 0; i < LEAF_SIZE; i++) {
-        /* the field clamped to the band, F-rep sign; NaN counts as outside */
-        double fi = f[i];
-        if (!(fi == fi)) fi = -bg;
-        const float fc = (float)std::min<double>(bg, std::max<double>(-bg, fi));
-        float a, phi;
-        if (mode == Mode::build) {
-            a = bg;
-            phi = -fc;
-        } else {
-            a = stock ? stock[i] : -bg;
-            phi = std::max(a, fc);
-        }
-        out[i] = phi;
-        active[i] = std::fabs(phi) < bg;
-        n_active += active[i];
-        n_neg += phi < 0;
-        if (phi != a) {
-            changed = true;
-            res.set[i >> 6] |= uint64_t(1) << (i & 63);
-        }
-        before += inside_fraction(a, inv);
-        after += inside_fraction(phi, inv);
-    }
-    res.before = before;
-    res.after = after;
-    if (!changed) return;
-
-    const bool uniform = n_active == 0 && (n_neg == 0 || n_neg == LEAF_SIZE);
-    if (job.leaf) {
-        if (uniform) {
-            /* the whole leaf is now one tile; the serial phase swaps it */
-            res.action = n_neg ? ACT_TILE_IN : ACT_TILE_OUT;
-            return;
-        }
-        float *vals = job.leaf->buffer().data();
+    if (mode == Mode::build) {
+        float out[LEAF_SIZE];
+        Leaf::NodeMaskType mask;
+        bool changed = false;
         for (int i = 0; i < LEAF_SIZE; i++) {
-            vals[i] = out[i];
-            job.leaf->setActiveState(i, active[i]);
+            out[i] = -clamp_to_band(fv[i], bg);
+            if (std::fabs(out[i]) < bg) mask.setOn(i);
+            changed |= out[i] != bg;
         }
-        res.action = ACT_CHANGED;
-        return;
+        if (changed) {
+            const int u = uniform_sign(out, mask);
+            if (u) {
+                /* empty space stays empty, a full leaf becomes an inside tile */
+                res.action = u < 0 ? ACT_TILE_IN : ACT_NONE;
+            } else {
+                auto *leaf = new Leaf(job.origin, bg, false);
+                std::memcpy(leaf->buffer().data(), out, sizeof out);
+                leaf->setValueMask(mask);
+                res.created = leaf;
+                res.action = ACT_NEW_LEAF;
+            }
+        }
+    } else {
+        /* Only the evaluated voxels and those deep inside the cut can
+         * change: update them in place (in a scratch leaf where the stock
+         * is an inside tile), counting what changed and the volume it
+         * took. */
+        float scratch[LEAF_SIZE];
+        Leaf::NodeMaskType scratch_mask;
+        float *vals = stock;
+        Leaf::NodeMaskType *mask = job.leaf ? &job.leaf->getValueMask() : &scratch_mask;
+        if (!vals) {
+            std::fill(scratch, scratch + LEAF_SIZE, -bg);
+            vals = scratch;
+        }
+        const double inv = 1.0 / v->voxel;
+        double removed = 0;
+        size_t nchanged = 0;
+        auto apply = [&](int i, float fc) {
+            const float a = vals[i];
+            if (!(fc > a)) return; /* max(a, fc) = a */
+            vals[i] = fc;
+            mask->set(i, std::fabs(fc) < bg);
+            res.set[i >> 6] |= uint64_t(1) << (i & 63);
+            nchanged++;
+            removed += inside_fraction(a, inv) - inside_fraction(fc, inv);
+        };
+        for (int k = 0; k < n; k++) apply(todo[k], clamp_to_band(fv[k], bg));
+        for (int k = 0; k < nfull; k++) apply(full[k], bg);
+        res.changed_voxels = nchanged;
+        res.removed = removed;
+        if (nchanged > 0) {
+            const int u = uniform_sign(vals, *mask);
+            if (job.leaf) {
+                /* a leaf now uniform becomes one tile; the serial phase swaps it */
+                res.action = u < 0 ? ACT_TILE_IN : u > 0 ? ACT_TILE_OUT : ACT_CHANGED;
+            } else if (u) {
+                /* the region was an inside tile and is now cut through entirely */
+                res.action = u < 0 ? ACT_NONE : ACT_TILE_OUT;
+            } else {
+                auto *leaf = new Leaf(job.origin, bg, false);
+                std::memcpy(leaf->buffer().data(), scratch, sizeof scratch);
+                leaf->setValueMask(scratch_mask);
+                res.created = leaf;
+                res.action = ACT_NEW_LEAF;
+            }
+        }
     }
-    if (uniform) {
-        /* build: empty space stays empty, a full leaf becomes an inside
-         * tile; subtract: the region was an inside tile and is now cut
-         * through entirely */
-        if (mode == Mode::build)
-            res.action = n_neg ? ACT_TILE_IN : ACT_NONE;
-        else
-            res.action = n_neg ? ACT_NONE : ACT_TILE_OUT;
-        return;
+    if (timed) {
+        res.job_s = seconds_now() - t_start;
+        res.field_s = t_field;
     }
-    auto *leaf = new Leaf(job.origin, bg, false);
-    for (int i = 0; i < LEAF_SIZE; i++) {
-        leaf->setValueOnly(i, out[i]);
-        leaf->setActiveState(i, active[i]);
-    }
-    res.created = leaf;
-    res.action = ACT_NEW_LEAF;
 }
 
 /* Inside volume (in voxels) of the stock in an aligned box, and the number
@@ -368,6 +409,7 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
     const size_t used = mode == Mode::subtract ? v->leaves * leaf_bytes : 0;
     const size_t limit = budget > used ? (budget - used) / leaf_bytes : 0;
 
+    const double t_classify = seconds_now();
     Workers workers(field);
     Classifier cls(v, field, workers.local(), mode, clo, chi, limit);
     for (int x = clo.x() & ~(NODE2_DIM - 1); x <= chi.x(); x += NODE2_DIM)
@@ -384,6 +426,7 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
                             double(budget) / 1048576.0);
     }
 
+    const double t_voxels = seconds_now();
     const size_t njobs = cls.jobs.size();
     std::vector<JobResult> results(njobs);
     const double inv = 1.0 / v->voxel;
@@ -395,7 +438,8 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
                               [&](const tbb::blocked_range<size_t> &r) {
                                   void *w = workers.local();
                                   for (size_t i = r.begin(); i != r.end(); ++i)
-                                      run_job(v, field, w, mode, cls.jobs[i], results[i]);
+                                      run_job(v, field, w, mode, cls.jobs[i], results[i],
+                                              i % JOB_SAMPLE == 0);
                               });
             if (mode == Mode::subtract) {
                 tbb::parallel_for(tbb::blocked_range<size_t>(0, cls.inside.size()),
@@ -416,9 +460,10 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
     }
 
     /* Serial phase: topology changes. */
+    const double t_apply = seconds_now();
     Tree &tree = v->grid->tree();
     const float bg = v->background;
-    double before = 0, after = 0;
+    double removed = 0, job_s = 0, field_s = 0;
     size_t changed = 0;
     std::vector<Coord> node1s;
     /* leaves not yet in the tree are ours to free if anything throws */
@@ -429,13 +474,15 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
             for (auto &x : r) delete x.created;
         }
     } free_left{results};
-    size_t evaluated = 0, octant_intervals = 0;
+    size_t evaluated = 0, octant_intervals = 0, changed_voxels = 0;
     for (size_t i = 0; i < njobs; i++) {
         JobResult &r = results[i];
         evaluated += r.evaluated;
         octant_intervals += r.intervals;
-        before += r.before;
-        after += r.after;
+        changed_voxels += r.changed_voxels;
+        removed += r.removed;
+        job_s += r.job_s;
+        field_s += r.field_s;
         const Coord &o = cls.jobs[i].origin;
         switch (r.action) {
         case ACT_NONE: continue;
@@ -469,7 +516,7 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
             tree.fill(bb, -bg, false);
             continue;
         }
-        before += inside_before[i];
+        removed += inside_before[i];
         if (inside_before[i] == 0 && inside_leaves[i] == 0) continue;
         tree.fill(bb, bg, false);
         v->leaves -= std::min(v->leaves, inside_leaves[i]);
@@ -488,12 +535,18 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
 
     if (stats) {
         const double vox3 = v->voxel * v->voxel * v->voxel;
-        stats->removed_mm3 = (before - after) * vox3;
+        stats->removed_mm3 = removed * vox3;
         stats->intervals = cls.intervals + octant_intervals;
         stats->leaves_evaluated = njobs;
         stats->voxels_evaluated = evaluated;
         stats->interior_boxes = cls.inside.size();
         stats->leaves_changed = changed;
+        stats->voxels_changed = changed_voxels;
+        stats->time_classify_s = t_voxels - t_classify;
+        stats->time_voxels_s = t_apply - t_voxels;
+        stats->time_apply_s = seconds_now() - t_apply;
+        stats->time_leaves_cpu_s = job_s * JOB_SAMPLE;
+        stats->time_field_cpu_s = field_s * JOB_SAMPLE;
     }
     return FM_OK;
 }
