@@ -135,6 +135,7 @@ fm_status fm_field_from_tape(fm_field *field, const fm_tape *tape, const double 
     field->batch = batch;
     field->interval = interval;
     field->release = release;
+    field->batch_shortfall = NULL;
     return FM_OK;
 }
 

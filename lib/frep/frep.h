@@ -327,6 +327,12 @@ typedef struct fm_field {
                   const double *z, double *out);
     fm_interval (*interval)(void *ctx, void *worker, const fm_interval box[3]);
     void (*release)(void *ctx); /* frees ctx; may be NULL */
+    /* Optional (NULL: every value is proven): batch, and per point how much
+     * the true value may exceed out[i] where an evaluation stopped at its
+     * budget before its proof closed (0 where it is proven). lib/stock
+     * counts the voxels where that could matter (fm_stock_cut_stats). */
+    void (*batch_shortfall)(void *ctx, void *worker, size_t n, const double *x, const double *y,
+                            const double *z, double *out, double *shortfall);
 } fm_field;
 
 /* A field over a compiled tape at fixed time t; the tape must outlive the

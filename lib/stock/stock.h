@@ -75,6 +75,11 @@ typedef struct fm_stock_cut_stats {
     size_t interior_boxes;   /* boxes found all inside the swept volume */
     size_t leaves_changed;   /* leaves whose values changed */
     size_t voxels_changed;   /* voxels of those leaves whose value the cut changed (tiles not counted) */
+    /* Voxels the cut may have left uncut: the swept field's search at them stopped at its
+     * evaluation budget before proving its value (fm_field.batch_shortfall), and the value it
+     * could not exclude would have cut more; and the most it could be, in mm. Should be 0. */
+    size_t voxels_uncertain;
+    double uncertain_max_mm;
     /* Where the time went (seconds; for benchmarks): wall time of the serial interval pass, of the
      * parallel voxel pass and of the serial topology/bookkeeping phase; thread-seconds of the leaf
      * jobs and of the field's calls within them (estimated from one job in eight). */

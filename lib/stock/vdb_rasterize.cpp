@@ -15,6 +15,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -62,38 +63,78 @@ struct Box {
     int size;
 };
 
-/* Interval pass: walk aligned boxes from 4096^3 down to leaves, keeping the
- * leaves whose box can hold the field's boundary (widened by the band) and,
- * when subtracting, that meet the stock. */
-struct Classifier {
-    fm_vdb *v;
-    const fm_field *field;
-    void *worker;
-    Mode mode;
-    Coord clip_lo, clip_hi;
-    Acc acc;
-    size_t leaf_limit;
-    bool over_limit = false;
-    size_t intervals = 0;
-    size_t new_leaves = 0;
-    std::vector<LeafJob> jobs;
-    std::vector<Box> inside;
-
-    Classifier(fm_vdb *vv, const fm_field *f, void *w, Mode m, Coord lo, Coord hi, size_t limit)
-        : v(vv), field(f), worker(w), mode(m), clip_lo(lo), clip_hi(hi),
-          acc(vv->grid->tree()), leaf_limit(limit)
+/* Interval pass: aligned boxes from 4096^3 down to leaves, one level at a
+ * time, each level's boxes in parallel; it keeps the leaves whose box can
+ * hold the field's boundary (widened by the band) and, when subtracting,
+ * that meet the stock. Children are listed in the order of their parents,
+ * so jobs come out in the same order whatever the thread count. */
+class Classifier {
+public:
+    Classifier(fm_vdb *vv, const fm_field *f, Workers &w, Mode m, Coord lo, Coord hi, size_t limit)
+        : v_(vv), field_(f), workers_(w), mode_(m), clip_lo_(lo), clip_hi_(hi), leaf_limit_(limit)
     {
     }
 
-    void visit(const Coord &o, int s)
+    /* Classify everything under the given root-level boxes. */
+    void run(std::vector<Box> level)
     {
-        if (over_limit) return;
+        while (!level.empty() && !over_limit()) {
+            /* Chunks of boxes, each classified by one task into its own
+             * output; the outputs are joined in chunk order. */
+            const size_t chunk = 32, nchunks = (level.size() + chunk - 1) / chunk;
+            std::vector<Out> outs(nchunks);
+            auto work = [&](size_t c) {
+                Acc acc(v_->grid->tree());
+                void *w = workers_.local();
+                const size_t end = std::min(level.size(), (c + 1) * chunk);
+                for (size_t i = c * chunk; i < end && !over_limit(); i++) classify(acc, w, level[i], outs[c]);
+            };
+            if (nchunks == 1) {
+                work(0);
+            } else {
+                v_->arena->execute([&] {
+                    tbb::parallel_for(tbb::blocked_range<size_t>(0, nchunks, 1),
+                                      [&](const tbb::blocked_range<size_t> &r) {
+                                          for (size_t c = r.begin(); c != r.end(); ++c) work(c);
+                                      },
+                                      tbb::simple_partitioner());
+                });
+            }
+            std::vector<Box> next;
+            for (Out &o : outs) {
+                intervals += o.intervals;
+                jobs.insert(jobs.end(), o.jobs.begin(), o.jobs.end());
+                inside.insert(inside.end(), o.inside.begin(), o.inside.end());
+                next.insert(next.end(), o.split.begin(), o.split.end());
+            }
+            level.swap(next);
+        }
+    }
+
+    bool over_limit() const { return new_leaves_.load(std::memory_order_relaxed) > leaf_limit_; }
+    size_t new_leaves() const { return new_leaves_.load(); }
+
+    size_t intervals = 0;
+    std::vector<LeafJob> jobs;
+    std::vector<Box> inside;
+
+private:
+    struct Out {
+        size_t intervals = 0;
+        std::vector<LeafJob> jobs;
+        std::vector<Box> inside, split;
+    };
+
+    void classify(Acc &acc, void *worker, const Box &b, Out &out)
+    {
+        const Coord &o = b.origin;
+        const int s = b.size;
         const Coord e = o.offsetBy(s - 1);
         for (int k = 0; k < 3; k++)
-            if (e[k] < clip_lo[k] || o[k] > clip_hi[k]) return;
+            if (e[k] < clip_lo_[k] || o[k] > clip_hi_[k]) return;
 
         bool stock_tile_inside = false;
-        if (mode == Mode::subtract) {
+        if (mode_ == Mode::subtract) {
             const int depth = acc.getValueDepth(o);
             if (depth < 3 && depth_extent(depth) >= s) {
                 /* One tile covers the box: outside the stock nothing can
@@ -105,42 +146,41 @@ struct Classifier {
 
         fm_interval box[3];
         for (int k = 0; k < 3; k++) {
-            box[k].lo = v->origin[k] + v->voxel * o[k];
-            box[k].hi = v->origin[k] + v->voxel * e[k];
+            box[k].lo = v_->origin[k] + v_->voxel * o[k];
+            box[k].hi = v_->origin[k] + v_->voxel * e[k];
         }
-        const fm_interval r = field->interval(field->ctx, worker, box);
-        intervals++;
-        const double bg = v->background;
+        const fm_interval r = field_->interval(field_->ctx, worker, box);
+        out.intervals++;
+        const double bg = v_->background;
         if (r.hi <= -bg) return; /* outside the field by more than the band */
         if (r.lo >= bg) {        /* deep inside the field: a tile */
-            inside.push_back(Box{o, s});
+            out.inside.push_back(b);
             return;
         }
         if (s == LEAF_DIM) {
             Leaf *leaf = nullptr;
-            if (mode == Mode::subtract && !stock_tile_inside) {
+            if (mode_ == Mode::subtract && !stock_tile_inside) {
                 leaf = acc.probeLeaf(o);
-                if (!leaf) {
-                    /* A voxel-level value without a leaf cannot happen; a
-                     * tile of a smaller extent than a leaf neither. */
-                    const float val = acc.getValue(o);
-                    if (val > 0) return;
-                }
+                /* A voxel-level value without a leaf cannot happen; a tile
+                 * of a smaller extent than a leaf neither. */
+                if (!leaf && acc.getValue(o) > 0) return;
             }
-            if (!leaf) {
-                new_leaves++;
-                if (new_leaves > leaf_limit) {
-                    over_limit = true;
-                    return;
-                }
-            }
-            jobs.push_back(LeafJob{o, leaf, r.hi});
+            if (!leaf && new_leaves_.fetch_add(1, std::memory_order_relaxed) + 1 > leaf_limit_) return;
+            out.jobs.push_back(LeafJob{o, leaf, r.hi});
             return;
         }
         const int h = s / 2;
         for (int i = 0; i < 8; i++)
-            visit(o.offsetBy((i & 4) ? h : 0, (i & 2) ? h : 0, (i & 1) ? h : 0), h);
+            out.split.push_back(Box{o.offsetBy((i & 4) ? h : 0, (i & 2) ? h : 0, (i & 1) ? h : 0), h});
     }
+
+    fm_vdb *v_;
+    const fm_field *field_;
+    Workers &workers_;
+    Mode mode_;
+    Coord clip_lo_, clip_hi_;
+    size_t leaf_limit_;
+    std::atomic<size_t> new_leaves_{0};
 };
 
 /* One leaf job in this many is timed for the statistics. */
@@ -154,6 +194,8 @@ struct JobResult {
     size_t evaluated = 0; /* voxels the field was evaluated at */
     size_t intervals = 0; /* interval evaluations over octants of the leaf */
     size_t changed_voxels = 0; /* voxels whose value changed */
+    size_t uncertain = 0; /* voxels a field evaluation that ran out of budget may have left low */
+    double uncertain_mm = 0; /* by how much at most */
     double removed = 0; /* subtract: inside volume before - after, in voxels */
     double job_s = 0, field_s = 0; /* timed jobs only: the whole job, the field calls in it */
     uint8_t action = ACT_NONE;
@@ -196,7 +238,8 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
     /* the stock's values read and written in the buffer, not by getValue
      * per voxel (each call checks for out-of-core data) */
     float *stock = mode == Mode::subtract && job.leaf ? job.leaf->buffer().data() : nullptr;
-    double x[LEAF_SIZE], y[LEAF_SIZE], z[LEAF_SIZE], fv[LEAF_SIZE];
+    double x[LEAF_SIZE], y[LEAF_SIZE], z[LEAF_SIZE], fv[LEAF_SIZE], sf[LEAF_SIZE];
+    const bool shortfall = mode == Mode::subtract && field->batch_shortfall;
     int todo[LEAF_SIZE], full[LEAF_SIZE];
     int n = 0, nfull = 0;
     if (mode == Mode::build) {
@@ -250,7 +293,10 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
     }
     if (n > 0) {
         const double t0 = timed ? seconds_now() : 0;
-        field->batch(field->ctx, worker, (size_t)n, x, y, z, fv);
+        if (shortfall)
+            field->batch_shortfall(field->ctx, worker, (size_t)n, x, y, z, fv, sf);
+        else
+            field->batch(field->ctx, worker, (size_t)n, x, y, z, fv);
         if (timed) t_field += seconds_now() - t0;
     }
     res.evaluated = (size_t)n;
@@ -302,7 +348,20 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
             nchanged++;
             removed += inside_fraction(a, inv) - inside_fraction(fc, inv);
         };
-        for (int k = 0; k < n; k++) apply(todo[k], clamp_to_band(fv[k], bg));
+        for (int k = 0; k < n; k++) {
+            const int i = todo[k];
+            if (shortfall && sf[k] > 0) {
+                /* the true value lies in [fv, fv + sf]: the voxel is
+                 * uncertain when the top of that range would store more */
+                const float hi = clamp_to_band(fv[k] + sf[k], bg);
+                const float stored = std::max(vals[i], clamp_to_band(fv[k], bg));
+                if (hi > stored) {
+                    res.uncertain++;
+                    res.uncertain_mm = std::max(res.uncertain_mm, double(hi) - double(stored));
+                }
+            }
+            apply(i, clamp_to_band(fv[k], bg));
+        }
         for (int k = 0; k < nfull; k++) apply(full[k], bg);
         res.changed_voxels = nchanged;
         res.removed = removed;
@@ -411,17 +470,19 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
 
     const double t_classify = seconds_now();
     Workers workers(field);
-    Classifier cls(v, field, workers.local(), mode, clo, chi, limit);
+    Classifier cls(v, field, workers, mode, clo, chi, limit);
+    std::vector<Box> roots;
     for (int x = clo.x() & ~(NODE2_DIM - 1); x <= chi.x(); x += NODE2_DIM)
         for (int y = clo.y() & ~(NODE2_DIM - 1); y <= chi.y(); y += NODE2_DIM)
             for (int z = clo.z() & ~(NODE2_DIM - 1); z <= chi.z(); z += NODE2_DIM)
-                cls.visit(Coord(x, y, z), NODE2_DIM);
-    if (cls.over_limit) {
-        const double need = double(used) + double(cls.new_leaves) * double(leaf_bytes);
+                roots.push_back(Box{Coord(x, y, z), NODE2_DIM});
+    cls.run(std::move(roots));
+    if (cls.over_limit()) {
+        const double need = double(used) + double(cls.new_leaves()) * double(leaf_bytes);
         return fm_error_set(err, FM_ERR_LIMIT,
                             "the grid would need more than %.0f MB (%zu new boundary leaves "
                             "of %zu bytes found so far%s) but the memory budget is %.0f MB",
-                            need / 1048576.0, cls.new_leaves, leaf_bytes,
+                            need / 1048576.0, cls.new_leaves(), leaf_bytes,
                             mode == Mode::subtract ? " on top of the stock" : "",
                             double(budget) / 1048576.0);
     }
@@ -474,12 +535,15 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
             for (auto &x : r) delete x.created;
         }
     } free_left{results};
-    size_t evaluated = 0, octant_intervals = 0, changed_voxels = 0;
+    size_t evaluated = 0, octant_intervals = 0, changed_voxels = 0, uncertain = 0;
+    double uncertain_mm = 0;
     for (size_t i = 0; i < njobs; i++) {
         JobResult &r = results[i];
         evaluated += r.evaluated;
         octant_intervals += r.intervals;
         changed_voxels += r.changed_voxels;
+        uncertain += r.uncertain;
+        uncertain_mm = std::max(uncertain_mm, r.uncertain_mm);
         removed += r.removed;
         job_s += r.job_s;
         field_s += r.field_s;
@@ -542,6 +606,8 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
         stats->interior_boxes = cls.inside.size();
         stats->leaves_changed = changed;
         stats->voxels_changed = changed_voxels;
+        stats->voxels_uncertain = uncertain;
+        stats->uncertain_max_mm = uncertain_mm;
         stats->time_classify_s = t_voxels - t_classify;
         stats->time_voxels_s = t_apply - t_voxels;
         stats->time_apply_s = seconds_now() - t_apply;

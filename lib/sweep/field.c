@@ -51,102 +51,163 @@ static int rank_by_up_desc(const void *a, const void *b)
     return x > y ? -1 : x < y ? 1 : 0;
 }
 
-static void many_batch(void *ctx, void *worker, size_t n, const double *x, const double *y, const double *z,
-                       double *out)
+/* Points per many_eval block: the scratch arrays stay on the stack. */
+#define MANY_BLOCK 256
+
+/* Scratch for one block of points. */
+typedef struct many_scratch {
+    double px[MANY_BLOCK], py[MANY_BLOCK], pz[MANY_BLOCK], vals[MANY_BLOCK], sf[MANY_BLOCK];
+} many_scratch;
+
+/* Fold sweep s's values at the points idx[0..m) (m <= MANY_BLOCK) into
+ * best, and where its search stopped short, value + shortfall into top. */
+static void fold(const fm_sweep *s, void *worker, size_t m, const size_t *idx, const double *x, const double *y,
+                 const double *z, double *best, double *top, int want_shortfall, int *any_short, many_scratch *t)
+{
+    for (size_t q = 0; q < m; q++) {
+        t->px[q] = x[idx[q]];
+        t->py[q] = y[idx[q]];
+        t->pz[q] = z[idx[q]];
+    }
+    fm_sweep_batch_ex(s, worker, m, t->px, t->py, t->pz, t->vals, want_shortfall ? t->sf : NULL);
+    for (size_t q = 0; q < m; q++) {
+        const size_t k = idx[q];
+        if (t->vals[q] > best[k]) best[k] = t->vals[q];
+        if (want_shortfall && t->sf[q] > 0) {
+            *any_short = 1;
+            if (t->vals[q] + t->sf[q] > top[k]) top[k] = t->vals[q] + t->sf[q];
+        }
+    }
+}
+
+/* max over sweeps of S_i at n points; shortfall (may be NULL) as in
+ * fm_sweep_batch_ex: how much the maximum may exceed out[k] because a
+ * sweep's search stopped at its budget there. */
+static void many_eval(void *ctx, void *worker, size_t n, const double *x, const double *y, const double *z,
+                      double *out, double *shortfall)
 {
     many_ctx *c = ctx;
     if (n == 0) return;
+    if (c->n == 1) {
+        fm_sweep_batch_ex(c->sweeps[0], worker, n, x, y, z, out, shortfall);
+        return;
+    }
+    /* Points in blocks: the scratch arrays stay on the stack. */
+    enum { BLOCK = MANY_BLOCK };
+    if (n > BLOCK) {
+        for (size_t b = 0; b < n; b += BLOCK)
+            many_eval(ctx, worker, n - b < BLOCK ? n - b : BLOCK, x + b, y + b, z ? z + b : NULL, out + b,
+                      shortfall ? shortfall + b : NULL);
+        return;
+    }
+    double zeros[BLOCK];
+    if (!z) {
+        memset(zeros, 0, sizeof zeros);
+        z = zeros;
+    }
+    double best[BLOCK], top[BLOCK];
+    many_scratch scratch;
+    int any_short = 0;
+    for (size_t k = 0; k < n; k++) best[k] = top[k] = -DBL_MAX;
+    size_t idx[BLOCK];
+    for (size_t k = 0; k < n; k++) idx[k] = k;
     if (c->n < MANY_ORDER_MIN) {
-        for (size_t k = 0; k < n; k++) {
-            double p[3] = {x[k], y[k], z ? z[k] : 0};
-            double best = -DBL_MAX;
-            for (size_t i = 0; i < c->n; i++) {
-                double v = fm_sweep_eval(c->sweeps[i], worker, p);
-                if (v > best) best = v;
+        for (size_t i = 0; i < c->n; i++) fold(c->sweeps[i], worker, n, idx, x, y, z, best, top, shortfall != NULL, &any_short, &scratch);
+    } else {
+        /* Each S_i is 1-Lipschitz (max of exact distances; for custom
+         * parts the interval of the points' box stands in), so with q the
+         * centre of the points' box, S_i(p) <= U_i + |p - q| where U_i
+         * bounds S_i(q), and S(p) >= L = max_i of the lower ends over the
+         * box. Sweeps whose bound stays below L anywhere in the box never
+         * win; the rest, tried in decreasing U_i, stop at a point as soon
+         * as U_i + |p - q| cannot beat the best value found there. The
+         * result is the same max. */
+        double lo[3] = {x[0], y[0], z[0]}, hi[3] = {x[0], y[0], z[0]};
+        for (size_t k = 1; k < n; k++) {
+            const double p[3] = {x[k], y[k], z[k]};
+            for (int a = 0; a < 3; a++) {
+                if (p[a] < lo[a]) lo[a] = p[a];
+                if (p[a] > hi[a]) hi[a] = p[a];
             }
-            out[k] = best;
         }
-        return;
-    }
-    /* Each S_i is 1-Lipschitz (max of exact distances; for custom parts the
-     * interval of the points' box stands in), so with q the centre of the
-     * points' box, S_i(p) <= U_i + |p - q| where U_i bounds S_i(q), and
-     * S(p) >= L = max_i of the lower ends over the box. Sweeps whose bound
-     * stays below L anywhere in the box never win; the rest, tried in
-     * decreasing U_i, stop as soon as U_i + |p - q| cannot beat the best
-     * value found at p. The result is the same max. */
-    double lo[3] = {x[0], y[0], z ? z[0] : 0}, hi[3] = {x[0], y[0], z ? z[0] : 0};
-    for (size_t k = 1; k < n; k++) {
-        double p[3] = {x[k], y[k], z ? z[k] : 0};
+        fm_interval box[3];
+        double q[3], hd2 = 0;
         for (int a = 0; a < 3; a++) {
-            if (p[a] < lo[a]) lo[a] = p[a];
-            if (p[a] > hi[a]) hi[a] = p[a];
+            box[a].lo = lo[a];
+            box[a].hi = hi[a];
+            q[a] = 0.5 * (lo[a] + hi[a]);
+            hd2 += 0.25 * (hi[a] - lo[a]) * (hi[a] - lo[a]);
         }
-    }
-    fm_interval box[3];
-    double q[3], hd2 = 0;
-    for (int a = 0; a < 3; a++) {
-        box[a].lo = lo[a];
-        box[a].hi = hi[a];
-        q[a] = 0.5 * (lo[a] + hi[a]);
-        hd2 += 0.25 * (hi[a] - lo[a]) * (hi[a] - lo[a]);
-    }
-    double hd = sqrt(hd2);
-    int lipschitz = c->sweeps[0]->part.kind == FM_TOOL_PART_PROFILE;
-    many_rank stack_rank[64];
-    many_rank *rank = c->n <= 64 ? stack_rank : malloc(c->n * sizeof *rank);
-    if (!rank) {
-        /* No memory for the ordering: every sweep at every point. */
-        for (size_t k = 0; k < n; k++) {
-            double p[3] = {x[k], y[k], z ? z[k] : 0}, best = -DBL_MAX;
-            for (size_t i = 0; i < c->n; i++) {
-                double v = fm_sweep_eval(c->sweeps[i], worker, p);
-                if (v > best) best = v;
-            }
-            out[k] = best;
-        }
-        return;
-    }
-    double L = -DBL_MAX;
-    size_t m = 0;
-    for (size_t i = 0; i < c->n; i++) {
-        const fm_sweep *s = c->sweeps[i];
-        double up, low;
-        if (lipschitz) {
-            /* S_i <= -dist(p, box_i): far from its box, the box alone
-             * bounds it and it needs no evaluation. */
-            double bd = box_dist(q, s->lo, s->hi);
-            if (bd > hd && -(bd - hd) < L) continue;
-            fm_sweep_value v;
-            fm_sweep_eval_ex(s, worker, q, &v);
-            up = v.upper;
-            if (bd > 0 && -bd < up) up = -bd;
-            low = v.value - hd;
+        double hd = sqrt(hd2);
+        int lipschitz = c->sweeps[0]->part.kind == FM_TOOL_PART_PROFILE;
+        many_rank stack_rank[64];
+        many_rank *rank = c->n <= 64 ? stack_rank : malloc(c->n * sizeof *rank);
+        if (!rank) {
+            /* No memory for the ordering: every sweep at every point. */
+            for (size_t i = 0; i < c->n; i++) fold(c->sweeps[i], worker, n, idx, x, y, z, best, top, shortfall != NULL, &any_short, &scratch);
         } else {
-            fm_interval iv = fm_sweep_interval(s, worker, box);
-            up = iv.hi;
-            low = iv.lo;
+            double L = -DBL_MAX;
+            size_t m = 0;
+            for (size_t i = 0; i < c->n; i++) {
+                const fm_sweep *s = c->sweeps[i];
+                double up, low;
+                if (lipschitz) {
+                    /* S_i <= -dist(p, box_i): far from its box, the box
+                     * alone bounds it and it needs no evaluation. */
+                    double bd = box_dist(q, s->lo, s->hi);
+                    if (bd > hd && -(bd - hd) < L) continue;
+                    fm_sweep_value v;
+                    fm_sweep_eval_ex(s, worker, q, &v);
+                    up = v.upper;
+                    if (bd > 0 && -bd < up) up = -bd;
+                    low = v.value - hd;
+                } else {
+                    fm_interval iv = fm_sweep_interval(s, worker, box);
+                    up = iv.hi;
+                    low = iv.lo;
+                }
+                if (low > L) L = low;
+                rank[m].up = up;
+                rank[m].i = i;
+                m++;
+            }
+            qsort(rank, m, sizeof *rank, rank_by_up_desc);
+            double reach[BLOCK];
+            for (size_t k = 0; k < n; k++) {
+                const double e[3] = {x[k] - q[0], y[k] - q[1], z[k] - q[2]};
+                reach[k] = lipschitz ? sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) : 0;
+            }
+            size_t na = n;
+            for (size_t j = 0; j < m && na > 0; j++) {
+                /* the points where sweep j may still win; a point dropped
+                 * here is dropped for every later (lower) sweep too */
+                size_t keep = 0;
+                for (size_t t = 0; t < na; t++) {
+                    const size_t k = idx[t];
+                    const double reachable = rank[j].up + reach[k];
+                    if (!(reachable < L) && reachable > best[k]) idx[keep++] = k;
+                }
+                na = keep;
+                if (na) fold(c->sweeps[rank[j].i], worker, na, idx, x, y, z, best, top, shortfall != NULL, &any_short, &scratch);
+            }
+            if (rank != stack_rank) free(rank);
         }
-        if (low > L) L = low;
-        rank[m].up = up;
-        rank[m].i = i;
-        m++;
     }
-    qsort(rank, m, sizeof *rank, rank_by_up_desc);
-    for (size_t k = 0; k < n; k++) {
-        double p[3] = {x[k], y[k], z ? z[k] : 0};
-        double e[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
-        double reach = lipschitz ? sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) : 0;
-        double best = -DBL_MAX;
-        for (size_t j = 0; j < m; j++) {
-            if (rank[j].up + reach < L) break; /* never wins in the box; nor do the rest */
-            if (rank[j].up + reach <= best) break;
-            double v = fm_sweep_eval(c->sweeps[rank[j].i], worker, p);
-            if (v > best) best = v;
-        }
-        out[k] = best;
-    }
-    if (rank != stack_rank) free(rank);
+    for (size_t k = 0; k < n; k++) out[k] = best[k];
+    if (shortfall)
+        for (size_t k = 0; k < n; k++) shortfall[k] = any_short && top[k] > best[k] ? top[k] - best[k] : 0;
+}
+
+static void many_batch(void *ctx, void *worker, size_t n, const double *x, const double *y, const double *z,
+                       double *out)
+{
+    many_eval(ctx, worker, n, x, y, z, out, NULL);
+}
+
+static void many_batch_shortfall(void *ctx, void *worker, size_t n, const double *x, const double *y,
+                                 const double *z, double *out, double *shortfall)
+{
+    many_eval(ctx, worker, n, x, y, z, out, shortfall);
 }
 
 static fm_interval many_interval(void *ctx, void *worker, const fm_interval box[3])
@@ -227,6 +288,7 @@ fm_status fm_sweep_field_many(fm_field *field, const fm_motion *motions, size_t 
     field->worker_new = many_worker_new;
     field->worker_free = many_worker_free;
     field->batch = many_batch;
+    field->batch_shortfall = many_batch_shortfall;
     field->interval = many_interval;
     field->release = many_release;
     return FM_OK;

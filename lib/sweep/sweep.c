@@ -671,10 +671,7 @@ double fm_sweep_eval(const fm_sweep *s, fm_sweep_worker *worker, const double p[
 void fm_sweep_eval_batch(const fm_sweep *s, fm_sweep_worker *worker, size_t n, const double *x,
                          const double *y, const double *z, double *out)
 {
-    for (size_t i = 0; i < n; i++) {
-        double p[3] = {x[i], y[i], z ? z[i] : 0};
-        out[i] = fm_sweep_eval(s, worker, p);
-    }
+    fm_sweep_batch_ex(s, worker, n, x, y, z, out, NULL);
 }
 
 fm_interval fm_sweep_interval(const fm_sweep *s, fm_sweep_worker *worker, const fm_interval box[3])

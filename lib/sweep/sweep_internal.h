@@ -35,6 +35,12 @@ struct fm_sweep {
     double lo[3], hi[3];
 };
 
+/* S at n points (z may be NULL: 0), values identical to fm_sweep_eval.
+ * shortfall (may be NULL) gets upper - value where the point's search
+ * stopped at its budget before its proof closed, 0 elsewhere (batch.c). */
+void fm_sweep_batch_ex(const fm_sweep *s, fm_sweep_worker *worker, size_t n, const double *x, const double *y,
+                       const double *z, double *out, double *shortfall);
+
 struct fm_sweep_worker {
     const fm_tool_part *part;
     void *part_worker;

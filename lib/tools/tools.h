@@ -157,6 +157,10 @@ void fm_tool_part_worker_free(const fm_tool_part *part, void *worker);
  * (d/dr, d/dz) (a supergradient where it has a kink); grad may be NULL. */
 double fm_tool_profile_eval(const fm_tool_part *part, void *worker, double r, double z,
                             double grad[2]);
+/* The same at n points (r[i], z[i]); fast for the plain cylinder and the
+ * ball tip, identical to the point form. */
+void fm_tool_profile_eval_batch(const fm_tool_part *part, void *worker, size_t n, const double *r,
+                                const double *z, double *out);
 /* A sound enclosure of the profile function over [r] x [z] (r >= 0). */
 fm_interval fm_tool_profile_interval(const fm_tool_part *part, void *worker, fm_interval r,
                                      fm_interval z);

@@ -376,6 +376,23 @@ static void check_dag_interval_grad(void)
                     CHECK_NEAR(gr[1], (fz1 - fz0) / (2 * h), 1e-5);
                 }
             }
+            /* The batch profile (vectorized direct formulas for cylinders
+             * and balls) equals the point form bit for bit, also on the
+             * axis, at the ball's centre and above z_hi - R. */
+            {
+                enum { NB = 203 };
+                double rs[NB], zs[NB], ob[NB];
+                for (int i = 0; i < NB; i++) {
+                    rs[i] = i % 7 == 0 ? 0 : test_uniform(0, ext);
+                    zs[i] = test_uniform(part->z_lo - 2, part->z_hi + 2);
+                }
+                zs[1] = part->z_lo + part->ball_radius;
+                zs[2] = part->z_hi - part->ball_radius;
+                fm_tool_profile_eval_batch(part, NULL, NB, rs, zs, ob);
+                int same = 1;
+                for (int i = 0; i < NB; i++) same &= ob[i] == fm_tool_profile_eval(part, NULL, rs[i], zs[i], NULL);
+                CHECK(same);
+            }
             /* Interval soundness over random boxes. */
             for (int i = 0; i < 100; i++) {
                 fm_interval box[3];
