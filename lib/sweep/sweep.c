@@ -497,9 +497,12 @@ static double node_bound(const fm_sweep *s, void *pw, const double p[3], const b
     return U < m ? m : U;
 }
 
-static double bb_search(const fm_sweep *s, void *pw, const double p[3], fm_sweep_value *out)
+static double bb_search(const fm_sweep *s, fm_sweep_worker *worker, const double p[3], fm_sweep_value *out)
 {
-    bb_heap *h = malloc(sizeof *h);
+    void *pw = worker ? worker->part_worker : NULL;
+    /* the heap (57 KB) lives in the worker, made on its first search */
+    if (worker && !worker->heap) worker->heap = malloc(sizeof(bb_heap));
+    bb_heap *h = worker ? worker->heap : malloc(sizeof *h);
     size_t evals = 0, budget = s->max_evals;
     int pieces = s->pieces;
     double best = -DBL_MAX, ubest = 0;
@@ -564,17 +567,18 @@ static double bb_search(const fm_sweep *s, void *pw, const double p[3], fm_sweep
         if (!s->certified && h->n[i].U > best && ncand < 64) cand[ncand++] = h->n[i];
     }
     /* Local search in each candidate left (uncertified kinds): the proof
-     * says none beats best by more than cert_tol; this finds by how much. */
+     * says none beats best by more than cert_tol; this finds by how much.
+     * Certified kinds stop at their proof (tol). */
     for (int i = 0; i < ncand; i++) {
         const bb_node *n = &cand[i];
         if (n->U > upper_rest) upper_rest = n->U;
-        if (n->U <= best) continue;
+        if (n->U <= best || s->certified) continue;
         double ub_local, up_local;
         double v = local_max(s, pw, p, n->ua, n->Fa, n->Da, n->ub, n->Fb, n->Db, 0.01 * s->tol, 0, &ub_local,
                              &up_local, &evals, budget + 4000);
         if (v > best) best = v, ubest = ub_local;
     }
-    free(h);
+    if (!worker) free(h);
     out->value = best;
     out->upper = upper_rest > best + cert_tol ? upper_rest : best + cert_tol;
     out->t = s->t0 + ubest * (s->t1 - s->t0);
@@ -656,7 +660,7 @@ void fm_sweep_eval_ex(const fm_sweep *s, fm_sweep_worker *worker, const double p
         return;
     case FM_SWEEP_SEARCH:
     default:
-        bb_search(s, pw, p, out);
+        bb_search(s, worker, p, out);
         return;
     }
 }
@@ -773,5 +777,6 @@ void fm_sweep_worker_free(fm_sweep_worker *w)
 {
     if (!w) return;
     fm_tool_part_worker_free(w->part, w->part_worker);
+    free(w->heap);
     free(w);
 }

@@ -44,6 +44,7 @@ void fm_sweep_batch_ex(const fm_sweep *s, fm_sweep_worker *worker, size_t n, con
 struct fm_sweep_worker {
     const fm_tool_part *part;
     void *part_worker;
+    void *heap; /* the branch-and-bound heap of sweep.c, made on first use */
 };
 
 #endif
