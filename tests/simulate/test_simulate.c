@@ -25,6 +25,10 @@ static const char *tool_json =
     "{\"number\": 5, \"shape\": \"bull\", \"diameter\": 10, \"corner_radius\": 2, \"flute_length\": 20,"
     " \"length\": 40}]}";
 
+/* The README's claim for these seven cuts, at 0.1 mm and at 0.05 mm: at
+ * most 0.022% off the closed form (issue 19: the tests assert the claim). */
+#define README_TOL 0.00022
+
 static fm_tool_table tools;
 
 /* Removed volume of program on stock at voxel size, or NAN on error. */
@@ -142,22 +146,22 @@ int main(int argc, char **argv)
 
     const char *block = "box:0,0,-20,100,60,0";
     if (!fine) {
-        check_case("flat slot + plunge", flat_slot, block, flat_slot_v, 0.1, 0.005);
-        check_case("ball slot", ball_slot, block, ball_slot_v, 0.1, 0.005);
-        check_case("full-circle ring", ring, block, ring_v, 0.1, 0.005);
-        check_case("helical bore", helix, block, helix_v, 0.1, 0.005);
-        check_case("G81 drill pattern", drill, block, drill_v, 0.1, 0.005);
-        check_case("V-bit line", vline, block, vline_v, 0.1, 0.005);
-        check_case("bull-nose slot", bull, block, bull_v, 0.1, 0.005);
+        check_case("flat slot + plunge", flat_slot, block, flat_slot_v, 0.1, README_TOL);
+        check_case("ball slot", ball_slot, block, ball_slot_v, 0.1, README_TOL);
+        check_case("full-circle ring", ring, block, ring_v, 0.1, README_TOL);
+        check_case("helical bore", helix, block, helix_v, 0.1, README_TOL);
+        check_case("G81 drill pattern", drill, block, drill_v, 0.1, README_TOL);
+        check_case("V-bit line", vline, block, vline_v, 0.1, README_TOL);
+        check_case("bull-nose slot", bull, block, bull_v, 0.1, README_TOL);
     } else {
         /* Smaller stocks around each cut keep the fine grids small. */
-        check_case("flat slot + plunge", flat_slot, "box:14,24,-8,86,36,0", flat_slot_v, 0.05, 0.001);
-        check_case("ball slot", ball_slot, "box:14,24,-8,86,36,0", ball_slot_v, 0.05, 0.001);
-        check_case("full-circle ring", ring, "box:25,5,-5,75,55,0", ring_v, 0.05, 0.001);
-        check_case("helical bore", helix, "box:40,20,-14,60,40,0", helix_v, 0.05, 0.001);
-        check_case("G81 drill pattern", drill, "box:14,14,-14,46,46,0", drill_v, 0.05, 0.001);
-        check_case("V-bit line", vline, "box:14,25,-5,86,35,0", vline_v, 0.05, 0.001);
-        check_case("bull-nose slot", bull, "box:15,20,-6,85,40,0", bull_v, 0.05, 0.001);
+        check_case("flat slot + plunge", flat_slot, "box:14,24,-8,86,36,0", flat_slot_v, 0.05, README_TOL);
+        check_case("ball slot", ball_slot, "box:14,24,-8,86,36,0", ball_slot_v, 0.05, README_TOL);
+        check_case("full-circle ring", ring, "box:25,5,-5,75,55,0", ring_v, 0.05, README_TOL);
+        check_case("helical bore", helix, "box:40,20,-14,60,40,0", helix_v, 0.05, README_TOL);
+        check_case("G81 drill pattern", drill, "box:14,14,-14,46,46,0", drill_v, 0.05, README_TOL);
+        check_case("V-bit line", vline, "box:14,25,-5,86,35,0", vline_v, 0.05, README_TOL);
+        check_case("bull-nose slot", bull, "box:15,20,-6,85,40,0", bull_v, 0.05, README_TOL);
     }
     fm_tool_table_free(&tools);
     return test_summary(fine ? "simulate (0.05 mm)" : "simulate (0.1 mm)");
