@@ -1,8 +1,10 @@
-/* stl.c: stock from an STL file (binary or ASCII). The file is validated
- * before any grid exists: the binary triangle count must match the file
- * size, every coordinate must be finite, and the grid the surface needs
- * (estimated from its projected area) must fit the memory budget. The
- * triangles then go to OpenVDB's meshToLevelSet through the bridge. */
+/* stl.c: a level set from an STL file (binary or ASCII), for an STL stock
+ * and for an STL design part (design.c). The file is validated before any
+ * grid exists: the binary triangle count must match the file size, every
+ * coordinate must be finite, and the grid the surface needs (estimated from
+ * its projected area, then from the leaves its band reaches) must fit the
+ * memory budget. The triangles then go to OpenVDB's meshToLevelSet through
+ * the bridge. */
 #include "stock/stock_impl.h"
 
 #include <ctype.h>
@@ -311,7 +313,8 @@ static fm_status counted_bytes(const leaf_set *leaves, double *bytes)
     return rc;
 }
 
-fm_stock *fm_stock_new_from_stl(const char *path, const fm_stock_options *opt_in, fm_error *err)
+fm_vdb *fm_stl_to_vdb(const char *path, const fm_stock_options *opt_in, const double origin[3],
+                      const char *what, fm_error *err)
 {
     fm_stock_options opt;
     if (fm_stock_options_resolve(opt_in, &opt, err)) return NULL;
@@ -344,7 +347,7 @@ fm_stock *fm_stock_new_from_stl(const char *path, const fm_stock_options *opt_in
     fclose(fp);
     buf[got] = '\0';
     mesh m = {0};
-    fm_stock *stock = NULL;
+    fm_vdb *grid = NULL;
     uint32_t *tris = NULL;
     const size_t max_tris = opt.memory_budget / BYTES_PER_TRIANGLE;
     if (got != size) {
@@ -424,16 +427,16 @@ fm_stock *fm_stock_new_from_stl(const char *path, const fm_stock_options *opt_in
     const double mesh_bytes = (double)m.n * BYTES_PER_TRIANGLE;
     if ((double)need + mesh_bytes > (double)opt.memory_budget) {
         fm_error_set(err, FM_ERR_LIMIT,
-                     "the STL stock %s would need about %.0f MB (projected surface %.0f mm^2 "
+                     "the STL %s %s would need about %.0f MB (projected surface %.0f mm^2 "
                      "at %g mm voxels, band %d, and %zu triangles) but the memory budget is "
                      "%.0f MB",
-                     path, ((double)need + mesh_bytes) / 1048576.0, area, opt.voxel_mm,
+                     what, path, ((double)need + mesh_bytes) / 1048576.0, area, opt.voxel_mm,
                      opt.band_voxels, m.n, (double)opt.memory_budget / 1048576.0);
         goto out;
     }
     /* the area says it fits: count the leaves the band really reaches */
     for (size_t i = 0; i < 9 * m.n; i++)
-        if (fabs(m.pts[i] / opt.voxel_mm) >= MAX_INDEX) {
+        if (fabs((m.pts[i] - origin[i % 3]) / opt.voxel_mm) >= MAX_INDEX) {
             fm_error_set(err, FM_ERR_INPUT,
                          "STL %s: coordinate %g mm is beyond the grid's index range at %g mm "
                          "voxels (+-%.0f mm)",
@@ -443,8 +446,12 @@ fm_stock *fm_stock_new_from_stl(const char *path, const fm_stock_options *opt_in
     leaf_count lc = {{NULL, 0, 0}, opt.memory_budget / fm_vdb_leaf_bytes(), 0, 0};
     lc.max_tests = 64 * ((uint64_t)lc.max_leaves + m.n);
     int over = 0;
-    for (size_t i = 0; i < m.n && !over; i++)
-        over = count_triangle(&lc, m.pts + 9 * i, opt.voxel_mm, opt.band_voxels);
+    for (size_t i = 0; i < m.n && !over; i++) {
+        /* in index space: leaves are counted as the grid will place them */
+        float t[9];
+        for (int k = 0; k < 9; k++) t[k] = (float)(m.pts[9 * i + k] - origin[k % 3]);
+        over = count_triangle(&lc, t, opt.voxel_mm, opt.band_voxels);
+    }
     double counted = 0;
     if (!over && counted_bytes(&lc.leaves, &counted)) over = -1;
     free(lc.leaves.keys);
@@ -454,17 +461,17 @@ fm_stock *fm_stock_new_from_stl(const char *path, const fm_stock_options *opt_in
     }
     if (over == 2) {
         fm_error_set(err, FM_ERR_LIMIT,
-                     "the STL stock %s: its triangles lie on each other so much that the grid "
+                     "the STL %s %s: its triangles lie on each other so much that the grid "
                      "they need could not be estimated within the memory budget of %.0f MB",
-                     path, (double)opt.memory_budget / 1048576.0);
+                     what, path, (double)opt.memory_budget / 1048576.0);
         goto out;
     }
     if (over == 1 || counted + mesh_bytes > (double)opt.memory_budget) {
         fm_error_set(err, FM_ERR_LIMIT,
-                     "the STL stock %s would need %s %.0f MB (its band reaches %s%zu leaves of "
+                     "the STL %s %s would need %s %.0f MB (its band reaches %s%zu leaves of "
                      "8^3 voxels at %g mm voxels, band %d; projected surface %.0f mm^2, %zu "
                      "triangles) but the memory budget is %.0f MB",
-                     path, over ? "more than" : "about",
+                     what, path, over ? "more than" : "about",
                      (over ? (double)opt.memory_budget : counted + mesh_bytes) / 1048576.0,
                      over ? "more than " : "", lc.leaves.n, opt.voxel_mm, opt.band_voxels, area,
                      m.n, (double)opt.memory_budget / 1048576.0);
@@ -476,17 +483,25 @@ fm_stock *fm_stock_new_from_stl(const char *path, const fm_stock_options *opt_in
         goto out;
     }
     for (size_t i = 0; i < m.n * 3; i++) tris[i] = (uint32_t)i;
-    const double origin[3] = {0, 0, 0};
     fm_vdb *v = fm_vdb_new(opt.voxel_mm, opt.band_voxels, origin, opt.threads, err);
     if (!v) goto out;
     if (fm_vdb_from_mesh(v, m.pts, m.n * 3, tris, m.n, err)) {
         fm_vdb_free(v);
         goto out;
     }
-    stock = fm_stock_wrap(v, &opt, err);
+    grid = v;
 out:
     free(buf);
     free(m.pts);
     free(tris);
-    return stock;
+    return grid;
+}
+
+fm_stock *fm_stock_new_from_stl(const char *path, const fm_stock_options *opt_in, fm_error *err)
+{
+    fm_stock_options opt;
+    if (fm_stock_options_resolve(opt_in, &opt, err)) return NULL;
+    const double origin[3] = {0, 0, 0};
+    fm_vdb *v = fm_stl_to_vdb(path, &opt, origin, "stock", err);
+    return v ? fm_stock_wrap(v, &opt, err) : NULL;
 }

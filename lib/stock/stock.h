@@ -217,6 +217,74 @@ fm_status fm_stock_visit(const fm_stock *stock, const int32_t lo[3], const int32
 fm_stock *fm_stock_new_from_zero_set(const fm_field *field, const fm_stock_options *opt,
                                      fm_error *err);
 
+/* -------------------------------------------------- design comparison -- */
+/* The design part (the intended result of the program) as a level set on
+ * the stock's transform: the same voxel size and voxel centres, so that the
+ * two grids compare voxel by voxel. Deviation is measured on the stock's
+ * surface: gouge where design material was removed (the surface lies
+ * inside the design), excess where material outside the design remains
+ * (docs/stock.md, "Design comparison"). */
+typedef struct fm_design fm_design;
+
+typedef struct fm_design_options {
+    double tolerance_mm;  /* deviations up to this count as on the design; 0: half a voxel */
+    size_t memory_budget; /* bytes the design grid may use; 0: the stock's budget */
+    int threads;          /* 0: the stock's */
+} fm_design_options;
+void fm_design_options_default(fm_design_options *opt);
+
+/* The design from a closed STL mesh (OpenVDB's mesh-to-volume), from an
+ * F-rep field (a HyperFun model, rasterized like a field stock), or from a
+ * frepmill snapshot (fm_stock_save: an earlier simulation's result), which
+ * is rebuilt onto the stock's transform when its voxel, origin or band
+ * differ. opt may be NULL. NULL and err on failure: FM_ERR_INPUT bad
+ * files or options (a tolerance over 30 voxels), FM_ERR_LIMIT a budget,
+ * FM_ERR_IO files. */
+fm_design *fm_design_from_stl(const fm_stock *stock, const char *path,
+                              const fm_design_options *opt, fm_error *err);
+fm_design *fm_design_from_field(const fm_stock *stock, const fm_field *field,
+                                const fm_design_options *opt, fm_error *err);
+fm_design *fm_design_load_vdb(const fm_stock *stock, const char *path,
+                              const fm_design_options *opt, fm_error *err);
+void fm_design_free(fm_design *design);
+double fm_design_tolerance(const fm_design *design);
+size_t fm_design_memory_bytes(const fm_design *design);
+/* Signed distance to the design's surface at a world point (mm), trilinear,
+ * positive inside the design, clamped to its band. At a point of the
+ * stock's surface: > 0 is a gouge that deep, < 0 excess that thick. */
+double fm_design_sample(const fm_design *design, const double p[3]);
+
+/* A connected region (26-neighbours) of voxels where the stock deviates
+ * from the design by more than the tolerance. */
+typedef struct fm_deviation_region {
+    double depth_mm;     /* largest deviation of the stock's surface there (within half a voxel) */
+    double position[3];  /* where: the point of the stock's surface, mm */
+    double volume_mm3;   /* design material removed (gouge) or stock outside the design (excess) */
+    double lo[3], hi[3]; /* bounds of the region's voxel centres, mm */
+    size_t voxels;       /* voxels (tiles counted voxel by voxel) */
+} fm_deviation_region;
+
+typedef struct fm_deviation {
+    double tolerance_mm;
+    double max_gouge_mm, max_excess_mm; /* over the whole stock surface; 0 when none */
+    /* Every bit of design material removed and of stock outside the design,
+     * within the tolerance included, with the smooth-Heaviside voxel measure
+     * of the removed volume (fm_stock_volume). */
+    double gouge_volume_mm3, excess_volume_mm3;
+    size_t gouge_total, excess_total;   /* regions found */
+    fm_deviation_region *gouges;        /* deepest first, at most max_regions */
+    size_t gouge_count;
+    fm_deviation_region *excess;        /* deepest first, at most max_regions */
+    size_t excess_count;
+} fm_deviation;
+
+/* Compare the stock with the design; out is filled (release it with
+ * fm_deviation_free, also after an error). Costs one pass over both grids'
+ * leaves plus work proportional to the deviating regions. */
+fm_status fm_stock_compare_design(const fm_stock *stock, const fm_design *design,
+                                  size_t max_regions, fm_deviation *out, fm_error *err);
+void fm_deviation_free(fm_deviation *deviation);
+
 /* ---------------------------------------------------------- snapshots -- */
 
 /* Write a snapshot crash-safe: temporary file in the same folder, fsync,

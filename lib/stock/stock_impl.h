@@ -104,6 +104,11 @@ fm_stock *fm_stock_wrap(fm_vdb *vdb, const fm_stock_options *opt, fm_error *err)
 /* Mark the chunks an index box touches as changed in version. */
 fm_status fm_stock_mark_box(fm_stock *s, const int32_t lo[3], const int32_t hi[3],
                             uint64_t version);
+/* Read and validate an STL file and convert it to a new grid at opt's voxel
+ * and band with voxel centres at origin + voxel * i; what ("stock",
+ * "design") names it in messages. NULL and err on failure (stl.c). */
+fm_vdb *fm_stl_to_vdb(const char *path, const fm_stock_options *opt, const double origin[3],
+                      const char *what, fm_error *err);
 /* Add removed volume to a tool / block (restoring snapshots uses them). */
 fm_status fm_stock_add_tool(fm_stock *s, int tool, double removed);
 void fm_stock_add_block(fm_stock *s, int64_t block, double removed, double t0, double t1);

@@ -1,0 +1,37 @@
+/* design_private.h: what design.c (the C side of the design comparison)
+ * and its C++ bridge vdb_design.cpp say to each other. Not part of the
+ * public API. Grids here use OpenVDB's sign (phi < 0 inside). */
+#ifndef FM_DESIGN_PRIVATE_H
+#define FM_DESIGN_PRIVATE_H
+
+#include "stock/stock_private.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Rebuild the level set of source onto target, an empty grid whose voxel,
+ * origin and band say where (OpenVDB's levelSetRebuild: the zero surface
+ * meshed and converted back). FM_ERR_LIMIT when the estimated grid is over
+ * budget bytes. */
+fm_status fm_vdb_rebuild_onto(fm_vdb *target, const fm_vdb *source, size_t budget, fm_error *err);
+
+/* Both grids on one transform (same voxel and origin). tolerance in mm;
+ * budget bounds the comparison's own tables; threads 0 = one per core. */
+typedef struct fm_vdb_compare_options {
+    double tolerance;
+    size_t max_regions;
+    size_t budget;
+    int threads;
+} fm_vdb_compare_options;
+
+/* Deviation of stock from design (docs/stock.md, "Design comparison"). out
+ * must be zeroed; its arrays are malloc'd (fm_deviation_free). */
+fm_status fm_vdb_compare(const fm_vdb *stock, const fm_vdb *design,
+                         const fm_vdb_compare_options *opt, fm_deviation *out, fm_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
