@@ -18,8 +18,9 @@ extern "C" {
 
 #include "core/core.h"
 
-struct fm_field; /* frep/frep.h */
-struct fm_stock; /* stock/stock.h */
+struct fm_field;  /* frep/frep.h */
+struct fm_stock;  /* stock/stock.h */
+struct fm_design; /* stock/stock.h */
 
 /* ---------------------------------------------------------------- mesh -- */
 
@@ -149,6 +150,18 @@ fm_status fm_mesh_write_draco(const fm_mesh *mesh, const fm_mesh_draco_options *
 
 /* ------------------------------------------------------------ pictures -- */
 
+/* A colour key drawn in the picture's top-left corner: count swatches top
+ * to bottom, each with a label beside it, and a title above. Labels and
+ * title are drawn with a small built-in font of digits, '+', '-', '.', 'm'
+ * and spaces (other characters are left blank). */
+#define FM_RENDER_LEGEND_MAX 16
+typedef struct fm_render_legend {
+    char title[16];
+    size_t count;
+    uint8_t colors[FM_RENDER_LEGEND_MAX][3];
+    char labels[FM_RENDER_LEGEND_MAX][16];
+} fm_render_legend;
+
 /* A toolpath polyline for the overlay: count points (x, y, z in mm). */
 typedef struct fm_render_polyline {
     const double *points; /* 3 * count */
@@ -175,6 +188,7 @@ typedef struct fm_render_options {
     uint8_t feed_color[3];   /* default blue */
     uint8_t rapid_color[3];  /* default red */
     double dash_pixels;      /* dash and gap length of rapids; default 6 */
+    const fm_render_legend *legend; /* colour key; may be NULL */
 } fm_render_options;
 void fm_render_default(fm_render_options *opt);
 
@@ -192,7 +206,8 @@ fm_status fm_render_png(const fm_mesh *mesh, const fm_render_options *opt, const
 typedef enum fm_mesh_coloring {
     FM_MESH_COLOR_NONE = 0,
     FM_MESH_COLOR_DEPTH, /* by depth below options.top_z: a ramp over [0, depth_range] */
-    FM_MESH_COLOR_TOOL   /* by the tool that last cut there (lib/stock's tool marks) */
+    FM_MESH_COLOR_TOOL,  /* by the tool that last cut there (lib/stock's tool marks) */
+    FM_MESH_COLOR_DEVIATION /* by the deviation from options.design (fm_mesh_deviation_color) */
 } fm_mesh_coloring;
 
 typedef struct fm_mesh_extract_options {
@@ -203,6 +218,8 @@ typedef struct fm_mesh_extract_options {
     double depth_range;   /* mm of depth the ramp spans; default 10 */
     int uncut_grey;       /* FM_MESH_COLOR_DEPTH: where no cut reached, the uncut grey
                              (fm_mesh_tool_color(-1)) instead of the ramp; default 0 */
+    const struct fm_design *design; /* FM_MESH_COLOR_DEVIATION: the design compared with */
+    double deviation_range; /* mm of deviation the shades span; 0: 10 x the design's tolerance */
     fm_mesh_budget budget;
 } fm_mesh_extract_options;
 void fm_mesh_extract_default(fm_mesh_extract_options *opt);
@@ -212,6 +229,14 @@ void fm_mesh_extract_default(fm_mesh_extract_options *opt);
  * tool number modulo 12, and a neutral grey for tool < 0 (never cut). */
 void fm_mesh_depth_color(double depth, double range, uint8_t rgb[3]);
 void fm_mesh_tool_color(int tool, uint8_t rgb[3]);
+/* Colour of a deviation from the design (mm; > 0 excess: material outside
+ * the design; < 0 gouge: design material removed), Fusion's convention:
+ * green within +-tolerance, blue for excess and red for gouge, light at
+ * the tolerance and dark at range and beyond. */
+void fm_mesh_deviation_color(double deviation, double tolerance, double range, uint8_t rgb[3]);
+/* The key of that scale (title "mm"): seven swatches from +range (dark
+ * blue) through 0 (green) to -range (dark red). */
+void fm_mesh_deviation_legend(double tolerance, double range, fm_render_legend *legend);
 
 /* The whole stock. opt may be NULL (defaults). */
 fm_mesh *fm_mesh_from_stock(struct fm_stock *stock, const fm_mesh_extract_options *opt,

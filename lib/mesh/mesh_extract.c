@@ -1,5 +1,6 @@
 /* mesh_extract.c: the C side of extraction: option defaults, the colour
- * ramps for depth and tool colouring, and meshing an F-rep field through
+ * ramps for depth, tool and deviation colouring (and the deviation's key
+ * for pictures), and meshing an F-rep field through
  * lib/stock's narrow-band rasterizer (the same one the stock is made with). */
 #include "mesh/mesh.h"
 
@@ -7,6 +8,7 @@
 #include "stock/stock.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 void fm_mesh_extract_default(fm_mesh_extract_options *opt)
@@ -58,6 +60,53 @@ void fm_mesh_tool_color(int tool, uint8_t rgb[3])
         return;
     }
     memcpy(rgb, palette[(tool + 11) % 12], 3);
+}
+
+static void mix(const uint8_t a[3], const uint8_t b[3], double t, uint8_t rgb[3])
+{
+    for (int k = 0; k < 3; k++) rgb[k] = (uint8_t)lround(a[k] + t * (b[k] - a[k]));
+}
+
+static const uint8_t DEV_GREEN[3] = {40, 170, 60};
+static const uint8_t DEV_EXCESS_LIGHT[3] = {140, 190, 255}, DEV_EXCESS_DARK[3] = {20, 40, 170};
+static const uint8_t DEV_GOUGE_LIGHT[3] = {255, 150, 130}, DEV_GOUGE_DARK[3] = {170, 0, 0};
+
+void fm_mesh_deviation_color(double deviation, double tolerance, double range, uint8_t rgb[3])
+{
+    const double a = fabs(deviation);
+    if (!(a > tolerance)) { /* NaN counts as on the design */
+        memcpy(rgb, DEV_GREEN, 3);
+        return;
+    }
+    double t = range > tolerance ? (a - tolerance) / (range - tolerance) : 1;
+    if (t > 1) t = 1;
+    if (deviation > 0)
+        mix(DEV_EXCESS_LIGHT, DEV_EXCESS_DARK, t, rgb);
+    else
+        mix(DEV_GOUGE_LIGHT, DEV_GOUGE_DARK, t, rgb);
+}
+
+void fm_mesh_deviation_legend(double tolerance, double range, fm_render_legend *legend)
+{
+    memset(legend, 0, sizeof *legend);
+    snprintf(legend->title, sizeof legend->title, "mm");
+    if (!(range > tolerance)) range = 2 * tolerance;
+    /* enough decimals to print the tolerance as it is (up to 4) */
+    int digits = 2;
+    while (digits < 4 && fabs(tolerance * pow(10, digits) - round(tolerance * pow(10, digits))) > 1e-6)
+        digits++;
+    const double values[7] = {range, 0.5 * (range + tolerance), tolerance, 0,
+                              -tolerance, -0.5 * (range + tolerance), -range};
+    for (int i = 0; i < 7; i++) {
+        /* the colour just beyond each value: the tolerance's swatches show
+         * the lightest shade, not green */
+        fm_mesh_deviation_color(values[i] * (1 + 1e-9), tolerance, range, legend->colors[i]);
+        if (values[i] == 0)
+            snprintf(legend->labels[i], sizeof legend->labels[i], "0");
+        else
+            snprintf(legend->labels[i], sizeof legend->labels[i], "%+.*f", digits, values[i]);
+    }
+    legend->count = 7;
 }
 
 fm_mesh *fm_mesh_from_field(const struct fm_field *field, double voxel_mm,

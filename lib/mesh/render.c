@@ -1,7 +1,8 @@
 /* render.c: a software renderer for preview pictures, no display or GPU:
  * isometric orthographic view with Z up, z-buffer, Lambert plus ambient
  * shading, per-vertex colours, an optional toolpath overlay (feeds solid,
- * rapids dashed), supersampling anti-aliasing, and a PNG writer (stb). */
+ * rapids dashed), supersampling anti-aliasing, an optional colour key with
+ * a tiny built-in font, and a PNG writer (stb). */
 #include "mesh/mesh_internal.h"
 
 #include <math.h>
@@ -186,6 +187,8 @@ static void draw_polyline(canvas *c, const fm_render_polyline *pl, const uint8_t
     }
 }
 
+static void draw_legend(uint8_t *rgb, int w, int h, const fm_render_legend *l);
+
 fm_status fm_render_rgb(const fm_mesh *mesh, const fm_render_options *opt_in, uint8_t *rgb,
                         fm_error *err)
 {
@@ -280,7 +283,93 @@ fm_status fm_render_rgb(const fm_mesh *mesh, const fm_render_options *opt_in, ui
             }
     free(c.depth);
     free(c.color);
+    if (opt.legend) draw_legend(rgb, opt.width, opt.height, opt.legend);
     return FM_OK;
+}
+
+/* ------------------------------------------------------------ legend -- */
+
+/* 5 x 7 glyphs, one row per byte, bit 4 the leftmost pixel. */
+static const struct glyph {
+    char c;
+    uint8_t rows[7];
+} GLYPHS[] = {
+    {'0', {0x0e, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0e}},
+    {'1', {0x04, 0x0c, 0x04, 0x04, 0x04, 0x04, 0x0e}},
+    {'2', {0x0e, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1f}},
+    {'3', {0x1f, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0e}},
+    {'4', {0x02, 0x06, 0x0a, 0x12, 0x1f, 0x02, 0x02}},
+    {'5', {0x1f, 0x10, 0x1e, 0x01, 0x01, 0x11, 0x0e}},
+    {'6', {0x06, 0x08, 0x10, 0x1e, 0x11, 0x11, 0x0e}},
+    {'7', {0x1f, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08}},
+    {'8', {0x0e, 0x11, 0x11, 0x0e, 0x11, 0x11, 0x0e}},
+    {'9', {0x0e, 0x11, 0x11, 0x0f, 0x01, 0x02, 0x0c}},
+    {'.', {0x00, 0x00, 0x00, 0x00, 0x00, 0x0c, 0x0c}},
+    {'+', {0x00, 0x04, 0x04, 0x1f, 0x04, 0x04, 0x00}},
+    {'-', {0x00, 0x00, 0x00, 0x1f, 0x00, 0x00, 0x00}},
+    {'m', {0x00, 0x00, 0x1a, 0x15, 0x15, 0x11, 0x11}},
+};
+
+#define LEGEND_PX 2 /* screen pixels per font pixel */
+
+static size_t bounded_length(const char *s, size_t max)
+{
+    size_t n = 0;
+    while (n < max && s[n]) n++;
+    return n;
+}
+
+static void fill_rect(uint8_t *rgb, int w, int h, int x0, int y0, int x1, int y1,
+                      const uint8_t c[3])
+{
+    for (int y = y0 < 0 ? 0 : y0; y < y1 && y < h; y++)
+        for (int x = x0 < 0 ? 0 : x0; x < x1 && x < w; x++)
+            memcpy(rgb + 3 * ((size_t)y * w + x), c, 3);
+}
+
+static void draw_text(uint8_t *rgb, int w, int h, int x, int y, const char *text,
+                      const uint8_t c[3])
+{
+    for (; *text; text++, x += 6 * LEGEND_PX) {
+        const struct glyph *g = NULL;
+        for (size_t i = 0; i < sizeof GLYPHS / sizeof GLYPHS[0]; i++)
+            if (GLYPHS[i].c == *text) g = &GLYPHS[i];
+        if (!g) continue;
+        for (int r = 0; r < 7; r++)
+            for (int b = 0; b < 5; b++)
+                if (g->rows[r] >> (4 - b) & 1)
+                    fill_rect(rgb, w, h, x + b * LEGEND_PX, y + r * LEGEND_PX,
+                              x + (b + 1) * LEGEND_PX, y + (r + 1) * LEGEND_PX, c);
+    }
+}
+
+/* The key in the top-left corner, on a white panel with a grey border. */
+static void draw_legend(uint8_t *rgb, int w, int h, const fm_render_legend *l)
+{
+    static const uint8_t white[3] = {255, 255, 255}, grey[3] = {150, 150, 150},
+                         ink[3] = {30, 30, 30};
+    const size_t n = l->count < FM_RENDER_LEGEND_MAX ? l->count : FM_RENDER_LEGEND_MAX;
+    size_t chars = bounded_length(l->title, sizeof l->title);
+    for (size_t i = 0; i < n; i++) {
+        const size_t c = bounded_length(l->labels[i], sizeof l->labels[i]);
+        if (c + 4 > chars) chars = c + 4;
+    }
+    const int line = 9 * LEGEND_PX, x0 = 6, y0 = 6;
+    const int pw = (int)chars * 6 * LEGEND_PX + 12, ph = (int)(n + 1) * line + 12;
+    fill_rect(rgb, w, h, x0, y0, x0 + pw, y0 + ph, grey);
+    fill_rect(rgb, w, h, x0 + 1, y0 + 1, x0 + pw - 1, y0 + ph - 1, white);
+    char title[sizeof l->title + 1];
+    memcpy(title, l->title, sizeof l->title);
+    title[sizeof l->title] = '\0';
+    draw_text(rgb, w, h, x0 + 6, y0 + 6, title, ink);
+    for (size_t i = 0; i < n; i++) {
+        const int y = y0 + 6 + (int)(i + 1) * line;
+        fill_rect(rgb, w, h, x0 + 6, y, x0 + 6 + 3 * 6 * LEGEND_PX - 4, y + line - 2, l->colors[i]);
+        char label[sizeof l->labels[i] + 1];
+        memcpy(label, l->labels[i], sizeof l->labels[i]);
+        label[sizeof l->labels[i]] = '\0';
+        draw_text(rgb, w, h, x0 + 6 + 4 * 6 * LEGEND_PX, y + LEGEND_PX / 2, label, ink);
+    }
 }
 
 typedef struct png_sink {

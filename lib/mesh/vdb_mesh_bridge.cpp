@@ -1,6 +1,7 @@
 // vdb_mesh_bridge.cpp: meshes from the stock's OpenVDB level set, whole grid
 // or one 64^3-voxel chunk at a time, with normals from the level-set gradient
-// and colours by depth or by the tool that last cut (lib/stock's tool marks).
+// and colours by depth, by the tool that last cut (lib/stock's tool marks) or
+// by the deviation from a design (lib/stock's fm_design).
 // The only lib/mesh file that sees OpenVDB; it reaches the grid through
 // lib/stock's private door (fm_stock_vdb_grid) and never changes it. Every
 // exception stops at the extern "C" functions.
@@ -134,10 +135,20 @@ fm_mesh *to_mesh(const fm_stock *stock, const Grid &grid, const Polygons &pg,
     // Colours too depend only on the vertex position: the tool recorded at
     // the voxel nearest the vertex (one of its cell's corners, whose value
     // that tool's surface set).
-    const bool need_marks = o.coloring == FM_MESH_COLOR_TOOL || o.uncut_grey;
+    const bool need_marks = o.coloring == FM_MESH_COLOR_TOOL ||
+                            (o.coloring == FM_MESH_COLOR_DEPTH && o.uncut_grey);
+    const double tol = o.design ? fm_design_tolerance(o.design) : 0;
+    const double range = o.deviation_range > 0 ? o.deviation_range : 10 * tol;
     for (size_t i = 0; o.coloring != FM_MESH_COLOR_NONE && i < m->vertex_count; i++) {
         const float *pf = m->positions + 3 * i;
         const double p[3] = {pf[0], pf[1], pf[2]};
+        if (o.coloring == FM_MESH_COLOR_DEVIATION) {
+            // the design's distance at this point of the stock's surface:
+            // inside the design a gouge (negative deviation), outside excess
+            fm_mesh_deviation_color(-fm_design_sample(o.design, p), tol, range,
+                                    m->colors + 3 * i);
+            continue;
+        }
         int tool = -1;
         const int cut = need_marks ? fm_stock_point_tool(stock, p, &tool) : 0;
         if (o.coloring == FM_MESH_COLOR_TOOL)
@@ -155,8 +166,11 @@ fm_status check_options(const fm_mesh_extract_options &o, fm_error *err)
     if (!(o.adaptivity >= 0 && o.adaptivity <= 1))
         return fm_error_set(err, FM_ERR_INPUT, "mesh adaptivity must be in 0..1");
     if (o.coloring != FM_MESH_COLOR_NONE && o.coloring != FM_MESH_COLOR_DEPTH &&
-        o.coloring != FM_MESH_COLOR_TOOL)
+        o.coloring != FM_MESH_COLOR_TOOL && o.coloring != FM_MESH_COLOR_DEVIATION)
         return fm_error_set(err, FM_ERR_INPUT, "unknown mesh colouring %d", int(o.coloring));
+    if (o.coloring == FM_MESH_COLOR_DEVIATION && !o.design)
+        return fm_error_set(err, FM_ERR_INPUT,
+                            "deviation colours need a design to compare with (--design)");
     if (o.coloring == FM_MESH_COLOR_DEPTH && !(o.depth_range > 0))
         return fm_error_set(err, FM_ERR_INPUT, "depth colour range must be positive");
     return FM_OK;
