@@ -52,16 +52,23 @@ static fm_status design_setup(const fm_stock *stock, const fm_design_options *op
     if (opt->threads == 0) opt->threads = stock->opt.threads;
     fm_stock_options_default(grid);
     grid->voxel_mm = h;
-    /* two voxels of margin: the trilinear sample at a surface point reads
-     * the 8 corners of its cell, up to sqrt(3) voxels away */
-    int band = fm_vdb_band(stock->vdb) + 2;
-    const int need = (int)ceil(opt->tolerance_mm / h) + 2;
-    if (need > band) band = need;
-    grid->band_voxels = band;
+    grid->band_voxels = fm_design_band_voxels(stock, opt->tolerance_mm);
     grid->memory_budget = opt->memory_budget;
     grid->threads = opt->threads;
     fm_vdb_origin(stock->vdb, origin);
     return FM_OK;
+}
+
+int fm_design_band_voxels(const fm_stock *stock, double tolerance_mm)
+{
+    const double h = fm_vdb_voxel(stock->vdb);
+    if (tolerance_mm == 0) tolerance_mm = 0.5 * h;
+    /* two voxels of margin: the trilinear sample at a surface point reads
+     * the 8 corners of its cell, up to sqrt(3) voxels away */
+    int band = fm_vdb_band(stock->vdb) + 2;
+    const double need = ceil(tolerance_mm / h) + 2;
+    if (need > band) band = need < 64 ? (int)need : 64;
+    return band;
 }
 
 static fm_design *design_wrap(fm_vdb *v, const fm_design_options *opt, fm_error *err)

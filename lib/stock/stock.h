@@ -247,6 +247,11 @@ fm_design *fm_design_from_field(const fm_stock *stock, const fm_field *field,
 fm_design *fm_design_load_vdb(const fm_stock *stock, const char *path,
                               const fm_design_options *opt, fm_error *err);
 void fm_design_free(fm_design *design);
+/* The band half-width (voxels) a design for this stock and tolerance gets:
+ * the stock's band + 2, or more when the tolerance needs it (0: half a
+ * voxel). A field given to fm_design_from_field only needs to tell the
+ * voxels within it from the rest. */
+int fm_design_band_voxels(const fm_stock *stock, double tolerance_mm);
 double fm_design_tolerance(const fm_design *design);
 size_t fm_design_memory_bytes(const fm_design *design);
 /* Signed distance to the design's surface at a world point (mm), trilinear,

@@ -577,9 +577,13 @@ void fill_regions(const Setup &s, const Members &m, CAcc &sa, std::vector<Region
                   Kind kind, size_t max_regions, fm_deviation_region **out, size_t *count,
                   size_t *total)
 {
+    /* a region holding less than a tolerance-thick layer over one voxel
+     * face is below what the grids resolve (a design's sharp corner
+     * sampled differently by two grids), not a deviation */
+    const double least = s.tol / s.h;
     std::vector<const Region *> list;
     for (const Region &r : regions)
-        if (r.kind == kind) list.push_back(&r);
+        if (r.kind == kind && r.volume >= least) list.push_back(&r);
     std::sort(list.begin(), list.end(), [](const Region *a, const Region *b) {
         if (a->depth != b->depth) return a->depth > b->depth;
         if (a->volume != b->volume) return a->volume > b->volume;
