@@ -27,7 +27,9 @@ static void usage(FILE *out)
             "                         [--band VOXELS] [--memory-budget MB] [--threads N]\n"
             "                         [--rapid-rate MM_PER_MIN] [--batch DIAMETERS]\n"
             "                         [--machine FILE.json] [--check [--fixture FILE]...]\n"
-            "                         [--png FILE] [--png-size WxH] [--color depth|tool|none]\n"
+            "                         [--png FILE] [--png-size WxH]\n"
+            "                         [--color depth|tool|deviation|none]\n"
+            "                         [--design PART [--tolerance MM]] [--stop-at LINE]\n"
             "                         [--dialect linuxcnc|fanuc] [--subroutine-path DIRS]\n"
             "                         [--calculator-input]\n"
             "\n"
@@ -43,7 +45,13 @@ static void usage(FILE *out)
             "          0.5 mm voxel, as `frepmill check`); the report gets its \"findings\"\n"
             "--png     a shaded isometric picture with the toolpath (same as --out FILE.png)\n"
             "--color   mesh and picture colours: depth below the stock top (default), the tool\n"
-            "          that cut last, or none\n"
+            "          that cut last, the deviation from the design (green within the tolerance,\n"
+            "          red gouge, blue excess; the default with --design), or none\n"
+            "--design  compare the result with the intended part (.stl, .hf or .vdb); the report\n"
+            "          gets its \"design\": gouges (with the line that cut them) and excess\n"
+            "--tolerance  deviations up to this many mm count as on the design (default half\n"
+            "          a voxel)\n"
+            "--stop-at  stop after the motions of source line LINE (an in-process stock)\n"
             "--dialect the G-code's dialect (default linuxcnc; docs/gcode.md)\n"
             "--subroutine-path  ':'-separated folders of subroutine files (NAME.ngc, Fanuc O1234.nc)\n"
             "--calculator-input Fanuc: X5 is 5 mm, not 0.005 (DPI / Haas setting 162)\n"
@@ -134,6 +142,7 @@ int fm_cmd_simulate(int argc, char **argv)
     fm_output_options_default(&out_opt);
     int want_png = 0;
     int rapid_rate_given = 0;
+    int color_given = 0;
 
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -190,13 +199,24 @@ int fm_cmd_simulate(int argc, char **argv)
             out_opt.png_width = w;
             out_opt.png_height = h;
         } else if (!strcmp(a, "--color")) {
+            color_given = 1;
             if (!strcmp(v, "depth")) out_opt.coloring = FM_MESH_COLOR_DEPTH;
             else if (!strcmp(v, "tool")) out_opt.coloring = FM_MESH_COLOR_TOOL;
+            else if (!strcmp(v, "deviation")) out_opt.coloring = FM_MESH_COLOR_DEVIATION;
             else if (!strcmp(v, "none")) out_opt.coloring = FM_MESH_COLOR_NONE;
             else {
-                fprintf(stderr, "frepmill simulate: --color %s: expected depth, tool or none\n", v);
+                fprintf(stderr,
+                        "frepmill simulate: --color %s: expected depth, tool, deviation or none\n",
+                        v);
                 return 2;
             }
+        } else if (!strcmp(a, "--design")) {
+            spec.design_path = v;
+        } else if (!strcmp(a, "--tolerance") && parse_double(v, &d) && d > 0) {
+            spec.tolerance_mm = d;
+        } else if (!strcmp(a, "--stop-at") && parse_double(v, &d) && d >= 1 && d <= 1e9 &&
+                   d == floor(d)) {
+            spec.stop_at_line = (int)d;
         } else if (!strcmp(a, "--stock")) {
             spec.stock_spec = v;
         } else if (!strcmp(a, "--tools")) {
@@ -234,7 +254,8 @@ int fm_cmd_simulate(int argc, char **argv)
         } else if (!strcmp(a, "--batch") && parse_double(v, &d)) {
             spec.batch_diameters = d;
         } else if (!strcmp(a, "--voxel") || !strcmp(a, "--band") || !strcmp(a, "--memory-budget") ||
-                   !strcmp(a, "--threads") || !strcmp(a, "--rapid-rate") || !strcmp(a, "--batch")) {
+                   !strcmp(a, "--threads") || !strcmp(a, "--rapid-rate") || !strcmp(a, "--batch") ||
+                   !strcmp(a, "--tolerance") || !strcmp(a, "--stop-at")) {
             fprintf(stderr, "frepmill simulate: %s %s: not a valid value\n", a, v);
             return 2;
         } else {
@@ -252,6 +273,16 @@ int fm_cmd_simulate(int argc, char **argv)
         return 2;
     }
 
+    if (spec.tolerance_mm > 0 && !spec.design_path) {
+        fprintf(stderr, "frepmill simulate: --tolerance needs --design\n");
+        return 2;
+    }
+    if (out_opt.coloring == FM_MESH_COLOR_DEVIATION && !spec.design_path) {
+        fprintf(stderr, "frepmill simulate: --color deviation needs --design\n");
+        return 2;
+    }
+    /* with a design the pictures show the deviation unless told otherwise */
+    if (spec.design_path && !color_given) out_opt.coloring = FM_MESH_COLOR_DEVIATION;
     if (fixture_count && !want_check) {
         fprintf(stderr, "frepmill simulate: --fixture needs --check\n");
         return 2;
@@ -309,6 +340,7 @@ int fm_cmd_simulate(int argc, char **argv)
     int status = 0;
     out_opt.top_z = result.initial_hi[2];
     out_opt.toolpath = bar.toolpath;
+    out_opt.design = result.design;
     st = fm_outputs_write(outputs, (size_t)output_count, result.stock, &out_opt, &err);
     if (st != FM_OK) {
         char buf[1024];
@@ -329,6 +361,27 @@ int fm_cmd_simulate(int argc, char **argv)
         fprintf(stderr, "frepmill simulate: check: %zu errors, %zu warnings (%.2f s)\n",
                 fm_check_count_severity(result.check, FM_CHECK_ERROR),
                 fm_check_count_severity(result.check, FM_CHECK_WARNING), result.check_time_s);
+    if (result.stopped_at_line)
+        fprintf(stderr, "frepmill simulate: stopped after line %d\n", result.stopped_at_line);
+    if (result.has_deviation) {
+        const fm_deviation *dv = &result.deviation;
+        fprintf(stderr,
+                "frepmill simulate: design: %zu gouges (deepest %.3f mm, %.2f mm3), %zu excess "
+                "regions (thickest %.3f mm, %.2f mm3) beyond %.3f mm; compared in %.2f s\n",
+                dv->gouge_total, dv->max_gouge_mm, dv->gouge_volume_mm3, dv->excess_total,
+                dv->max_excess_mm, dv->excess_volume_mm3, dv->tolerance_mm, result.design_wall_s);
+        for (size_t i = 0; i < dv->gouge_count && i < 5; i++) {
+            const fm_deviation_region *g = &dv->gouges[i];
+            if (result.gouge_blame[i].line > 0)
+                fprintf(stderr, "  gouge %.3f mm at (%.2f, %.2f, %.2f): line %d, tool %d\n",
+                        g->depth_mm, g->position[0], g->position[1], g->position[2],
+                        result.gouge_blame[i].line, result.gouge_blame[i].tool);
+            else
+                fprintf(stderr, "  gouge %.3f mm at (%.2f, %.2f, %.2f): no motion of this "
+                                "program reaches it\n",
+                        g->depth_mm, g->position[0], g->position[1], g->position[2]);
+        }
+    }
 
     if (report_path && status == 0) {
         json_t *report = fm_job_report_json(&result);
@@ -343,8 +396,7 @@ int fm_cmd_simulate(int argc, char **argv)
             status = 4;
         }
     }
-    fm_check_free(result.check);
-    fm_stock_free(result.stock);
+    fm_job_result_release(&result);
     fm_toolpath_free(bar.toolpath);
     return status;
 }

@@ -41,6 +41,7 @@ fm_status fm_check_pass_run(const fm_check_pass_input *in, fm_check **out, fm_jo
     spec.resume_stock = NULL;
     spec.skip_motions = 0;
     spec.check = &in->check;
+    spec.design_path = NULL; /* the simulation compares, not the check */
 
     pass_run run = {in, 0};
     fm_job_hooks hooks = {.user = &run, .progress = keep_going};

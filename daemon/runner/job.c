@@ -67,6 +67,261 @@ int fm_path_has_extension(const char *path, const char *ext)
     return 1;
 }
 
+/* A HyperFun model as a field for a stock or a design.
+ *
+ * Values: HyperFun functions are rarely distances (hfSphere is R^2 - r^2)
+ * and the narrow band needs first-order distances, so the model is
+ * normalized, f / sqrt(f^2 + |grad f|^2) (Shapiro eq. 4.9), with the
+ * gradient from forward differences of batch evaluations (three more
+ * points a step of 1e-6 of the coordinates' size away; one forward-mode
+ * gradient per point costs ten times as much), on the model's tape
+ * shortened to the points' box (the min/max branches of features far
+ * away dropped). The value is then cut by the distance to the model's
+ * bounding box, as fm_field asks.
+ *
+ * Boxes: the normalized function's interval is useless for classifying
+ * boxes (its modulus is below 1 everywhere, so no box would ever be found
+ * deep inside or outside, and the rasterizer would evaluate every voxel of
+ * the bounding box). A box whose widening by `reach` (the grid's band) the
+ * model's interval shows all inside or all outside is at least the band
+ * from the surface: a tile. Other boxes get voxel work. */
+typedef struct model_field {
+    fm_graph *graph;
+    fm_tape *tape;
+    fm_field field;
+    double reach;
+} model_field;
+
+#define MODEL_CHUNK 256
+
+typedef struct model_worker {
+    fm_evaluator *ev;
+    double x[4 * MODEL_CHUNK], y[4 * MODEL_CHUNK], z[4 * MODEL_CHUNK], f[4 * MODEL_CHUNK];
+} model_worker;
+
+static void *model_worker_new(void *ctx)
+{
+    model_field *mf = ctx;
+    model_worker *w = malloc(sizeof *w);
+    if (!w) return NULL;
+    w->ev = fm_evaluator_new(mf->tape, NULL);
+    if (!w->ev) {
+        free(w);
+        return NULL;
+    }
+    return w;
+}
+
+static void model_worker_free(void *ctx, void *worker)
+{
+    (void)ctx;
+    model_worker *w = worker;
+    if (!w) return;
+    fm_evaluator_free(w->ev);
+    free(w);
+}
+
+/* Exact signed distance to the field's bounds, positive inside. */
+static double model_box_distance(const fm_field *f, const double p[3])
+{
+    double out2 = 0, in = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        const double below = f->lo[k] - p[k], above = p[k] - f->hi[k];
+        const double d = below > above ? below : above;
+        if (d > 0) out2 += d * d;
+        if (-d < in) in = -d;
+    }
+    return out2 > 0 ? -sqrt(out2) : in;
+}
+
+static void model_batch(void *ctx, void *worker, size_t n, const double *x, const double *y,
+                        const double *z, double *out)
+{
+    model_field *mf = ctx;
+    model_worker *w = worker;
+    for (size_t start = 0; start < n; start += MODEL_CHUNK) {
+        const size_t m = n - start < MODEL_CHUNK ? n - start : MODEL_CHUNK;
+        /* the point, then its +x, +y and +z neighbours, each block m long */
+        fm_interval box[4] = {{INFINITY, -INFINITY}, {INFINITY, -INFINITY},
+                              {INFINITY, -INFINITY}, {0, 0}};
+        for (size_t i = 0; i < m; i++) {
+            const double p[3] = {x[start + i], y[start + i], z[start + i]};
+            for (int j = 0; j < 4; j++) {
+                double q[3] = {p[0], p[1], p[2]};
+                if (j > 0) q[j - 1] += 1e-6 * (1 + fabs(p[j - 1]));
+                w->x[j * m + i] = q[0];
+                w->y[j * m + i] = q[1];
+                w->z[j * m + i] = q[2];
+            }
+            for (int k = 0; k < 3; k++) {
+                if (p[k] < box[k].lo) box[k].lo = p[k];
+                if (p[k] > box[k].hi) box[k].hi = p[k];
+            }
+        }
+        /* the neighbours lie a step above */
+        for (int k = 0; k < 3; k++) box[k].hi += 2e-6 * (1 + fabs(box[k].hi));
+        fm_interval range;
+        fm_tape *shorter = fm_eval_interval_shorten(w->ev, box, &range);
+        if (shorter) fm_evaluator_use(w->ev, shorter);
+        fm_eval_batch(w->ev, 4 * m, w->x, w->y, w->z, NULL, w->f);
+        if (shorter) {
+            fm_evaluator_use(w->ev, NULL);
+            fm_tape_free(shorter);
+        }
+        for (size_t i = 0; i < m; i++) {
+            const double f = w->f[i];
+            double g2 = 0;
+            for (int k = 0; k < 3; k++) {
+                const size_t j = (1 + (size_t)k) * m + i;
+                const double step = k == 0 ? w->x[j] - w->x[i] : k == 1 ? w->y[j] - w->y[i]
+                                                                        : w->z[j] - w->z[i];
+                const double d = (w->f[j] - f) / step;
+                g2 += d * d;
+            }
+            const double v = f / sqrt(f * f + g2);
+            const double p[3] = {x[start + i], y[start + i], z[start + i]};
+            const double b = model_box_distance(&mf->field, p);
+            /* NaN (and 0 / 0 at a flat zero) takes the box distance */
+            out[start + i] = v < b ? v : b;
+        }
+    }
+}
+
+static fm_interval model_interval(void *ctx, void *worker, const fm_interval box[3])
+{
+    model_field *mf = ctx;
+    model_worker *w = worker;
+    fm_interval wide[4];
+    for (int k = 0; k < 3; k++) {
+        wide[k].lo = box[k].lo - mf->reach;
+        wide[k].hi = box[k].hi + mf->reach;
+    }
+    wide[3].lo = wide[3].hi = 0;
+    const fm_interval f = fm_eval_interval(w->ev, wide);
+    /* a hair beyond the band, so that the float band compares below it */
+    const double beyond = mf->reach * (1 + 1e-6);
+    if (f.lo > 0) return (fm_interval){beyond, INFINITY};
+    /* outside the model, or beyond the bounds box by more than the band */
+    double c[3], half2 = 0;
+    for (int k = 0; k < 3; k++) {
+        c[k] = 0.5 * (box[k].lo + box[k].hi);
+        half2 += 0.25 * (box[k].hi - box[k].lo) * (box[k].hi - box[k].lo);
+    }
+    const double bound = model_box_distance(&mf->field, c) + sqrt(half2);
+    if (f.hi < 0 || bound <= -beyond) return (fm_interval){-INFINITY, -beyond};
+    return (fm_interval){-1, fmin(1, bound)};
+}
+
+static void model_field_close(model_field *mf)
+{
+    fm_tape_free(mf->tape);
+    fm_graph_free(mf->graph);
+    memset(mf, 0, sizeof *mf);
+}
+
+/* what: "stock" or "design", for messages; reach: the grid's band, mm. */
+static fm_status model_field_open(const char *path, double voxel, double reach, const char *what,
+                                  model_field *mf, fm_error *err)
+{
+    memset(mf, 0, sizeof *mf);
+    mf->reach = reach;
+    mf->graph = fm_graph_new(0);
+    if (!mf->graph) return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    fm_graph *g = mf->graph;
+    fm_evaluator *ev = NULL;
+    fm_status st = FM_OK;
+    fm_hf_model model;
+    if ((st = fm_hf_compile_file(g, path, NULL, &model, err)) != FM_OK) goto done;
+    if (model.dimension > 3) {
+        st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                         "the %s model '%s' is %dD; a %s is a 3D object (x[3])", what,
+                         model.name, model.dimension, what);
+        goto done;
+    }
+    mf->tape = fm_tape_compile(g, model.root, err);
+    if (!mf->tape) {
+        st = err && err->code ? err->code : FM_ERR_INPUT;
+        goto done;
+    }
+    ev = fm_evaluator_new(mf->tape, err);
+    if (!ev) {
+        st = err && err->code ? err->code : FM_ERR_INPUT;
+        goto done;
+    }
+    fm_inside_bounds s;
+    fm_interval start[3];
+    for (int a = 0; a < 3; a++) start[a] = (fm_interval){-JOB_MODEL_SEARCH_MM, JOB_MODEL_SEARCH_MM};
+    double min_size = fmax(voxel, 2 * JOB_MODEL_SEARCH_MM / 1024.0);
+    if (fm_find_inside_bounds(ev, start, min_size, JOB_MODEL_MAX_BOXES, &s) != FM_OK) {
+        st = fm_error_at(err, FM_ERR_LIMIT, path, 0, 0,
+                         "the %s model's boundary is too complex to bound (over %u boxes)", what,
+                         JOB_MODEL_MAX_BOXES);
+        goto done;
+    }
+    if (!s.found) {
+        st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "the %s model '%s' is empty within +-%.0f mm",
+                         what, model.name, JOB_MODEL_SEARCH_MM);
+        goto done;
+    }
+    for (int a = 0; a < 3; a++) {
+        if (s.lo[a] <= -JOB_MODEL_SEARCH_MM || s.hi[a] >= JOB_MODEL_SEARCH_MM) {
+            st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                             "the %s model '%s' is not bounded within +-%.0f mm along %c; "
+                             "intersect it with a block",
+                             what, model.name, JOB_MODEL_SEARCH_MM, "xyz"[a]);
+            goto done;
+        }
+        mf->field.lo[a] = s.lo[a] - 4 * voxel;
+        mf->field.hi[a] = s.hi[a] + 4 * voxel;
+    }
+    mf->field.ctx = mf;
+    mf->field.worker_new = model_worker_new;
+    mf->field.worker_free = model_worker_free;
+    mf->field.batch = model_batch;
+    mf->field.interval = model_interval;
+done:
+    fm_evaluator_free(ev);
+    if (st != FM_OK) model_field_close(mf);
+    return st;
+}
+
+/* ------------------------------------------------------------ design -- */
+
+static fm_design *make_design(const fm_job_spec *spec, const fm_stock *stock, fm_error *err)
+{
+    const char *path = spec->design_path;
+    fm_design_options opt;
+    fm_design_options_default(&opt);
+    opt.tolerance_mm = spec->tolerance_mm;
+    opt.threads = spec->stock.threads;
+    /* the design shares the job's budget with the stock */
+    const size_t budget = spec->stock.memory_budget, used = fm_stock_memory_bytes(stock);
+    opt.memory_budget = budget > used + ((size_t)1 << 20) ? budget - used : (size_t)1 << 20;
+    if (fm_path_has_extension(path, ".stl")) return fm_design_from_stl(stock, path, &opt, err);
+    if (fm_path_has_extension(path, ".vdb")) return fm_design_load_vdb(stock, path, &opt, err);
+    if (fm_path_has_extension(path, ".hf")) {
+        model_field mf;
+        const double h = fm_stock_voxel_size(stock);
+        if (model_field_open(path, h, h * fm_design_band_voxels(stock, spec->tolerance_mm),
+                             "design", &mf, err) != FM_OK)
+            return NULL;
+        fm_design *d = fm_design_from_field(stock, &mf.field, &opt, err);
+        model_field_close(&mf);
+        return d;
+    }
+    fm_error_set(err, FM_ERR_INPUT, "design '%s' is not a .stl mesh, a .hf model or a .vdb snapshot",
+                 path);
+    return NULL;
+}
+
+static double process_cpu_s(void)
+{
+    struct rusage ru;
+    if (getrusage(RUSAGE_SELF, &ru) != 0) return 0;
+    return (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
+           (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
+}
+
 /* ------------------------------------------------------------- tools -- */
 
 /* A built tool, with the HyperFun model behind a custom cutter. */
@@ -231,6 +486,24 @@ fm_status fm_job_interpret(const fm_job_spec *spec, fm_motion_sink sink, void *u
     return st;
 }
 
+/* ---------------------------------------------------------- stop at -- */
+
+/* spec.stop_at_line: has the program gone past LINE with this motion? */
+typedef struct stop_rule {
+    int line;  /* 0: never stop */
+    int seen;  /* a motion of LINE went by */
+} stop_rule;
+
+static int stop_before(stop_rule *r, const fm_motion *m)
+{
+    if (r->line <= 0) return 0;
+    if (m->line == r->line) {
+        r->seen = 1;
+        return 0;
+    }
+    return r->seen || m->line > r->line;
+}
+
 /* -------------------------------------------------------- first pass -- */
 
 typedef struct survey {
@@ -239,6 +512,8 @@ typedef struct survey {
     int max_line;
     int any_tip;
     double tip_lo[3], tip_hi[3]; /* box of the tool tip over the program */
+    stop_rule stop;
+    int stopped;
 } survey;
 
 static void grow_box(survey *s, const double lo[3], const double hi[3])
@@ -253,6 +528,8 @@ static void grow_box(survey *s, const double lo[3], const double hi[3])
 static int survey_sink(void *user, const fm_motion *m)
 {
     survey *s = user;
+    /* past a stop the program is still checked, but not counted */
+    if (s->stop.line > 0 && (s->stopped || (s->stopped = stop_before(&s->stop, m)))) return 0;
     s->motions++;
     if (m->t1 > s->time_total) s->time_total = m->t1;
     if (m->line > s->max_line) s->max_line = m->line;
@@ -306,6 +583,8 @@ typedef struct cutter {
 
     fm_job_progress progress;
     double started;
+    stop_rule stop;
+    int stopped_at_line;
     unsigned char *lines_cut; /* bitmap of source lines that cut */
     size_t lines_cap;
     long blocks;
@@ -467,6 +746,12 @@ static fm_status check_skipped(cutter *c, const fm_motion *m)
 static int cut_sink(void *user, const fm_motion *m)
 {
     cutter *c = user;
+    if (stop_before(&c->stop, m)) {
+        /* what the lines before cut is in the stock, then the job ends */
+        if ((c->status = flush_batch(c)) != FM_OK) return 1;
+        c->stopped_at_line = 1;
+        return 1;
+    }
     c->progress.motions_done++;
     if (c->hooks && c->hooks->on_motion) c->hooks->on_motion(c->hooks->user, m);
     if (m->index < c->spec->skip_motions) {
@@ -644,7 +929,139 @@ static fm_status run_source(cutter *c)
     }
 }
 
+/* ------------------------------------------------------------- blame -- */
+
+/* Each listed gouge is blamed on the motion whose swept volume reaches
+ * deepest at the gouge's deepest point (on the final surface, so the motion
+ * that cut it has its sweep's boundary there and every other a value at or
+ * below it). The program is interpreted once more; only motions whose box
+ * can reach a point build their sweep. A gouge no motion reaches within a
+ * voxel (cut before this program, in an earlier job's stock) stays
+ * unblamed. */
+typedef struct blamer {
+    const job_tools *tools;
+    const fm_deviation *dev;
+    fm_job_blame *blame;
+    double best[FM_JOB_MAX_REGIONS];
+    double voxel;
+    stop_rule stop;
+    fm_error *err;
+    fm_status status;
+} blamer;
+
+/* A box that holds the motion's swept volume (a quick test before building
+ * the sweep): the path's box widened by the tool's size. */
+static void motion_reach(const fm_motion *m, const fm_tool *tool, double lo[3], double hi[3])
+{
+    const double r = 0.5 * tool->spec.diameter + tool->spec.flute_length + tool->spec.length;
+    for (int k = 0; k < 3; k++) {
+        lo[k] = fmin(m->start[k], m->end[k]) + m->tip_offset[k];
+        hi[k] = fmax(m->start[k], m->end[k]) + m->tip_offset[k];
+    }
+    if (m->kind == FM_MOTION_ARC) {
+        double rr = 0;
+        for (int k = 0; k < 3; k++)
+            if (k != m->plane_axis) rr += (m->start[k] - m->center[k]) * (m->start[k] - m->center[k]);
+        const double ra = sqrt(rr), rb = sqrt((m->end[0] - m->center[0]) * (m->end[0] - m->center[0]) +
+                                              (m->end[1] - m->center[1]) * (m->end[1] - m->center[1]) +
+                                              (m->end[2] - m->center[2]) * (m->end[2] - m->center[2]));
+        const double rad = fmax(ra, rb);
+        for (int k = 0; k < 3; k++) {
+            if (k == m->plane_axis) continue;
+            lo[k] = fmin(lo[k], m->center[k] + m->tip_offset[k] - rad);
+            hi[k] = fmax(hi[k], m->center[k] + m->tip_offset[k] + rad);
+        }
+    }
+    for (int k = 0; k < 3; k++) {
+        lo[k] -= r;
+        hi[k] += r;
+    }
+}
+
+static int blame_sink(void *user, const fm_motion *m)
+{
+    blamer *b = user;
+    if (stop_before(&b->stop, m)) return 1;
+    if (m->kind == FM_MOTION_DWELL) return 0;
+    const fm_tool *tool = tool_for(b->tools, m->tool);
+    if (!tool) return 0;
+    const size_t n = b->dev->gouge_count;
+    int any = m->kind == FM_MOTION_PARAM; /* its box is not known before the sweep */
+    if (!any) {
+        double lo[3], hi[3];
+        motion_reach(m, tool, lo, hi);
+        for (size_t i = 0; i < n && !any; i++) {
+            const double *p = b->dev->gouges[i].position;
+            any = p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] && p[1] <= hi[1] &&
+                  p[2] >= lo[2] && p[2] <= hi[2];
+        }
+    }
+    if (!any) return 0;
+    fm_sweep *sweep = NULL;
+    if ((b->status = fm_sweep_new(m, &tool->flutes, NULL, &sweep, b->err)) != FM_OK) return 1;
+    fm_sweep_worker *w = fm_sweep_worker_new(sweep);
+    if (!w) {
+        fm_sweep_free(sweep);
+        b->status = fm_error_set(b->err, FM_ERR_LIMIT, "out of memory");
+        return 1;
+    }
+    double lo[3], hi[3];
+    fm_sweep_bounds(sweep, lo, hi);
+    for (size_t i = 0; i < n; i++) {
+        const double *p = b->dev->gouges[i].position;
+        int inside = 1;
+        for (int k = 0; k < 3; k++) inside &= p[k] >= lo[k] - b->voxel && p[k] <= hi[k] + b->voxel;
+        if (!inside) continue;
+        const double v = fm_sweep_eval(sweep, w, p);
+        /* the first of equal depths: the motion that cut it first */
+        if (v > b->best[i] + 1e-9) {
+            b->best[i] = v;
+            b->blame[i].line = m->line;
+            b->blame[i].tool = m->tool;
+        }
+    }
+    fm_sweep_worker_free(w);
+    fm_sweep_free(sweep);
+    return 0;
+}
+
+static fm_status blame_gouges(const fm_job_spec *spec, const job_tools *tools, double voxel,
+                              fm_job_result *result, fm_error *err)
+{
+    const fm_deviation *dev = &result->deviation;
+    if (dev->gouge_count == 0) return FM_OK;
+    blamer *b = calloc(1, sizeof *b);
+    if (!b) return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    b->tools = tools;
+    b->dev = dev;
+    b->blame = result->gouge_blame;
+    b->voxel = voxel;
+    b->stop.line = spec->stop_at_line;
+    b->err = err;
+    for (size_t i = 0; i < FM_JOB_MAX_REGIONS; i++) b->best[i] = -INFINITY;
+    /* no probe: a G38 move does not trip here (docs/simulate.md) */
+    fm_status st = run_program(spec, tools->use, blame_sink, b, NULL, err);
+    if (st == FM_OK) st = b->status;
+    /* a sweep that ends more than a voxel from the point did not cut it */
+    for (size_t i = 0; i < dev->gouge_count; i++)
+        if (b->best[i] < -b->voxel) b->blame[i].line = b->blame[i].tool = 0;
+    free(b);
+    return st;
+}
+
 /* ---------------------------------------------------------------- run -- */
+
+void fm_job_result_release(fm_job_result *r)
+{
+    fm_stock_free(r->stock);
+    r->stock = NULL;
+    fm_design_free(r->design);
+    r->design = NULL;
+    fm_deviation_free(&r->deviation);
+    r->has_deviation = 0;
+    fm_check_free(r->check);
+    r->check = NULL;
+}
 
 fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_result *result,
                      fm_error *err)
@@ -663,6 +1080,7 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
      * its length gives the progress its denominator. */
     survey sv = {0};
     int live = spec->program_kind == FM_PROGRAM_LIVE;
+    sv.stop.line = spec->stop_at_line;
     st = live ? FM_OK : run_program(spec, tools.use, survey_sink, &sv, NULL, err);
     if (st != FM_OK) {
         free_tools(&tools);
@@ -675,6 +1093,21 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     if (!stock) {
         free_tools(&tools);
         return err ? err->code : FM_ERR_INPUT;
+    }
+    /* The design before any cut: its errors come at once, and progress
+     * hooks can colour by deviation while the job runs. */
+    fm_design *design = NULL;
+    double design_wall = 0, design_cpu = 0;
+    if (spec->design_path) {
+        const double w0 = now_s(), c0 = process_cpu_s();
+        design = make_design(spec, stock, err);
+        if (!design) {
+            fm_stock_free(stock);
+            free_tools(&tools);
+            return err && err->code ? err->code : FM_ERR_INPUT;
+        }
+        design_wall += now_s() - w0;
+        design_cpu += process_cpu_s() - c0;
     }
 
     double initial_lo[3] = {0, 0, 0}, initial_hi[3] = {0, 0, 0};
@@ -694,6 +1127,7 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
 
     cutter *c = calloc(1, sizeof *c);
     if (!c) {
+        fm_design_free(design);
         fm_stock_free(stock);
         free_tools(&tools);
         return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
@@ -707,16 +1141,30 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     c->progress.motions_total = sv.motions;
     c->progress.program_time_total = sv.time_total;
     c->progress.block = -1;
+    c->progress.design = design;
+    c->stop.line = spec->stop_at_line;
 
     if (spec->check) st = setup_check(c, &sv, err);
     if (st == FM_OK)
         st = live ? run_source(c) : run_program(spec, tools.use, cut_sink, c, cut_probe, err);
     if (st == FM_OK) st = c->status;
-    if (st == FM_OK && !c->stopped) st = flush_batch(c);
+    if (st == FM_OK && !c->stopped && !c->stopped_at_line) st = flush_batch(c);
+    if (st == FM_OK && design && !c->stopped) {
+        const double w0 = now_s(), c0 = process_cpu_s();
+        st = fm_stock_compare_design(stock, design, FM_JOB_MAX_REGIONS, &result->deviation, err);
+        result->has_deviation = st == FM_OK;
+        if (st == FM_OK)
+            st = blame_gouges(spec, &tools, fm_stock_voxel_size(stock), result, err);
+        design_wall += now_s() - w0;
+        design_cpu += process_cpu_s() - c0;
+    }
     if (st != FM_OK) {
         free_check(c);
         free(c->lines_cut);
         free(c);
+        fm_deviation_free(&result->deviation);
+        result->has_deviation = 0;
+        fm_design_free(design);
         fm_stock_free(stock);
         free_tools(&tools);
         return st;
@@ -750,6 +1198,10 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     if (result->top_block_count > FM_JOB_TOP_BLOCKS) result->top_block_count = FM_JOB_TOP_BLOCKS;
     result->cut_stats = c->stats;
     result->cuts = c->cuts;
+    result->stopped_at_line = c->stopped_at_line ? spec->stop_at_line : 0;
+    result->design = design;
+    result->design_wall_s = design_wall;
+    result->design_cpu_s = design_cpu;
     result->wall_time_s = now_s() - started;
     result->peak_memory_bytes = fm_job_peak_rss();
 

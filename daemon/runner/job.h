@@ -79,6 +79,17 @@ typedef struct fm_job_spec {
      * attribution (docs/simulate.md). */
     double batch_diameters;
 
+    /* Design comparison (docs/simulate.md): the intended part, a .stl mesh,
+     * a .hf model or a frepmill .vdb snapshot; NULL for none. Deviations up
+     * to tolerance_mm (0: half a voxel) count as on the design. */
+    const char *design_path;
+    double tolerance_mm;
+    /* Stop after the motions of this source line (0: run to the end): the
+     * job ends at the first motion of another line that follows one of
+     * LINE's, or, when LINE makes no motion, at the first motion of a line
+     * after it; the stock is then as the program leaves it there. */
+    int stop_at_line;
+
     /* Resuming (the daemon after a restart): start from this stock instead
      * of stock_spec (the job takes ownership, also on error), and cut only
      * the motions from index skip_motions on (the program is still
@@ -104,11 +115,6 @@ typedef struct fm_job_spec {
 
     /* Live mode (program_kind FM_PROGRAM_LIVE): the motions' source. */
     const fm_job_motion_source *source;
-
-    /* Room for what is coming; unset means "not given". */
-    const char *design_path;     /* design part to compare with (issue 16) */
-    double design_tolerance_mm;  /* issue 16 */
-    double stop_at_s;            /* issue 16: stop at this program time */
 } fm_job_spec;
 
 void fm_job_spec_default(fm_job_spec *spec);
@@ -136,6 +142,9 @@ typedef struct fm_job_progress {
     /* Live jobs: no motion is waiting now (the stock has caught up with
      * the machine): the moment to publish what changed. */
     int idle;
+    /* The design when the spec names one (for deviation colours), or NULL;
+     * valid during the callback. */
+    const fm_design *design;
 } fm_job_progress;
 
 typedef struct fm_job_hooks {
@@ -156,6 +165,15 @@ typedef struct fm_job_hooks {
 } fm_job_hooks;
 
 #define FM_JOB_TOP_BLOCKS 10
+/* Gouge and excess regions a report lists (deepest first). */
+#define FM_JOB_MAX_REGIONS 100
+
+/* The motion blamed for a gouge region: the one whose swept volume reaches
+ * deepest at the region's deepest point (docs/simulate.md). */
+typedef struct fm_job_blame {
+    int line; /* source line; 0 when no motion of this program reaches it */
+    int tool;
+} fm_job_blame;
 
 typedef struct fm_job_result {
     fm_stock *stock;           /* the final stock, owned by the caller (fm_stock_free) */
@@ -184,7 +202,23 @@ typedef struct fm_job_result {
      * wall time its relations took. */
     fm_check *check;
     double check_time_s;
+    /* spec.stop_at_line when the job stopped there (it then ends as done,
+     * not stopped), else 0. */
+    int stopped_at_line;
+    /* With a design: the design (for deviation colours; owned by the
+     * caller, fm_design_free), the deviation (fm_deviation_free) and the
+     * blame of each listed gouge; the time the comparison took (building
+     * the design, comparing, blaming), wall and CPU of the process. */
+    fm_design *design;
+    int has_deviation;
+    fm_deviation deviation;
+    fm_job_blame gouge_blame[FM_JOB_MAX_REGIONS];
+    double design_wall_s, design_cpu_s;
 } fm_job_result;
+
+/* Free what a result owns (stock, design, deviation, check); safe on a zeroed
+ * result. */
+void fm_job_result_release(fm_job_result *result);
 
 /* Run the whole job. On success result->stock holds the final stock. On
  * error nothing is left allocated and err says what and where (programs

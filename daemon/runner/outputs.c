@@ -153,6 +153,12 @@ static fm_status write_png(const fm_mesh *mesh, const char *path, const fm_outpu
     fm_render_default(&ro);
     ro.width = opt->png_width;
     ro.height = opt->png_height;
+    fm_render_legend legend;
+    if (opt->coloring == FM_MESH_COLOR_DEVIATION && opt->design) {
+        const double tol = fm_design_tolerance(opt->design);
+        fm_mesh_deviation_legend(tol, 10 * tol, &legend);
+        ro.legend = &legend;
+    }
     fm_render_polyline *lines = NULL;
     const fm_toolpath *tp = opt->toolpath;
     if (tp && tp->line_count) {
@@ -198,6 +204,7 @@ fm_status fm_outputs_write(const char *const *paths, size_t count, fm_stock *sto
             fm_mesh_extract_default(&eo);
             eo.coloring = opt->coloring;
             eo.top_z = opt->top_z;
+            eo.design = opt->design;
             /* faces no cut reached keep a neutral grey, so that cuts stand out */
             eo.uncut_grey = 1;
             mesh = fm_mesh_from_stock(stock, &eo, err);

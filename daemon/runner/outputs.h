@@ -26,6 +26,7 @@ typedef struct fm_output_options {
     double top_z;              /* original stock top for depth colours; surface no cut
                                   reached is grey with either colouring */
     int png_width, png_height; /* default 1024 x 768 */
+    const fm_design *design;   /* FM_MESH_COLOR_DEVIATION: the design; pictures get its key */
     const fm_toolpath *toolpath; /* overlay for pictures; may be NULL */
 } fm_output_options;
 void fm_output_options_default(fm_output_options *opt);

@@ -4,6 +4,40 @@
 
 #include "findings_json.h"
 
+static json_t *position_json(const double p[3])
+{
+    return json_pack("[f, f, f]", p[0], p[1], p[2]);
+}
+
+/* "design": the deviation from the design (docs/simulate.md). */
+static json_t *design_json(const fm_job_result *r)
+{
+    const fm_deviation *d = &r->deviation;
+    json_t *gouges = json_array(), *excess = json_array();
+    for (size_t i = 0; i < d->gouge_count; i++) {
+        const fm_deviation_region *g = &d->gouges[i];
+        const fm_job_blame *b = &r->gouge_blame[i];
+        json_array_append_new(
+            gouges, json_pack("{s:o, s:o, s:f, s:o, s:f}", "line",
+                              b->line > 0 ? json_integer(b->line) : json_null(), "tool",
+                              b->line > 0 ? json_integer(b->tool) : json_null(), "depth_mm",
+                              g->depth_mm, "position", position_json(g->position), "volume_mm3",
+                              g->volume_mm3));
+    }
+    for (size_t i = 0; i < d->excess_count; i++) {
+        const fm_deviation_region *e = &d->excess[i];
+        json_array_append_new(excess, json_pack("{s:f, s:o, s:f}", "depth_mm", e->depth_mm,
+                                                "position", position_json(e->position),
+                                                "volume_mm3", e->volume_mm3));
+    }
+    return json_pack("{s:f, s:f, s:f, s:f, s:f, s:I, s:I, s:o, s:o}", "tolerance_mm",
+                     d->tolerance_mm, "max_gouge_mm", d->max_gouge_mm, "max_excess_mm",
+                     d->max_excess_mm, "gouge_volume_mm3", d->gouge_volume_mm3,
+                     "excess_volume_mm3", d->excess_volume_mm3, "gouge_regions",
+                     (json_int_t)d->gouge_total, "excess_regions", (json_int_t)d->excess_total,
+                     "gouges", gouges, "excess", excess);
+}
+
 json_t *fm_job_report_json(const fm_job_result *r)
 {
     json_t *tools = json_array();
@@ -32,5 +66,8 @@ json_t *fm_job_report_json(const fm_job_result *r)
         json_object_set_new(out, "findings", fm_findings_json_array(r->check));
         json_object_set_new(out, "check_time_s", json_real(r->check_time_s));
     }
+    if (out && r->stopped_at_line)
+        json_object_set_new(out, "stopped_at_line", json_integer(r->stopped_at_line));
+    if (out && r->has_deviation) json_object_set_new(out, "design", design_json(r));
     return out;
 }
