@@ -8,8 +8,8 @@
  * design_private.h; every exception stops at it. OpenVDB signs throughout
  * (phi < 0 inside). */
 #include "stock/design_private.h"
+#include "stock/vdb_bridge.hpp"
 
-#include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
@@ -30,20 +30,8 @@
 
 namespace {
 
-using Grid = openvdb::FloatGrid;
-using Tree = Grid::TreeType;
-using Leaf = Tree::LeafNodeType;
-using Coord = openvdb::Coord;
-using CoordBBox = openvdb::CoordBBox;
-using CAcc = openvdb::tree::ValueAccessor<const Tree>;
+using namespace fm_vdb_bridge;
 using Sampler = openvdb::tools::GridSampler<CAcc, openvdb::tools::BoxSampler>;
-
-constexpr int LEAF_DIM = 8;
-constexpr int LEAF_SIZE = 512;
-constexpr int NODE1_DIM = 128;
-constexpr int NODE2_DIM = 4096;
-
-static_assert(Leaf::DIM == LEAF_DIM, "frepmill assumes OpenVDB's 5-4-3 float tree");
 
 /* Below this share of a voxel, gouge or excess is the rounding between two
  * grids that describe the same surface (a plane sampled by the stock's cut
@@ -53,49 +41,6 @@ static_assert(Leaf::DIM == LEAF_DIM, "frepmill assumes OpenVDB's 5-4-3 float tre
 constexpr double MIN_SHARE = 1e-4;
 
 enum Kind : uint8_t { NONE = 0, GOUGE = 1, EXCESS = 2 };
-
-const Grid &grid_of(const fm_vdb *v)
-{
-    return **static_cast<const Grid::Ptr *>(fm_vdb_grid_ptr(const_cast<fm_vdb *>(v)));
-}
-
-template <class F>
-fm_status guarded(fm_error *err, const char *what, F &&f)
-{
-    try {
-        return f();
-    } catch (const std::bad_alloc &) {
-        return fm_error_set(err, FM_ERR_LIMIT, "%s: out of memory", what);
-    } catch (const openvdb::Exception &e) {
-        return fm_error_set(err, FM_ERR_INTERNAL, "%s: OpenVDB: %s", what, e.what());
-    } catch (const std::exception &e) {
-        return fm_error_set(err, FM_ERR_INTERNAL, "%s: %s", what, e.what());
-    } catch (...) {
-        return fm_error_set(err, FM_ERR_INTERNAL, "%s: unknown C++ exception", what);
-    }
-}
-
-/* The removed volume's measure (vdb_bridge.cpp): the part of a voxel inside
- * the surface, a linear smooth Heaviside, exact for planes through voxel
- * faces. */
-inline double inside_fraction(double phi, double inv_voxel)
-{
-    const double f = 0.5 - phi * inv_voxel;
-    return f <= 0.0 ? 0.0 : (f >= 1.0 ? 1.0 : f);
-}
-
-/* Edge, in voxels, of the region a value found at this accessor depth
- * stands for (-1: the root's background). */
-inline int depth_extent(int depth)
-{
-    switch (depth) {
-    case -1:
-    case 0: return NODE2_DIM;
-    case 1: return NODE1_DIM;
-    case 2: return LEAF_DIM;
-    default: return 1;
-    }
-}
 
 struct CoordHash {
     size_t operator()(const Coord &c) const
@@ -209,9 +154,9 @@ void classify(const Setup &s, Worker &w, const Coord &o, double sums[2])
     double g = 0, e = 0;
     for (int i = 0; i < LEAF_SIZE; i++) {
         const double a = sv ? sv[i] : sc, b = dv ? dv[i] : dc;
-        const double hm = inside_fraction(std::max(a, b), s.inv);
-        const double fg = inside_fraction(b, s.inv) - hm;
-        const double fe = inside_fraction(a, s.inv) - hm;
+        const double hm = inside_fraction(float(std::max(a, b)), s.inv);
+        const double fg = inside_fraction(float(b), s.inv) - hm;
+        const double fe = inside_fraction(float(a), s.inv) - hm;
         g += fg;
         e += fe;
         if (!(fg > MIN_SHARE || fe > MIN_SHARE)) continue;
@@ -614,8 +559,8 @@ fm_status compare(const fm_vdb *sv, const fm_vdb *dv, const fm_vdb_compare_optio
                   fm_deviation *out, fm_error *err)
 {
     Setup s;
-    s.stock = &grid_of(sv);
-    s.design = &grid_of(dv);
+    s.stock = sv->grid.get();
+    s.design = dv->grid.get();
     s.h = fm_vdb_voxel(sv);
     s.inv = 1.0 / s.h;
     fm_vdb_origin(sv, s.origin);
@@ -648,8 +593,8 @@ fm_status compare(const fm_vdb *sv, const fm_vdb *dv, const fm_vdb_compare_optio
     const size_t nleaves = walk.leaves.size();
     std::vector<double> sums(2 * nleaves, 0.0);
     tbb::enumerable_thread_specific<std::unique_ptr<Worker>> workers;
-    tbb::task_arena arena(opt.threads > 0 ? opt.threads : int(tbb::task_arena::automatic));
-    arena.execute([&] {
+    std::unique_ptr<tbb::task_arena> arena = make_arena(opt.threads);
+    arena->execute([&] {
         tbb::parallel_for(tbb::blocked_range<size_t>(0, nleaves, 32),
                           [&](const tbb::blocked_range<size_t> &r) {
                               auto &w = workers.local();
@@ -875,7 +820,7 @@ fm_status fm_vdb_compare(const fm_vdb *stock, const fm_vdb *design,
 fm_status fm_vdb_rebuild_onto(fm_vdb *target, const fm_vdb *source, size_t budget, fm_error *err)
 {
     return guarded(err, "rebuilding the design's level set", [&]() -> fm_status {
-        const Grid &src = grid_of(source);
+        const Grid &src = *source->grid;
         std::vector<openvdb::Vec3s> points;
         std::vector<openvdb::Vec3I> tris;
         std::vector<openvdb::Vec4I> quads;
