@@ -20,7 +20,10 @@
  *    s R - (s/2) sqrt(R^2 - s^2/4) - R^2 asin(s / 2R), and a region holds the
  *    part of it higher than the tolerance (2% each).
  * 3. --stop-at: the pocket program stopped after its clearing pass leaves no
- *    gouge, and the report says where it stopped. */
+ *    gouge, and the report says where it stopped; its stock saved as a .vdb
+ *    and cut by the rest of the program ends as the whole program does.
+ * 4. Deviation colours on the pocket's mesh: the strip's floor red, the
+ *    walls left short blue, the top green; the picture carries the key. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -254,6 +257,70 @@ static const char *pocket_program =
     "G0 Z5\n"                     /* 25 */
     "M5 M30\n";                   /* 26 */
 
+/* Vertices of the pocket's mesh whose place is unambiguous get the colour
+ * their deviation asks for: on the strip's floor (gouge 0.2 mm) red, on the
+ * cut pocket's long walls (excess 0.4 mm) blue, on the block's top away
+ * from the pocket green. The key is in the picture's corner. */
+static void check_colors(fm_job_result *r, double tol)
+{
+    fm_mesh_extract_options eo;
+    fm_mesh_extract_default(&eo);
+    eo.coloring = FM_MESH_COLOR_DEVIATION;
+    eo.design = r->design;
+    fm_error err;
+    fm_mesh *m = fm_mesh_from_stock(r->stock, &eo, &err);
+    CHECK(m != NULL);
+    if (!m) return;
+    uint8_t red[3], blue[3], green[3];
+    fm_mesh_deviation_color(-0.2, tol, 10 * tol, red);
+    fm_mesh_deviation_color(0.4, tol, 10 * tol, blue);
+    fm_mesh_deviation_color(0, tol, 10 * tol, green);
+    CHECK(red[0] > red[2] && blue[2] > blue[0] && green[1] > green[0] && green[1] > green[2]);
+    size_t n[3] = {0, 0, 0}, wrong = 0;
+    for (size_t i = 0; i < m->vertex_count; i++) {
+        const float *p = m->positions + 3 * i;
+        const uint8_t *c = m->colors + 3 * i;
+        const uint8_t *want = NULL;
+        int k = -1;
+        if (fabs(p[2] + 5.2) < 0.02 && p[0] > 21 && p[0] < 34 && fabs(p[1] - 20) < 2)
+            want = red, k = 0;
+        else if ((fabs(p[1] - 10.4) < 0.02 || fabs(p[1] - 29.6) < 0.02) && p[0] > 15 &&
+                 p[0] < 45 && p[2] < -0.5 && p[2] > -4.5)
+            want = blue, k = 1;
+        else if (fabs(p[2]) < 0.02 && (p[0] < 8 || p[0] > 52) && p[1] > 2 && p[1] < 38)
+            want = green, k = 2;
+        if (!want) continue;
+        n[k]++;
+        if (memcmp(c, want, 3)) wrong++;
+    }
+    printf("deviation colours: %zu red, %zu blue, %zu green vertices judged, %zu wrong\n", n[0],
+           n[1], n[2], wrong);
+    CHECK(n[0] > 100 && n[1] > 100 && n[2] > 100);
+    CHECK(wrong == 0);
+    fm_render_options ro;
+    fm_render_default(&ro);
+    fm_render_legend key;
+    fm_mesh_deviation_legend(tol, 10 * tol, &key);
+    ro.legend = &key;
+    CHECK(key.count == 7 && !strcmp(key.labels[0], "+0.50") && !strcmp(key.labels[2], "+0.05") &&
+          !strcmp(key.labels[3], "0") && !strcmp(key.labels[6], "-0.50"));
+    uint8_t *rgb = malloc((size_t)ro.width * ro.height * 3);
+    if (rgb && fm_render_rgb(m, &ro, rgb, &err) == FM_OK) {
+        /* each swatch's middle pixel has its colour (layout in render.c:
+         * panel at 6, 6; swatches from y = 12 + 18 (i + 1), x = 12..44) */
+        int ok = 1;
+        for (size_t i = 0; i < key.count; i++) {
+            const int x = 20, y = 12 + 18 * (int)(i + 1) + 8;
+            ok &= !memcmp(rgb + 3 * ((size_t)y * ro.width + x), key.colors[i], 3);
+        }
+        CHECK(ok);
+    } else {
+        CHECK(0);
+    }
+    free(rgb);
+    fm_mesh_free(m);
+}
+
 static void test_pocket(void)
 {
     const double h = 0.1, tol = 0.05;
@@ -338,6 +405,8 @@ static void test_pocket(void)
     CHECK(json_is_object(e0) && !json_object_get(e0, "line"));
     CHECK(json_number_value(json_object_get(e0, "volume_mm3")) > 0);
     json_decref(rep);
+    check_colors(&r, tol);
+    const double final_whole = r.final_volume_mm3;
     fm_job_result_release(&r);
 
     /* stopped after the clearing pass (line 15): the walls' excess, no gouge */
@@ -357,6 +426,23 @@ static void test_pocket(void)
     rep = fm_job_report_json(&r);
     CHECK(json_integer_value(json_object_get(rep, "stopped_at_line")) == 15);
     json_decref(rep);
+    /* the in-process stock, cut by the rest of the program (lines 16 on) */
+    char saved[512];
+    snprintf(saved, sizeof saved, "%s/after15.vdb", dir);
+    fm_error err;
+    CHECK(fm_stock_save(r.stock, saved, NULL, &err) == FM_OK);
+    fm_job_result_release(&r);
+    const char *rest = strstr(pocket_program, "G0 Z5\n(a strip");
+    char program[2048];
+    snprintf(program, sizeof program, "G21 G90 G17\nT1 M6\nS10000 M3\n%s", rest ? rest : "");
+    if (!run(program, saved, design, h, tol, 0, &r)) {
+        CHECK(0);
+        return;
+    }
+    printf("rest of the program on the saved stock: final %.3f mm3 (whole program %.3f), %zu gouges\n",
+           r.final_volume_mm3, final_whole, r.deviation.gouge_total);
+    CHECK_NEAR(r.final_volume_mm3, final_whole, 1e-6 * final_whole);
+    CHECK(r.deviation.gouge_total == 2);
     fm_job_result_release(&r);
 }
 
