@@ -514,7 +514,9 @@ static void test_scallops(void)
 
 int main(int argc, char **argv)
 {
+    /* --pocket or --scallops: one case alone (profiling) */
     const int only_scallops = argc > 1 && !strcmp(argv[1], "--scallops");
+    const int only_pocket = argc > 1 && !strcmp(argv[1], "--pocket");
     fm_error err;
     if (fm_tooltable_parse_json(tool_json, strlen(tool_json), "tools.json", &tools, &err) != FM_OK) {
         fprintf(stderr, "tools: %s\n", err.message);
@@ -523,7 +525,7 @@ int main(int argc, char **argv)
     snprintf(dir, sizeof dir, "/tmp/fm-design-XXXXXX");
     if (!mkdtemp(dir)) return 1;
     if (!only_scallops) test_pocket();
-    test_scallops();
+    if (!only_pocket) test_scallops();
     fm_tool_table_free(&tools);
     char cmd[300];
     snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
