@@ -67,6 +67,10 @@ int fm_path_has_extension(const char *path, const char *ext)
     return 1;
 }
 
+/* The search for a HyperFun design's bounds (as stock_spec.c's for stocks). */
+#define JOB_MODEL_SEARCH_MM 2000.0
+#define JOB_MODEL_MAX_BOXES 4000000u
+
 /* A HyperFun model as a field for a stock or a design.
  *
  * Values: HyperFun functions are rarely distances (hfSphere is R^2 - r^2)
