@@ -175,6 +175,8 @@ fm_status fm_jobs_check_run(json_t *spec, const char *dir, size_t memory_budget,
     in->spec.stock.memory_budget = memory_budget;
     in->spec.stock.threads = 1; /* a request's thread; leave the cores to the jobs */
     in->spec.dialect = dialect; /* the server's G-code settings, as for jobs */
+    if ((v = json_object_get(options, "dialect"))) in->spec.dialect = json_string_value(v);
+    in->spec.calculator_input = json_is_true(json_object_get(options, "calculator_input"));
     in->spec.subroutine_path = subroutine_path;
 
     tools_text = json_dumps(json_object_get(spec, "tools"), JSON_INDENT(1));

@@ -135,8 +135,11 @@ static void run_job(fm_jobs *jobs, job *j)
         spec.stock.threads = (int)json_integer_value(v);
     if ((v = json_object_get(options, "batch"))) spec.batch_diameters = json_number_value(v);
     if ((v = json_object_get(options, "rapid_rate"))) spec.rapid_rate = json_number_value(v);
-    /* the server's G-code settings (jobs over HTTP cannot name folders) */
+    /* the server's G-code settings unless the job names its dialect (jobs
+     * over HTTP cannot name folders: that would be a file access) */
     spec.dialect = jobs->cfg.dialect;
+    if ((v = json_object_get(options, "dialect"))) spec.dialect = json_string_value(v);
+    spec.calculator_input = json_is_true(json_object_get(options, "calculator_input"));
     spec.subroutine_path = jobs->cfg.subroutine_path;
 
     fm_tool_table table;

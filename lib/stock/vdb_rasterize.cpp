@@ -79,6 +79,17 @@ public:
     void run(std::vector<Box> level)
     {
         while (!level.empty() && !over_limit()) {
+            /* Breadth first, a fine level of a large field holds millions
+             * of boxes before a single leaf is counted against the budget:
+             * past a size, the level is finished piece by piece, so that
+             * the lists stay bounded and the leaf limit stops the pass. */
+            if (level.size() > max_level_boxes) {
+                for (size_t i = 0; i < level.size() && !over_limit(); i += max_level_boxes) {
+                    const size_t end = std::min(level.size(), i + max_level_boxes);
+                    run(std::vector<Box>(level.begin() + long(i), level.begin() + long(end)));
+                }
+                return;
+            }
             /* Chunks of boxes, each classified by one task into its own
              * output; the outputs are joined in chunk order. */
             const size_t chunk = 32, nchunks = (level.size() + chunk - 1) / chunk;
@@ -110,6 +121,8 @@ public:
             level.swap(next);
         }
     }
+
+    static constexpr size_t max_level_boxes = size_t(1) << 16;
 
     bool over_limit() const { return new_leaves_.load(std::memory_order_relaxed) > leaf_limit_; }
     size_t new_leaves() const { return new_leaves_.load(); }
@@ -471,12 +484,20 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
     const double t_classify = seconds_now();
     Workers workers(field);
     Classifier cls(v, field, workers, mode, clo, chi, limit);
+    /* The roots go to the classifier in bounded batches: a large box at a
+     * fine voxel has a billion of them (4 m at 1 um), more than the budget
+     * allows to list. */
     std::vector<Box> roots;
-    for (int x = clo.x() & ~(NODE2_DIM - 1); x <= chi.x(); x += NODE2_DIM)
-        for (int y = clo.y() & ~(NODE2_DIM - 1); y <= chi.y(); y += NODE2_DIM)
-            for (int z = clo.z() & ~(NODE2_DIM - 1); z <= chi.z(); z += NODE2_DIM)
+    for (int x = clo.x() & ~(NODE2_DIM - 1); x <= chi.x() && !cls.over_limit(); x += NODE2_DIM)
+        for (int y = clo.y() & ~(NODE2_DIM - 1); y <= chi.y() && !cls.over_limit(); y += NODE2_DIM)
+            for (int z = clo.z() & ~(NODE2_DIM - 1); z <= chi.z(); z += NODE2_DIM) {
                 roots.push_back(Box{Coord(x, y, z), NODE2_DIM});
-    cls.run(std::move(roots));
+                if (roots.size() == Classifier::max_level_boxes) {
+                    cls.run(std::move(roots));
+                    roots = std::vector<Box>();
+                }
+            }
+    if (!roots.empty() && !cls.over_limit()) cls.run(std::move(roots));
     if (cls.over_limit()) {
         const double need = double(used) + double(cls.new_leaves()) * double(leaf_bytes);
         return fm_error_set(err, FM_ERR_LIMIT,

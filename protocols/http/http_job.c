@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "http_server.h"
+#include "toolpaths/gcode/gcode.h"
 
 int fm_http_error_set(fm_http_error *err, int status, const char *code, const char *fmt, ...)
 {
@@ -248,8 +249,9 @@ static int options_ok(json_t *options, fm_http_error *err)
         fm_http_error_set(err, 400, "bad_type", "options must be an object");
         return 0;
     }
-    static const char *const keys[] = {"name",    "band",  "batch", "rapid_rate", "memory_budget_mb",
-                                       "threads", "check", "color", NULL};
+    static const char *const keys[] = {"name",    "band",  "batch",   "rapid_rate",
+                                       "memory_budget_mb", "threads", "check", "color",
+                                       "dialect", "calculator_input", NULL};
     if (!only_keys(options, keys, "options", err)) return 0;
     json_t *v;
     /* The members of a check object are the daemon's to validate (they
@@ -266,6 +268,19 @@ static int options_ok(json_t *options, fm_http_error *err)
         fm_http_error_set(err, 400, "bad_value",
                           "options.color must be \"tool\" (colour the meshes by the tool that "
                           "cut last) or \"none\"");
+        return 0;
+    }
+    fm_gcode_dialect dialect;
+    if ((v = json_object_get(options, "dialect")) &&
+        (!json_is_string(v) || !fm_gcode_dialect_parse(json_string_value(v), &dialect))) {
+        fm_http_error_set(err, 400, "bad_value",
+                          "options.dialect must be \"linuxcnc\" or \"fanuc\" (the program's G-code "
+                          "dialect; without it the server's setting)");
+        return 0;
+    }
+    if ((v = json_object_get(options, "calculator_input")) && !json_is_boolean(v)) {
+        fm_http_error_set(err, 400, "bad_type",
+                          "options.calculator_input must be true (Fanuc: X5 is 5 mm) or false");
         return 0;
     }
     if ((v = json_object_get(options, "band")) &&

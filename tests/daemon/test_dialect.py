@@ -1,10 +1,12 @@
 """test_dialect.py: the daemon's G-code settings. A daemon started with
 `--dialect fanuc` runs a Fanuc program (O number line, decimal points: "X50"
-would be 0.05 mm); one started with `--subroutine-path DIR` runs a LinuxCNC
+would be 0.05 mm), and so does a job whose options say "dialect": "fanuc" on a
+daemon left at linuxcnc (with "calculator_input": true, "X50" is 50 mm); one
+started with `--subroutine-path DIR` runs a LinuxCNC
 program whose o<slot> call is found in DIR. Each cuts one slot whose volume
 is computed here in closed form: a 6 mm flat end mill 2 mm deep from
 (10,20) to (50,20): (40 * 6 + pi * 3^2) * 2 mm3. A dialect the daemon does
-not know stops its start.
+not know stops its start, and a job naming one is refused (400).
 Usage: test_dialect.py FREPMILLD FREPMILL"""
 import json
 import math
@@ -22,14 +24,23 @@ TOOLS = {"units": "mm", "tools": [{"number": 1, "shape": "flat", "diameter": 6,
 SLOT = (40 * 6 + math.pi * 3 ** 2) * 2
 FANUC = ("%\nO1000 (SLOT)\nG21 G17 G40 G80 G90\nT1 M06\nG00 Z5.\nG00 X10. Y20.\n"
          "G01 Z-2. F300.\nX50. F600.\nG00 Z5.\nM30\n%\n")
+# the same program without decimal points: millimetres only with calculator input
+FANUC_CALCULATOR = FANUC.replace(".", "")
 LINUXCNC_MAIN = "G21 G17 G90\nT1 M6\nG00 Z5\nG00 X10 Y20\no<slot> call\nM2\n"
 LINUXCNC_SUB = "o<slot> sub\nG01 Z-2 F300\nG01 X50 F600\nG00 Z5\no<slot> endsub\nM2\n"
 
 
-def run(frepmilld, state, flags, program, tmp, what):
+def run(frepmilld, state, flags, program, tmp, what, options=None):
     d = Daemon(frepmilld, state, "--workers", "1", *flags)
     try:
         job = {"stock": STOCK, "voxel": VOXEL, "tools": TOOLS, "program": {"gcode": program}}
+        if options:
+            job["options"] = options
+            bad = dict(job, options=dict(options, dialect="haas"))
+            code, body = curl_json("-X", "POST", "-H", "Content-Type: application/json",
+                                   "--data-binary", json.dumps(bad), d.url + "/v1/jobs")
+            check(code == 400 and "options.dialect" in json.dumps(body),
+                  "%s: a job naming dialect haas is refused (%d, %s)" % (what, code, body))
         job_id = submit(d.url, job, tmp)
         status = wait_state(d.url, job_id, ("done", "failed", "cancelled"), 300)
         check(status["state"] == "done", "%s: done (%s)" % (what, status.get("error")))
@@ -59,6 +70,9 @@ def main():
             f.write(LINUXCNC_SUB)
         run(frepmilld, os.path.join(tmp, "a"), ["--dialect", "fanuc"], FANUC, tmp,
             "--dialect fanuc: a Fanuc program")
+        run(frepmilld, os.path.join(tmp, "a2"), [], FANUC_CALCULATOR, tmp,
+            "options.dialect fanuc on a linuxcnc daemon",
+            {"dialect": "fanuc", "calculator_input": True})
         run(frepmilld, os.path.join(tmp, "b"), ["--subroutine-path", subs], LINUXCNC_MAIN, tmp,
             "--subroutine-path: o<slot> call found in the configured folder")
         out = subprocess.run([frepmilld, "--dialect", "haas", "--state-dir",
