@@ -39,9 +39,14 @@ static double cpu_seconds(void)
 int main(void)
 {
 #ifdef FM_UNDER_ASAN
-    printf("stock_memory: skipped under AddressSanitizer (its shadow memory counts in the resident set); "
-           "the plain build runs it\n");
-    return 77;
+    /* The rest (estimate against the grid, volumes, the cuts' memory
+     * safety) holds under the sanitizer too: only the resident bound is
+     * left to the plain build. */
+    const int rss_meaningful = 0;
+    printf("stock_memory: under AddressSanitizer the 300 MB resident bound is not checked (its shadow "
+           "memory counts in the resident set); the plain build checks it\n");
+#else
+    const int rss_meaningful = 1;
 #endif
     fm_error err;
     fm_stock_options o;
@@ -60,7 +65,7 @@ int main(void)
     printf("100x100x50 mm at 0.1 mm: built in %.2f s CPU; grid %.1f MB (estimate %.1f MB); "
            "RSS %.1f MB (%.1f MB before), peak %.1f MB\n",
            t, grid / 1048576.0, est / 1048576.0, rss / 1024.0, base / 1024.0, peak / 1024.0);
-    CHECK(peak < 300 * 1024);
+    CHECK(!rss_meaningful || peak < 300 * 1024);
     CHECK(est >= grid);
     CHECK(est < 2 * grid + (4u << 20));
     const double vol = 100.0 * 100 * 50;
@@ -87,7 +92,7 @@ int main(void)
            "grid %.1f MB, RSS %.1f MB, peak %.1f MB\n",
            t, got, want, 100 * (got - want) / want, fm_stock_memory_bytes(s) / 1048576.0,
            rss2 / 1024.0, peak2 / 1024.0);
-    CHECK(peak2 < 300 * 1024);
+    CHECK(!rss_meaningful || peak2 < 300 * 1024);
     fm_stock_free(s);
     return test_summary("stock_memory");
 }
