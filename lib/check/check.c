@@ -393,6 +393,23 @@ static fm_status check_start(fm_check *c, const fm_motion *first, const fm_tool 
     return FM_OK;
 }
 
+/* A travel_limit finding of motion m at point p, overrun by `over` (mm or
+ * degrees). */
+static fm_status record_travel_limit(fm_check *c, const fm_motion *m, const double p[3],
+                                     double over, fm_error *err)
+{
+    fm_check_finding f;
+    memset(&f, 0, sizeof f);
+    f.severity = FM_CHECK_ERROR;
+    f.line = m->line;
+    f.block = m->block;
+    f.time_s = m->t0;
+    memcpy(f.position, p, sizeof f.position);
+    memcpy(f.contact, p, sizeof f.contact);
+    f.penetration_mm = over;
+    return record(c, FM_CHECK_TRAVEL_LIMIT, FM_CHECK_PART_FLUTES, -1, &f, err);
+}
+
 /* A rotary joint beyond its travel: the joints move linearly in joint
  * space from start to end (with TCP too), so the ends bound the travel.
  * Wrapped axes roll over and have no travel to leave. penetration_mm is
@@ -414,16 +431,7 @@ static fm_status check_rotary_travel(fm_check *c, const fm_motion *m, fm_error *
     }
     if (worst <= 0) return FM_OK;
     const double *p = end_out ? m->end : m->start;
-    fm_check_finding f;
-    memset(&f, 0, sizeof f);
-    f.severity = FM_CHECK_ERROR;
-    f.line = m->line;
-    f.block = m->block;
-    f.time_s = m->t0;
-    memcpy(f.position, p, sizeof f.position);
-    memcpy(f.contact, p, sizeof f.contact);
-    f.penetration_mm = worst;
-    return record(c, FM_CHECK_TRAVEL_LIMIT, FM_CHECK_PART_FLUTES, -1, &f, err);
+    return record_travel_limit(c, m, p, worst, err);
 }
 
 static fm_status check_travel(fm_check *c, const fm_motion *m, fm_error *err)
@@ -447,16 +455,7 @@ static fm_status check_travel(fm_check *c, const fm_motion *m, fm_error *err)
     /* the end beyond the limit, else the start (arcs: the end is a fair guess) */
     const double *p = m->end;
     if (m->end[axis] >= mc->limit_lo[axis] && m->end[axis] <= mc->limit_hi[axis]) p = m->start;
-    fm_check_finding f;
-    memset(&f, 0, sizeof f);
-    f.severity = FM_CHECK_ERROR;
-    f.line = m->line;
-    f.block = m->block;
-    f.time_s = m->t0;
-    memcpy(f.position, p, sizeof f.position);
-    memcpy(f.contact, p, sizeof f.contact);
-    f.penetration_mm = worst;
-    return record(c, FM_CHECK_TRAVEL_LIMIT, FM_CHECK_PART_FLUTES, -1, &f, err);
+    return record_travel_limit(c, m, p, worst, err);
 }
 
 /* The motion's flutes stay in the stock's exact distance until the caller

@@ -5,6 +5,7 @@ bounded."""
 import json
 import os
 import signal
+import socket
 import struct
 import subprocess
 import time
@@ -148,3 +149,17 @@ def modbus_port(daemon, timeout=30):
                 return int(text.rsplit(":", 1)[1])
         time.sleep(0.05)
     raise RuntimeError("no %s within %d s" % (path, timeout))
+
+
+def modbus_read(port, start, count, fc=4):
+    """One FC03/FC04 read over a raw socket (register values)."""
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+        s.sendall(struct.pack(">HHHBBHH", 1, 0, 6, 1, fc, start, count))
+        head = b""
+        while len(head) < 9:
+            head += s.recv(9 - len(head))
+        n = head[8]
+        data = b""
+        while len(data) < n:
+            data += s.recv(n - len(data))
+    return list(struct.unpack(">%dH" % count, data))

@@ -9,14 +9,13 @@ Usage: test_check.py FREPMILLD FREPMILL"""
 import base64
 import json
 import os
-import socket
 import struct
 import subprocess
 import sys
 import tempfile
 import time
 
-from daemon_util import ROOT, Daemon, check, curl_json, modbus_port, submit, wait_state
+from daemon_util import modbus_read, ROOT, Daemon, check, curl_json, modbus_port, submit, wait_state
 
 CHECK_DIR = os.path.join(ROOT, "tests", "check")
 STOCK = "box:0,0,-10,50,50,0"
@@ -65,20 +64,6 @@ def same_findings(a, b):
             if any(abs(p - q) > 1e-6 for p, q in zip(x[k], y[k])):
                 return False
     return True
-
-
-def modbus_read(port, start, count, fc=4):
-    """One FC03/FC04 read over a raw socket (register values)."""
-    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
-        s.sendall(struct.pack(">HHHBBHH", 1, 0, 6, 1, fc, start, count))
-        head = b""
-        while len(head) < 9:
-            head += s.recv(9 - len(head))
-        n = head[8]
-        data = b""
-        while len(data) < n:
-            data += s.recv(n - len(data))
-    return list(struct.unpack(">%dH" % count, data))
 
 
 def main():

@@ -11,30 +11,14 @@ Exits 77 when /usr/share/linuxcnc/ncfiles/3D_Chips.ngc is absent (fails
 with CI=true)."""
 import json
 import os
-import socket
-import struct
 import sys
 import tempfile
 import time
 
-from daemon_util import ROOT, Daemon, check, curl, curl_json, modbus_port, submit, wait_state
+from daemon_util import modbus_read, ROOT, Daemon, check, curl, curl_json, modbus_port, submit, wait_state
 
 CHIPS = "/usr/share/linuxcnc/ncfiles/3D_Chips.ngc"
 STOCK = "box:-50,-50,-50,50,50,0"
-
-
-def modbus_read(port, start, count, fc=4):
-    """One FC04 read over a raw socket (register values)."""
-    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
-        s.sendall(struct.pack(">HHHBBHH", 1, 0, 6, 1, fc, start, count))
-        head = b""
-        while len(head) < 9:
-            head += s.recv(9 - len(head))
-        n = head[8]
-        data = b""
-        while len(data) < n:
-            data += s.recv(n - len(data))
-    return list(struct.unpack(">%dH" % count, data))
 
 
 def first_progress(d, port, job, tmp, want_findings):
