@@ -258,6 +258,9 @@ static void run_case(const bench_case *bc, const bench_opts *o)
            "%zu interval boxes, %zu interior boxes\n",
            r.motions / wall, cs->voxels_evaluated / wall, cs->voxels_evaluated, cs->leaves_evaluated,
            cs->voxels_changed, cs->intervals, cs->interior_boxes);
+    /* the budget warning: must be 0 (issue 19) */
+    printf("  budget warning: %zu voxels uncertain (up to %.4f mm, first at line %d)%s\n", r.voxels_uncertain,
+           r.uncertain_max_mm, r.uncertain_line, r.voxels_uncertain ? "  <-- NOT ZERO" : "");
 
     /* Where the time goes: the parts the job's statistics time, and the
      * set-up and final measures timed here again on their own. */

@@ -55,6 +55,8 @@ static void usage(FILE *out)
             "--dialect the G-code's dialect (default linuxcnc; docs/gcode.md)\n"
             "--subroutine-path  ':'-separated folders of subroutine files (NAME.ngc, Fanuc O1234.nc)\n"
             "--calculator-input Fanuc: X5 is 5 mm, not 0.005 (DPI / Haas setting 162)\n"
+            "--sweep-evaluations  the swept volumes' search budget per point (default 20000);\n"
+            "          a smaller one provokes the budget warning (for tests)\n"
 
             "Exit status: 0 success, 2 bad input, 3 resource limit, 4 I/O error.\n",
             fm_output_formats());
@@ -253,9 +255,13 @@ int fm_cmd_simulate(int argc, char **argv)
             rapid_rate_given = 1;
         } else if (!strcmp(a, "--batch") && parse_double(v, &d)) {
             spec.batch_diameters = d;
+        } else if (!strcmp(a, "--sweep-evaluations") && parse_double(v, &d) && d >= 1 && d <= 1e9 &&
+                   d == floor(d)) {
+            spec.sweep_evaluations = (size_t)d;
         } else if (!strcmp(a, "--voxel") || !strcmp(a, "--band") || !strcmp(a, "--memory-budget") ||
                    !strcmp(a, "--threads") || !strcmp(a, "--rapid-rate") || !strcmp(a, "--batch") ||
-                   !strcmp(a, "--tolerance") || !strcmp(a, "--stop-at")) {
+                   !strcmp(a, "--tolerance") || !strcmp(a, "--stop-at") ||
+                   !strcmp(a, "--sweep-evaluations")) {
             fprintf(stderr, "frepmill simulate: %s %s: not a valid value\n", a, v);
             return 2;
         } else {
@@ -361,6 +367,15 @@ int fm_cmd_simulate(int argc, char **argv)
         fprintf(stderr, "frepmill simulate: check: %zu errors, %zu warnings (%.2f s)\n",
                 fm_check_count_severity(result.check, FM_CHECK_ERROR),
                 fm_check_count_severity(result.check, FM_CHECK_WARNING), result.check_time_s);
+    if (result.voxels_uncertain > 0) {
+        char where[32] = "";
+        if (result.uncertain_line > 0)
+            snprintf(where, sizeof where, " (first at line %d)", result.uncertain_line);
+        fprintf(stderr,
+                "frepmill simulate: warning: %zu voxels may be under-cut by up to %.4f mm%s: the "
+                "swept volume's search ran out of its budget there\n",
+                result.voxels_uncertain, result.uncertain_max_mm, where);
+    }
     if (result.stopped_at_line)
         fprintf(stderr, "frepmill simulate: stopped after line %d\n", result.stopped_at_line);
     if (result.has_deviation) {

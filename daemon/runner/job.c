@@ -648,8 +648,9 @@ static fm_status flush_batch(cutter *c)
     if (c->batch_count == 0) return FM_OK;
     const fm_motion *first = &c->batch[0], *last = &c->batch[c->batch_count - 1];
     fm_field field;
-    fm_status st = fm_sweep_field_many(&field, c->batch, c->batch_count, &c->batch_tool->flutes,
-                                       c->err);
+    fm_sweep_options sweep_opt = {.max_evaluations = c->spec->sweep_evaluations};
+    fm_status st = fm_sweep_field_many_ex(&field, c->batch, c->batch_count, &c->batch_tool->flutes,
+                                          &sweep_opt, c->err);
     if (st == FM_OK) {
         fm_stock_cut cut = {.tool = c->batch_tool->spec.number,
                             .block = first->line,
@@ -673,6 +674,12 @@ static fm_status flush_batch(cutter *c)
             c->stats.time_apply_s += cs.time_apply_s;
             c->stats.time_leaves_cpu_s += cs.time_leaves_cpu_s;
             c->stats.time_field_cpu_s += cs.time_field_cpu_s;
+            if (cs.voxels_uncertain > 0 && c->stats.voxels_uncertain == 0)
+                c->progress.uncertain_line = first->line;
+            c->stats.voxels_uncertain += cs.voxels_uncertain;
+            if (cs.uncertain_max_mm > c->stats.uncertain_max_mm)
+                c->stats.uncertain_max_mm = cs.uncertain_max_mm;
+            c->progress.voxels_uncertain = c->stats.voxels_uncertain;
             c->cuts++;
         }
     }
@@ -1202,6 +1209,9 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     if (result->top_block_count > FM_JOB_TOP_BLOCKS) result->top_block_count = FM_JOB_TOP_BLOCKS;
     result->cut_stats = c->stats;
     result->cuts = c->cuts;
+    result->voxels_uncertain = c->stats.voxels_uncertain;
+    result->uncertain_max_mm = c->stats.uncertain_max_mm;
+    result->uncertain_line = c->progress.uncertain_line;
     result->stopped_at_line = c->stopped_at_line ? spec->stop_at_line : 0;
     result->design = design;
     result->design_wall_s = design_wall;

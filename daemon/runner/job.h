@@ -115,6 +115,11 @@ typedef struct fm_job_spec {
 
     /* Live mode (program_kind FM_PROGRAM_LIVE): the motions' source. */
     const fm_job_motion_source *source;
+
+    /* The swept volumes' search budget per point (fm_sweep_options.
+     * max_evaluations; 0: the default 20,000). Smaller budgets are for
+     * tests that provoke the budget warning (fm_job_result.voxels_uncertain). */
+    size_t sweep_evaluations;
 } fm_job_spec;
 
 void fm_job_spec_default(fm_job_spec *spec);
@@ -145,6 +150,10 @@ typedef struct fm_job_progress {
     /* The design when the spec names one (for deviation colours), or NULL;
      * valid during the callback. */
     const fm_design *design;
+    /* The budget warning so far (fm_job_result.voxels_uncertain and
+     * uncertain_line). */
+    size_t voxels_uncertain;
+    int uncertain_line;
 } fm_job_progress;
 
 typedef struct fm_job_hooks {
@@ -197,6 +206,15 @@ typedef struct fm_job_result {
      * batch of motions is one cut): for benchmarks and profiling. */
     fm_stock_cut_stats cut_stats;
     long cuts;
+    /* The budget warning: voxels left possibly under-cut because a swept
+     * volume's search ran out of its budget before proving the value there
+     * (fm_stock_cut_stats.voxels_uncertain summed over cuts; should be 0),
+     * the most they may lack (mm), and the first source line of the first
+     * cut (a motion or a batch) that had any (0 when none, or when that
+     * motion has no source line). */
+    size_t voxels_uncertain;
+    double uncertain_max_mm;
+    int uncertain_line;
     /* With spec.check: the finished check (its findings closed), owned by
      * the caller (fm_check_free), also when a hook stopped the job; and the
      * wall time its relations took. */

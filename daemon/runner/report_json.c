@@ -61,7 +61,16 @@ json_t *fm_job_report_json(const fm_job_result *r)
                      "wall_time_s", r->wall_time_s, "peak_memory_bytes",
                      (json_int_t)r->peak_memory_bytes, "voxel_mm", r->voxel_mm, "tools", tools,
                      "top_blocks", blocks, "stopped", r->stopped);
-    /* the collision check run in the same pass */
+    /* the budget warning (docs/simulate.md): always there, 0 when the
+     * cuts are exact to the sweep's tolerance */
+    if (out) {
+        json_object_set_new(out, "voxels_uncertain", json_integer((json_int_t)r->voxels_uncertain));
+        json_object_set_new(out, "uncertain_max_mm", json_real(r->uncertain_max_mm));
+        json_object_set_new(out, "uncertain_line", r->voxels_uncertain && r->uncertain_line > 0
+                                                       ? json_integer(r->uncertain_line)
+                                                       : json_null());
+    }
+        /* the collision check run in the same pass */
     if (out && r->check) {
         json_object_set_new(out, "findings", fm_findings_json_array(r->check));
         json_object_set_new(out, "check_time_s", json_real(r->check_time_s));

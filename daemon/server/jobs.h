@@ -63,6 +63,10 @@ typedef struct fm_job_view {
     int error_finding_count; /* findings of severity "error": the collision alarm */
     int first_finding_line;
     int error_code; /* fm_status of a failed job, 0 if none */
+    /* The budget warning (fm_job_progress.voxels_uncertain, uncertain_line):
+     * counted since the job last started (a resumed job counts anew). */
+    size_t voxels_uncertain;
+    int uncertain_line;
 } fm_job_view;
 
 /* Open the state folder (created if missing), load every stored job (done

@@ -73,7 +73,13 @@ json_t *fm_publish_status_json(job *j)
         "motions_total", (json_int_t)j->motions_total, "findings",
         j->findings ? json_incref(j->findings) : json_array(), "error", j->error,
         "mesh_version", (json_int_t)j->mesh_version, "created", j->created, "name", name);
-    if (out) json_object_set_new(out, "tool_colors", tool_colors_json(j));
+    if (out) {
+        json_object_set_new(out, "tool_colors", tool_colors_json(j));
+        json_object_set_new(out, "voxels_uncertain", json_integer((json_int_t)v->voxels_uncertain));
+        json_object_set_new(out, "uncertain_line", v->voxels_uncertain && v->uncertain_line > 0
+                                                       ? json_integer(v->uncertain_line)
+                                                       : json_null());
+    }
     pthread_mutex_unlock(&j->lock);
     return out;
 }
@@ -114,6 +120,8 @@ void fm_publish_view_from_status(job *j, json_t *status)
     j->initial_mm3 = json_number_value(json_object_get(status, "initial_volume_mm3"));
     j->motions_done = (long)json_integer_value(json_object_get(status, "motions_done"));
     j->motions_total = (long)json_integer_value(json_object_get(status, "motions_total"));
+    v->voxels_uncertain = (size_t)json_integer_value(json_object_get(status, "voxels_uncertain"));
+    v->uncertain_line = (int)json_integer_value(json_object_get(status, "uncertain_line"));
     json_t *findings = json_object_get(status, "findings");
     if (json_is_array(findings)) {
         fm_publish_findings(j, findings);
@@ -147,6 +155,8 @@ void fm_publish_progress(job *j, const fm_job_progress *p, publish_pace *pace)
     v->removal_rate_mm3_s = p->program_time > 0 ? p->removed_mm3 / p->program_time : 0;
     j->motions_done = p->motions_done;
     j->motions_total = p->motions_total;
+    v->voxels_uncertain = p->voxels_uncertain;
+    v->uncertain_line = p->uncertain_line;
     if (now - pace->last_event >= FM_PUBLISH_EVENT_INTERVAL_S) {
         pace->last_event = now;
         if (p->line != pace->last_line) {

@@ -247,8 +247,8 @@ static void many_release(void *ctx)
     free(c);
 }
 
-fm_status fm_sweep_field_many(fm_field *field, const fm_motion *motions, size_t n, const fm_tool_part *part,
-                              fm_error *err)
+fm_status fm_sweep_field_many_ex(fm_field *field, const fm_motion *motions, size_t n, const fm_tool_part *part,
+                                 const fm_sweep_options *options, fm_error *err)
 {
     memset(field, 0, sizeof *field);
     if (n == 0) return fm_error_set(err, FM_ERR_INTERNAL, "sweep field: no motions");
@@ -260,7 +260,7 @@ fm_status fm_sweep_field_many(fm_field *field, const fm_motion *motions, size_t 
     }
     for (size_t i = 0; i < n; i++) {
         if (motions[i].kind == FM_MOTION_DWELL && n > 1) continue;
-        fm_status st = fm_sweep_new(&motions[i], part, NULL, &c->sweeps[c->n], err);
+        fm_status st = fm_sweep_new(&motions[i], part, options, &c->sweeps[c->n], err);
         if (st != FM_OK) {
             many_release(c);
             return st;
@@ -268,7 +268,7 @@ fm_status fm_sweep_field_many(fm_field *field, const fm_motion *motions, size_t 
         c->n++;
     }
     if (c->n == 0) { /* only dwells: the tool at rest still occupies its place */
-        fm_status st = fm_sweep_new(&motions[0], part, NULL, &c->sweeps[0], err);
+        fm_status st = fm_sweep_new(&motions[0], part, options, &c->sweeps[0], err);
         if (st != FM_OK) {
             many_release(c);
             return st;
@@ -292,6 +292,12 @@ fm_status fm_sweep_field_many(fm_field *field, const fm_motion *motions, size_t 
     field->interval = many_interval;
     field->release = many_release;
     return FM_OK;
+}
+
+fm_status fm_sweep_field_many(fm_field *field, const fm_motion *motions, size_t n, const fm_tool_part *part,
+                              fm_error *err)
+{
+    return fm_sweep_field_many_ex(field, motions, n, part, NULL, err);
 }
 
 fm_status fm_sweep_field(fm_field *field, const fm_motion *motion, const fm_tool_part *part, fm_error *err)

@@ -174,5 +174,10 @@ fm_status fm_sweep_field(fm_field *field, const fm_motion *motion, const fm_tool
  * field for lib/stock to rasterize in one pass. Dwells are skipped. */
 fm_status fm_sweep_field_many(fm_field *field, const fm_motion *motions, size_t n,
                               const fm_tool_part *part, fm_error *err);
+/* The same with sweep options for every motion (NULL: the defaults): a
+ * job's forced evaluation budget (fm_job_spec.sweep_evaluations). */
+fm_status fm_sweep_field_many_ex(fm_field *field, const fm_motion *motions, size_t n,
+                                 const fm_tool_part *part, const fm_sweep_options *options,
+                                 fm_error *err);
 
 #endif

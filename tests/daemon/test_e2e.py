@@ -61,6 +61,9 @@ def main():
             check(abs(status["removed_volume_mm3"] - ref["removed_volume_mm3"]) <= tol_removed,
                   "removed volume %.2f vs CLI %.2f mm3" % (status["removed_volume_mm3"],
                                                            ref["removed_volume_mm3"]))
+            # the budget warning (issue 19): the demo's cuts are all proven
+            check(status.get("voxels_uncertain") == 0 and status.get("uncertain_line", 0) is None,
+                  "status: voxels_uncertain %s (the demo must show 0)" % status.get("voxels_uncertain"))
             code, stl = curl(d.url + "/v1/jobs/%s/mesh?format=stl" % job_id)
             check(code == 200, "GET mesh?format=stl is 200 (%d bytes)" % len(stl))
             vol = stl_volume(stl)
@@ -78,6 +81,8 @@ def main():
             code, rep = curl_json(d.url + "/v1/jobs/%s/report" % job_id)
             check(code == 200 and rep["motions"] == ref["motions"],
                   "report: %d motions like the CLI" % rep["motions"])
+            check(rep.get("voxels_uncertain") == 0 and ref.get("voxels_uncertain") == 0,
+                  "report: voxels_uncertain 0 like the CLI")
             code, chunks = curl_json(d.url + "/v1/jobs/%s/chunks?since=0" % job_id)
             check(code == 200 and len(chunks["chunks"]) > 0, "%d chunks listed" % len(chunks["chunks"]))
             full = [c for c in chunks["chunks"] if c["triangles"] > 0][0]
