@@ -26,7 +26,8 @@ static void usage(FILE *out)
             "                         [--out FILE]... [--report FILE.json] [--progress]\n"
             "                         [--band VOXELS] [--memory-budget MB] [--threads N]\n"
             "                         [--rapid-rate MM_PER_MIN] [--batch DIAMETERS]\n"
-            "                         [--machine FILE.json] [--check [--fixture FILE]...]\n"
+            "                         [--machine FILE.json [--pose-at SECONDS|end]]\n"
+            "                         [--check [--fixture FILE]...]\n"
             "                         [--png FILE] [--png-size WxH]\n"
             "                         [--color depth|tool|deviation|none]\n"
             "                         [--design PART [--tolerance MM]] [--stop-at LINE]\n"
@@ -41,6 +42,9 @@ static void usage(FILE *out)
             "--report  JSON report (default: none; `-` for standard output)\n"
             "--machine the machine (docs/check.md): rotary axes that A B C words turn, TCP,\n"
             "          rapid rate (times the whole job), Fanuc reference points, limits for --check\n"
+            "--pose-at the picture shows the workpiece in its machine position (the rotary\n"
+            "          table axes turned) at this program time, or at the end; the report\n"
+            "          gets its \"machine_pose\"\n"
             "--check   also run the collision check in the same pass (at the check's own\n"
             "          0.5 mm voxel, as `frepmill check`); the report gets its \"findings\"\n"
             "--png     a shaded isometric picture with the toolpath (same as --out FILE.png)\n"
@@ -64,6 +68,7 @@ static void usage(FILE *out)
 
 typedef struct progress_bar {
     fm_toolpath *toolpath;
+    fm_machine_pose *pose; /* --pose-at: tracked from the motions; else NULL */
     int enabled;
     int is_tty;
     double last_shown;
@@ -106,7 +111,8 @@ static int show_progress(void *user, const fm_job_progress *p)
 static void collect_motion(void *user, const fm_motion *motion)
 {
     progress_bar *bar = user;
-    fm_toolpath_add(bar->toolpath, motion);
+    if (bar->toolpath) fm_toolpath_add(bar->toolpath, motion);
+    if (bar->pose) fm_machine_pose_track(bar->pose, motion);
 }
 
 static int parse_double(const char *s, double *out)
@@ -115,6 +121,30 @@ static int parse_double(const char *s, double *out)
     errno = 0;
     *out = strtod(s, &end);
     return end != s && *end == '\0' && errno != ERANGE && isfinite(*out);
+}
+
+/* "machine_pose": where the rotary table axes put the workpiece at the
+ * chosen time (x_machine = rotation x_workpiece + translation). */
+static json_t *pose_json(const fm_machine_pose *pose, const fm_job_result *result)
+{
+    double rot[9], trans[3];
+    fm_machine_pose_transform(pose, rot, trans);
+    json_t *o = json_object();
+    double t = pose->time_s < result->program_time_s ? pose->time_s : result->program_time_s;
+    json_object_set_new(o, "time_s", json_real(t));
+    json_t *joints = json_object();
+    for (int i = 0; pose->machine && i < pose->machine->rotary_count; i++) {
+        int l = pose->machine->rotary[i].letter;
+        char name[2] = {(char)('a' + l), '\0'};
+        json_object_set_new(joints, name, json_real(pose->joints[l]));
+    }
+    json_object_set_new(o, "joints_deg", joints);
+    json_t *r = json_array(), *tr = json_array();
+    for (int i = 0; i < 9; i++) json_array_append_new(r, json_real(rot[i]));
+    for (int i = 0; i < 3; i++) json_array_append_new(tr, json_real(trans[i]));
+    json_object_set_new(o, "rotation", r);
+    json_object_set_new(o, "translation", tr);
+    return o;
 }
 
 static int exit_status(fm_status st)
@@ -145,6 +175,7 @@ int fm_cmd_simulate(int argc, char **argv)
     int want_png = 0;
     int rapid_rate_given = 0;
     int color_given = 0;
+    double pose_time = NAN; /* --pose-at; NAN: none */
 
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -233,6 +264,14 @@ int fm_cmd_simulate(int argc, char **argv)
             fixtures[fixture_count++] = v;
         } else if (!strcmp(a, "--machine")) {
             machine_path = v;
+        } else if (!strcmp(a, "--pose-at")) {
+            if (!strcmp(v, "end")) pose_time = INFINITY;
+            else if (parse_double(v, &d) && d >= 0) pose_time = d;
+            else {
+                fprintf(stderr, "frepmill simulate: --pose-at %s: expected seconds of program time "
+                                "(>= 0) or end\n", v);
+                return 2;
+            }
         } else if (!strcmp(a, "--dialect")) {
             fm_gcode_dialect dialect;
             if (!fm_gcode_dialect_parse(v, &dialect)) {
@@ -289,6 +328,11 @@ int fm_cmd_simulate(int argc, char **argv)
     }
     /* with a design the pictures show the deviation unless told otherwise */
     if (spec.design_path && !color_given) out_opt.coloring = FM_MESH_COLOR_DEVIATION;
+    if (!isnan(pose_time) && !machine_path) {
+        fprintf(stderr, "frepmill simulate: --pose-at needs --machine (the rotary axes that turn "
+                        "the workpiece)\n");
+        return 2;
+    }
     if (fixture_count && !want_check) {
         fprintf(stderr, "frepmill simulate: --fixture needs --check\n");
         return 2;
@@ -328,8 +372,10 @@ int fm_cmd_simulate(int argc, char **argv)
         fprintf(stderr, "frepmill simulate: out of memory\n");
         return 3;
     }
+    fm_machine_pose pose = {.machine = spec.machine, .time_s = pose_time};
+    if (!isnan(pose_time)) bar.pose = &pose;
     fm_job_hooks hooks = {.user = &bar, .progress = show_progress};
-    if (bar.toolpath) hooks.on_motion = collect_motion;
+    if (bar.toolpath || bar.pose) hooks.on_motion = collect_motion;
 
     fm_job_result result;
     fm_error err;
@@ -347,6 +393,11 @@ int fm_cmd_simulate(int argc, char **argv)
     out_opt.top_z = result.initial_hi[2];
     out_opt.toolpath = bar.toolpath;
     out_opt.design = result.design;
+    double pose_rot[9], pose_trans[3];
+    if (bar.pose) {
+        fm_machine_pose_transform(bar.pose, pose_rot, pose_trans);
+        out_opt.rotation = pose_rot;
+    }
     st = fm_outputs_write(outputs, (size_t)output_count, result.stock, &out_opt, &err);
     if (st != FM_OK) {
         char buf[1024];
@@ -400,6 +451,7 @@ int fm_cmd_simulate(int argc, char **argv)
 
     if (report_path && status == 0) {
         json_t *report = fm_job_report_json(&result);
+        if (bar.pose) json_object_set_new(report, "machine_pose", pose_json(bar.pose, &result));
         int rc = !strcmp(report_path, "-")
                      ? json_dumpf(report, stdout, JSON_INDENT(2) | JSON_REAL_PRECISION(10))
                      : json_dump_file(report, report_path, JSON_INDENT(2) | JSON_REAL_PRECISION(10));

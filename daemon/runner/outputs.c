@@ -146,6 +146,18 @@ int fm_output_format_known(const char *path)
            fm_mesh_format_from_path(path) != FM_MESH_FORMAT_UNKNOWN;
 }
 
+void fm_machine_pose_track(fm_machine_pose *pose, const fm_motion *motion)
+{
+    /* motions come in time order: the last one begun by time_s holds it */
+    if (!pose->machine || motion->t0 > pose->time_s) return;
+    fm_motion_joints_at(motion, pose->time_s, pose->joints);
+}
+
+void fm_machine_pose_transform(const fm_machine_pose *pose, double rot[9], double trans[3])
+{
+    fm_machine_table_transform(pose->machine, pose->joints, -1, rot, trans);
+}
+
 static fm_status write_png(const fm_mesh *mesh, const char *path, const fm_output_options *opt,
                            fm_error *err)
 {
@@ -172,6 +184,7 @@ static fm_status write_png(const fm_mesh *mesh, const char *path, const fm_outpu
         ro.paths = lines;
         ro.path_count = tp->line_count;
     }
+    ro.rotation = opt->rotation;
     fm_status st = fm_render_png(mesh, &ro, path, err);
     free(lines);
     return st;

@@ -189,6 +189,10 @@ typedef struct fm_render_options {
     uint8_t rapid_color[3];  /* default red */
     double dash_pixels;      /* dash and gap length of rapids; default 6 */
     const fm_render_legend *legend; /* colour key; may be NULL */
+    /* The scene turned before it is viewed (3x3 row-major, x -> R x; NULL:
+     * as it is), e.g. a workpiece in its position on a rotary table. The
+     * view and light stay; a translation would not change a fitted picture. */
+    const double *rotation;
 } fm_render_options;
 void fm_render_default(fm_render_options *opt);
 

@@ -54,14 +54,24 @@ typedef struct canvas {
     float *color;       /* 3 per sample, 0..255 */
     double light[3];    /* unit */
     double ambient;
+    /* The view basis in the mesh's frame: the fixed basis turned back by
+     * the scene's rotation (x_view = R x, so v . R x = (R^T v) . x). */
+    double right[3], up[3], eye[3];
 } canvas;
 
 /* Screen position (supersampled pixels, y down) and depth of a point. */
 static void project(const canvas *c, const double p[3], double s[3])
 {
-    s[0] = 0.5 * c->w + (dot3(p, VIEW_RIGHT) - c->cx) * c->scale;
-    s[1] = 0.5 * c->h - (dot3(p, VIEW_UP) - c->cy) * c->scale;
-    s[2] = dot3(p, VIEW_TOWARD_EYE);
+    s[0] = 0.5 * c->w + (dot3(p, c->right) - c->cx) * c->scale;
+    s[1] = 0.5 * c->h - (dot3(p, c->up) - c->cy) * c->scale;
+    s[2] = dot3(p, c->eye);
+}
+
+/* out = R^T v (R row-major; NULL is the identity). */
+static void turn_back(const double *R, const double v[3], double out[3])
+{
+    for (int a = 0; a < 3; a++)
+        out[a] = R ? R[a] * v[0] + R[3 + a] * v[1] + R[6 + a] * v[2] : v[a];
 }
 
 static double shade_of(const canvas *c, double n[3])
@@ -70,7 +80,7 @@ static double shade_of(const canvas *c, double n[3])
     if (len <= 0)
         return c->ambient;
     /* Two-sided: an open chunk mesh seen from behind is lit like its front. */
-    if (dot3(n, VIEW_TOWARD_EYE) < 0)
+    if (dot3(n, c->eye) < 0)
         len = -len;
     double l = dot3(n, c->light) / len;
     return c->ambient + (1.0 - c->ambient) * (l > 0 ? l : 0);
@@ -206,24 +216,28 @@ fm_status fm_render_rgb(const fm_mesh *mesh, const fm_render_options *opt_in, ui
     if (opt.margin < 0 || 2 * opt.margin >= opt.width || 2 * opt.margin >= opt.height)
         return fm_error_set(err, FM_ERR_INPUT, "margin %d leaves no picture", opt.margin);
 
+    canvas c;
+    turn_back(opt.rotation, VIEW_RIGHT, c.right);
+    turn_back(opt.rotation, VIEW_UP, c.up);
+    turn_back(opt.rotation, VIEW_TOWARD_EYE, c.eye);
+
     /* Projected bounds of everything drawn. */
     double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
     for (size_t i = 0; mesh && i < mesh->vertex_count; i++) {
         double p[3] = {mesh->positions[3 * i], mesh->positions[3 * i + 1],
                        mesh->positions[3 * i + 2]};
-        double sx = dot3(p, VIEW_RIGHT), sy = dot3(p, VIEW_UP);
+        double sx = dot3(p, c.right), sy = dot3(p, c.up);
         lo[0] = fmin(lo[0], sx), hi[0] = fmax(hi[0], sx);
         lo[1] = fmin(lo[1], sy), hi[1] = fmax(hi[1], sy);
     }
     for (size_t k = 0; k < opt.path_count; k++)
         for (size_t i = 0; i < opt.paths[k].count; i++) {
             const double *p = opt.paths[k].points + 3 * i;
-            double sx = dot3(p, VIEW_RIGHT), sy = dot3(p, VIEW_UP);
+            double sx = dot3(p, c.right), sy = dot3(p, c.up);
             lo[0] = fmin(lo[0], sx), hi[0] = fmax(hi[0], sx);
             lo[1] = fmin(lo[1], sy), hi[1] = fmax(hi[1], sy);
         }
 
-    canvas c;
     c.ss = opt.antialias;
     c.w = opt.width * c.ss;
     c.h = opt.height * c.ss;
@@ -231,8 +245,11 @@ fm_status fm_render_rgb(const fm_mesh *mesh, const fm_render_options *opt_in, ui
     double ll = sqrt(dot3(opt.light, opt.light));
     if (!(ll > 0))
         return fm_error_set(err, FM_ERR_INPUT, "light direction is zero");
+    /* the light stays with the viewer, so it turns back with the view */
+    double light[3];
     for (int a = 0; a < 3; a++)
-        c.light[a] = opt.light[a] / ll;
+        light[a] = opt.light[a] / ll;
+    turn_back(opt.rotation, light, c.light);
     if (lo[0] <= hi[0]) {
         double ex = hi[0] - lo[0], ey = hi[1] - lo[1];
         double sx = ex > 0 ? (opt.width - 2.0 * opt.margin) / ex : INFINITY;

@@ -110,6 +110,16 @@ void fm_machine_table_transform(const fm_machine *mc, const double rotary[3], in
     }
 }
 
+void fm_motion_joints_at(const fm_motion *m, double t, double joints[3])
+{
+    joints[0] = joints[1] = joints[2] = 0;
+    if (!m || !m->machine) return;
+    double u = m->t1 > m->t0 ? (t - m->t0) / (m->t1 - m->t0) : 1.0;
+    if (!(u > 0)) u = 0; /* NaN too */
+    if (u > 1) u = 1;
+    for (int l = 0; l < 3; l++) joints[l] = m->rotary_start[l] + u * (m->rotary_end[l] - m->rotary_start[l]);
+}
+
 /* -------------------------------------------------------------- chain -- */
 
 /* The farthest the tool's point gets from each step's line over [ua, ub]

@@ -151,6 +151,10 @@ int fm_machine_axis_of(const fm_machine *machine, int letter);
  * For pictures of the workpiece in its machine position. */
 void fm_machine_table_transform(const fm_machine *machine, const double rotary[3], int upto, double rot[9],
                                 double trans[3]);
+/* A motion's joint values (degrees, A B C) at program time t, t clamped to
+ * [t0, t1]: every joint moves linearly in time (motion.h). A motion
+ * without a machine has all joints at 0. */
+void fm_motion_joints_at(const fm_motion *m, double t, double joints[3]);
 
 /* ------------------------------------------------------ frep DAGs -- */
 
