@@ -17,6 +17,7 @@
 #include "config.h"
 #include "jobs.h"
 #include "log.h"
+#include "http_service.h"
 #include "modbus_service.h"
 #include "queue_redis.h"
 #include "store.h"
@@ -88,13 +89,15 @@ static int submit_demo(fm_jobs *jobs, const fm_daemon_config *cfg, unsigned port
         json_t *job = json_pack("{s:s, s:f, s:O, s:{s:s}, s:{s:s}}", "stock",
                                 "box:0,0,-30,100,60,0", "voxel", cfg->demo_voxel, "tools",
                                 tools_json, "program", "gcode", program, "options", "name", "demo");
-        char *text = json_dumps(job, JSON_COMPACT);
+        fm_job_doc *doc = NULL;
+        fm_error derr;
+        fm_error_clear(&derr);
+        const fm_job_doc_rules rules = fm_jobs_doc_rules(jobs, 1);
+        fm_status st = fm_job_doc_from_json(job, &rules, &doc, &derr);
         json_decref(job);
-        fm_http_error herr;
-        json_t *canonical = text ? fm_http_job_parse(text, strlen(text), &herr) : NULL;
-        free(text);
         char id[64];
-        if (canonical && fm_jobs_submit(jobs, canonical, id, sizeof id, &herr) == 0) {
+        if (st == FM_OK) st = fm_jobs_submit(jobs, doc, id, sizeof id, &derr);
+        if (st == FM_OK) {
             char host[64];
             unsigned p;
             fm_daemon_split_addr(cfg->listen, host, sizeof host, &p);
@@ -104,9 +107,8 @@ static int submit_demo(fm_jobs *jobs, const fm_daemon_config *cfg, unsigned port
             fflush(stdout);
             rc = 0;
         } else {
-            fm_log(FM_LOG_ERROR, "demo: the job was refused: %s", herr.message);
+            fm_log(FM_LOG_ERROR, "demo: the job was refused: %s", derr.message);
         }
-        json_decref(canonical);
     }
     json_decref(tools_json);
     free(program);

@@ -48,17 +48,47 @@ void fm_job_store_write_result(job *j)
     json_decref(result);
 }
 
-fm_status fm_job_store_create(fm_jobs *jobs, const char *id, double created, json_t *spec,
+/* Write one model file unless the same bytes' size is there already (a
+ * document read back at start finds its models where it left them). */
+static fm_status write_model(const char *dir, const char *name, const fm_job_model *m,
+                             char *path, size_t size, fm_error *err)
+{
+    snprintf(path, size, "%s/%s", dir, name);
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISREG(st.st_mode) && (size_t)st.st_size == m->size) return FM_OK;
+    return fm_store_write_atomic(dir, name, m->data, m->size, err);
+}
+
+fm_status fm_job_store_write_models(fm_job_doc *doc, const char *dir, fm_error *err)
+{
+    char path[PATH_MAX], name[64];
+    fm_status st = FM_OK;
+    if (doc->stock_model.size) {
+        snprintf(name, sizeof name, "stock.%s", doc->stock_model.is_stl ? "stl" : "hf");
+        st = write_model(dir, name, &doc->stock_model, path, sizeof path, err);
+        if (st == FM_OK) st = fm_job_doc_set_stock_file(doc, path, err);
+    }
+    for (int i = 0; st == FM_OK && i < doc->check.fixture_count; i++) {
+        snprintf(name, sizeof name, "fixture%d.%s", i, doc->fixtures[i].is_stl ? "stl" : "hf");
+        st = write_model(dir, name, &doc->fixtures[i], path, sizeof path, err);
+        if (st == FM_OK) st = fm_job_doc_set_fixture_file(doc, i, path, err);
+    }
+    return st;
+}
+
+fm_status fm_job_store_create(fm_jobs *jobs, const char *id, double created, fm_job_doc *doc,
                               fm_error *err)
 {
     char dir[JOB_DIR_MAX];
     snprintf(dir, sizeof dir, "%s/%.40s", jobs->jobs_dir, id);
-    json_t *stored = json_pack("{s:s, s:f, s:O}", "id", id, "created", created, "job", spec);
-    /* Durable before acknowledged: the folder, the spec (temp, fsync,
-     * rename, fsync folder) and the new folder's entry in jobs/. */
+    json_t *stored = json_pack("{s:s, s:f, s:O}", "id", id, "created", created, "job", doc->json);
+    /* Durable before acknowledged: the folder, the models, the spec (temp,
+     * fsync, rename, fsync folder; last, so that a folder without it was
+     * never acknowledged) and the new folder's entry in jobs/. */
     fm_status st = mkdir(dir, 0750) == 0 ? FM_OK
                                          : fm_error_set(err, FM_ERR_IO, "cannot create %s: %s",
                                                         dir, strerror(errno));
+    if (st == FM_OK) st = fm_job_store_write_models(doc, dir, err);
     if (st == FM_OK) st = write_json(dir, "spec.json", stored, err);
     if (st == FM_OK) st = fm_store_fsync_dir(jobs->jobs_dir, err);
     json_decref(stored);
@@ -136,18 +166,22 @@ static void load_job(fm_jobs *jobs, const char *id)
     json_error_t jerr;
     json_t *stored = json_loadb(text, size, 0, &jerr);
     free(text);
-    json_t *spec_json = json_object_get(stored, "job");
-    char *spec_text = spec_json ? json_dumps(spec_json, JSON_COMPACT) : NULL;
-    fm_http_error herr;
-    json_t *spec = spec_text ? fm_http_job_parse(spec_text, strlen(spec_text), &herr) : NULL;
-    free(spec_text);
-    if (!spec) {
-        fm_log(FM_LOG_ERROR, "job %s: its stored spec is unreadable; left in place", id);
+    /* What the daemon stored it validated; read back with the rules of its
+     * own documents (a live job's stock may be a configured file). */
+    const fm_job_doc_rules stored_rules = fm_jobs_doc_rules(jobs, 1);
+    fm_job_doc *doc = NULL;
+    fm_error derr;
+    fm_error_clear(&derr);
+    if (fm_job_doc_from_json(json_object_get(stored, "job"), &stored_rules, &doc, &derr) != FM_OK ||
+        fm_job_store_write_models(doc, dir, &derr) != FM_OK) {
+        fm_log(FM_LOG_ERROR, "job %s: its stored spec is unreadable (%s); left in place", id,
+               derr.message);
+        fm_job_doc_free(doc);
         json_decref(stored);
         return;
     }
-    job *j = fm_jobs_record_new(id, jobs->jobs_dir, spec, json_number_value(json_object_get(stored, "created")));
-    json_decref(spec);
+    job *j = fm_jobs_record_new(id, jobs->jobs_dir, doc,
+                                json_number_value(json_object_get(stored, "created")));
     json_decref(stored);
     if (!j) return;
     snprintf(path, sizeof path, "%s/result.json", dir);
@@ -217,31 +251,4 @@ int fm_job_store_load_one(fm_jobs *jobs, const char *id)
     if (!j) return 0;
     fm_jobs_put(jobs, j);
     return 1;
-}
-
-fm_status fm_job_store_materialize_stock(job *j, char *path, size_t size, const char **spec_out,
-                                         fm_error *err)
-{
-    json_t *stock = json_object_get(j->spec, "stock");
-    if (json_is_string(stock)) {
-        *spec_out = json_string_value(stock);
-        return FM_OK;
-    }
-    json_t *hf = json_object_get(stock, "hyperfun");
-    if (hf) {
-        snprintf(path, size, "%s/stock.hf", j->dir);
-        *spec_out = path;
-        return fm_store_write_atomic(j->dir, "stock.hf", json_string_value(hf),
-                                     json_string_length(hf), err);
-    }
-    json_t *stl = json_object_get(stock, "stl_base64");
-    uint8_t *bytes;
-    size_t n;
-    if (fm_http_base64_decode(json_string_value(stl), json_string_length(stl), &bytes, &n) != 0)
-        return fm_error_set(err, FM_ERR_INPUT, "stock.stl_base64 is not valid base64");
-    snprintf(path, size, "%s/stock.stl", j->dir);
-    *spec_out = path;
-    fm_status st = fm_store_write_atomic(j->dir, "stock.stl", bytes, n, err);
-    free(bytes);
-    return st;
 }

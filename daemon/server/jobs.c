@@ -13,11 +13,9 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "jobs_check.h"
 #include "jobs_internal.h"
 #include "log.h"
 #include "store.h"
-#include "toolpaths/tooltable/tooltable.h"
 
 double fm_jobs_mono_s(void)
 {
@@ -41,13 +39,16 @@ const char *fm_job_state_name(fm_job_state state)
 
 /* ------------------------------------------------------------ records -- */
 
-job *fm_jobs_record_new(const char *id, const char *jobs_dir, json_t *spec, double created)
+job *fm_jobs_record_new(const char *id, const char *jobs_dir, fm_job_doc *doc, double created)
 {
     job *j = calloc(1, sizeof *j);
-    if (!j) return NULL;
+    if (!j) {
+        fm_job_doc_free(doc);
+        return NULL;
+    }
     snprintf(j->id, sizeof j->id, "%s", id);
     snprintf(j->dir, sizeof j->dir, "%.1200s/%.40s", jobs_dir, id);
-    j->spec = json_incref(spec);
+    j->doc = doc;
     j->created = created;
     j->refs = 1; /* the table's */
     pthread_mutex_init(&j->lock, NULL);
@@ -63,7 +64,8 @@ static void job_free(job *j)
 {
     fm_publish_chunks_free(j);
     for (int i = 0; i < JOB_EVENT_RING; i++) free(j->ring[i].data);
-    json_decref(j->spec);
+    fm_job_doc_free(j->doc);
+    fm_live_free(j->live);
     json_decref(j->error);
     json_decref(j->report);
     json_decref(j->findings);
@@ -98,6 +100,7 @@ void fm_jobs_put(fm_jobs *jobs, job *j)
 
 void fm_jobs_table_add(fm_jobs *jobs, job *j)
 {
+    j->jobs = jobs;
     if (jobs->count == jobs->cap) {
         size_t cap = jobs->cap ? jobs->cap * 2 : 64;
         job **t = realloc(jobs->table, cap * sizeof *t);
@@ -140,134 +143,132 @@ static void make_id(fm_jobs *jobs, char *id, size_t size)
              r[0], r[1]);
 }
 
-/* A cheap check before acknowledging: a box or cylinder stock whose grid
- * estimate is over the per-job budget is refused now, not after queueing. */
-static int check_budget(fm_jobs *jobs, json_t *spec, fm_http_error *err)
+fm_job_doc_rules fm_jobs_doc_rules(const fm_jobs *jobs, int own)
 {
-    const char *stock = json_string_value(json_object_get(spec, "stock"));
-    double voxel = json_number_value(json_object_get(spec, "voxel"));
-    json_t *band_json = json_object_get(json_object_get(spec, "options"), "band");
-    int band = band_json ? (int)json_integer_value(band_json) : 3;
-    if (!stock) return 0;
-    double v[6], area = -1;
-    if (sscanf(stock, "box:%lf,%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5]) ==
-        6) {
-        double dx = fabs(v[3] - v[0]), dy = fabs(v[4] - v[1]), dz = fabs(v[5] - v[2]);
-        area = 2 * (dx * dy + dy * dz + dx * dz);
-    } else if (sscanf(stock, "cylinder:%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4]) ==
-               5) {
-        /* Caps project on z; the side projects to 8 r h on x and y. */
-        area = 2 * 3.14159265358979323846 * v[4] * v[4] + 8 * fabs(v[4]) * fabs(v[3] - v[2]);
-    }
-    if (!(area > 0) || !isfinite(area)) return 0;
-    size_t need = fm_stock_estimate_bytes(area, voxel, band);
+    fm_job_doc_rules rules = {.allow_files = own, .allow_live = own};
+    rules.dialect = jobs->cfg.dialect;
+    rules.subroutine_path = jobs->cfg.subroutine_path;
+    return rules;
+}
+
+size_t fm_jobs_memory_budget(const fm_jobs *jobs, const fm_job_doc *doc)
+{
     size_t budget = jobs->cfg.job_memory_bytes;
-    json_t *mb = json_object_get(json_object_get(spec, "options"), "memory_budget_mb");
-    if (mb && json_number_value(mb) * 1048576.0 < (double)budget)
-        budget = (size_t)(json_number_value(mb) * 1048576.0);
-    if (need > budget) {
-        fm_http_error_set(err, 413, "memory_budget",
-                          "the stock needs about %.0f MB at voxel %g mm; the budget per job is "
-                          "%.0f MB (job_memory_mb); use a coarser voxel or a smaller stock",
-                          (double)need / 1048576.0, voxel, (double)budget / 1048576.0);
-        return -1;
+    double mb = doc->memory_budget_mb;
+    if (mb > 0 && mb * 1048576.0 < (double)budget) budget = (size_t)(mb * 1048576.0);
+    return budget;
+}
+
+/* Store a document durably and make its record (in the table, with a
+ * reference for the caller) under given_id, or a new id when NULL. Takes
+ * doc. */
+static fm_status admit(fm_jobs *jobs, fm_job_doc *doc, const char *given_id, job **out,
+                       fm_error *err)
+{
+    *out = NULL;
+    /* A cheap check before acknowledging: a box or cylinder stock whose
+     * grid estimate is over the per-job budget is refused now, not after
+     * queueing. */
+    fm_status st = fm_job_doc_check_memory(doc, fm_jobs_memory_budget(jobs, doc), err);
+    if (st != FM_OK) {
+        fm_job_doc_free(doc);
+        return st;
     }
-    return 0;
-}
-
-/* The tool table is parsed now so that a bad one is a 400 with its line
- * and column, not a failed job. */
-static int check_tools(json_t *spec, fm_http_error *err)
-{
-    char *text = json_dumps(json_object_get(spec, "tools"), JSON_INDENT(1));
-    if (!text) return fm_http_error_set(err, 400, "bad_tools", "the tool table is not valid");
-    fm_tool_table table;
-    fm_error ferr;
-    fm_error_clear(&ferr);
-    fm_status st = fm_tooltable_parse_json(text, strlen(text), "tools", &table, &ferr);
-    free(text);
-    if (st != FM_OK)
-        return fm_http_error_set(err, 400, "bad_tools", "tools: %s", ferr.message) ? -1 : -1;
-    int rc = 0;
-    for (size_t i = 0; i < table.count; i++)
-        if (table.tools[i].shape == FM_TOOL_HYPERFUN) {
-            /* Such a tool names a model file on this machine; over the
-             * network that would read the server's files. */
-            fm_http_error_set(err, 400, "bad_tools",
-                              "tools: tool %d is a HyperFun tool that names a file; not accepted "
-                              "over HTTP",
-                              table.tools[i].number);
-            rc = -1;
-            break;
-        }
-    fm_tool_table_free(&table);
-    return rc;
-}
-
-/* Store and queue a new job under given_id, or a new id when NULL. */
-static int submit_as(fm_jobs *jobs, json_t *spec, const char *given_id, char *id, size_t id_size,
-                     fm_http_error *err)
-{
-    if (check_tools(spec, err) || check_budget(jobs, spec, err)) return err->status;
-    if (fm_jobs_check_validate(spec, err)) return err->status;
     pthread_mutex_lock(&jobs->lock);
-    size_t live = 0;
-    for (size_t i = 0; i < jobs->count; i++) live += !jobs->table[i]->deleted;
+    size_t kept = 0;
+    for (size_t i = 0; i < jobs->count; i++) kept += !jobs->table[i]->deleted;
     int stopping = jobs->stopping;
     pthread_mutex_unlock(&jobs->lock);
-    if (stopping) return fm_http_error_set(err, 503, "shutting_down", "the daemon is stopping");
-    if ((int)live >= jobs->cfg.max_jobs)
-        return fm_http_error_set(err, 429, "job_limit",
-                                 "%zu jobs are stored, the most allowed (max_jobs); delete "
-                                 "finished jobs first",
-                                 live);
+    if (stopping || (int)kept >= jobs->cfg.max_jobs) {
+        fm_job_doc_free(doc);
+        if (stopping)
+            return fm_error_set_reason(err, FM_ERR_LIMIT, "shutting_down", "the daemon is stopping");
+        return fm_error_set_reason(err, FM_ERR_LIMIT, "job_limit",
+                                   "%zu jobs are stored, the most allowed (max_jobs); delete "
+                                   "finished jobs first",
+                                   kept);
+    }
     char new_id[32];
     if (given_id) snprintf(new_id, sizeof new_id, "%s", given_id);
     else make_id(jobs, new_id, sizeof new_id);
     double created = fm_jobs_wall_s();
     fm_error ferr;
-    if (fm_job_store_create(jobs, new_id, created, spec, &ferr) != FM_OK) {
+    fm_error_clear(&ferr);
+    if (fm_job_store_create(jobs, new_id, created, doc, &ferr) != FM_OK) {
         fm_log(FM_LOG_ERROR, "cannot store a new job: %s", ferr.message);
-        return fm_http_error_set(err, 507, "storage", "the job could not be stored: %s",
-                                 ferr.message);
+        fm_job_doc_free(doc);
+        return fm_error_set_reason(err, FM_ERR_IO, "storage", "the job could not be stored: %s",
+                                   ferr.message);
     }
-    job *j = fm_jobs_record_new(new_id, jobs->jobs_dir, spec, created);
-    if (!j) return fm_http_error_set(err, 503, "out_of_memory", "out of memory");
+    job *j = fm_jobs_record_new(new_id, jobs->jobs_dir, doc, created);
+    if (!j)
+        return fm_error_set_reason(err, FM_ERR_LIMIT, "out_of_memory", "out of memory");
     pthread_mutex_lock(&j->lock);
     fm_publish_event(j, "state", json_pack("{s:s}", "state", "queued"));
     pthread_mutex_unlock(&j->lock);
     pthread_mutex_lock(&jobs->lock);
     fm_jobs_table_add(jobs, j);
-    fm_queue_push(jobs, j);
+    j->refs++; /* the caller's */
     pthread_mutex_unlock(&jobs->lock);
-    snprintf(id, id_size, "%s", new_id);
-    json_t *name = json_object_get(json_object_get(spec, "options"), "name");
-    fm_log(FM_LOG_INFO, "job %s: accepted%s%s", new_id, name ? " as " : "",
-           name ? json_string_value(name) : "");
-    return 0;
+    fm_log(FM_LOG_INFO, "job %s: accepted%s%s", new_id, j->doc->name[0] ? " as " : "",
+           j->doc->name);
+    *out = j;
+    return FM_OK;
 }
 
-int fm_jobs_submit(fm_jobs *jobs, json_t *spec, char *id, size_t id_size, fm_http_error *err)
+fm_status fm_jobs_submit(fm_jobs *jobs, fm_job_doc *doc, char *id, size_t id_size,
+                         fm_error *err)
 {
-    return submit_as(jobs, spec, NULL, id, id_size, err);
+    job *j;
+    fm_status st = admit(jobs, doc, NULL, &j, err);
+    if (st != FM_OK) return st;
+    pthread_mutex_lock(&jobs->lock);
+    fm_queue_push(jobs, j);
+    pthread_mutex_unlock(&jobs->lock);
+    snprintf(id, id_size, "%s", j->id);
+    fm_jobs_put(jobs, j);
+    return FM_OK;
+}
+
+fm_status fm_jobs_submit_live(fm_jobs *jobs, fm_job_doc *doc, char *id, size_t id_size,
+                              fm_error *err)
+{
+    job *j;
+    fm_status st = admit(jobs, doc, NULL, &j, err);
+    if (st != FM_OK) return st;
+    fm_live_attach(jobs, j);
+    snprintf(id, id_size, "%s", j->id);
+    st = fm_queue_run_now(jobs, j, err);
+    if (st != FM_OK) fm_live_detach(jobs, j);
+    fm_jobs_put(jobs, j);
+    return st;
 }
 
 /* ------------------------------------------------------ shared queues -- */
 
-int fm_jobs_take(fm_jobs *jobs, const char *id, json_t *spec, fm_jobs_take_result *result,
-                 json_t **final, fm_http_error *err)
+fm_status fm_jobs_take(fm_jobs *jobs, const char *id, fm_job_doc *doc,
+                       fm_jobs_take_result *result, json_t **final, fm_error *err)
 {
     *final = NULL;
-    if (strlen(id) >= 32)
-        return fm_http_error_set(err, 400, "bad_id", "the queue's job id '%s' is too long", id);
+    if (strlen(id) >= 32) {
+        fm_job_doc_free(doc);
+        return fm_error_set_reason(err, FM_ERR_INPUT, "bad_id",
+                                   "the queue's job id '%.64s' is too long", id);
+    }
     job *j = fm_jobs_get(jobs, id);
     /* Not known here: a folder that a daemon sharing the state folder left. */
     if (!j && fm_job_store_load_one(jobs, id)) j = fm_jobs_get(jobs, id);
     if (!j) {
-        char out[32];
         *result = FM_JOBS_TAKEN;
-        return submit_as(jobs, spec, id, out, sizeof out, err);
+        fm_status st = admit(jobs, doc, id, &j, err);
+        if (st != FM_OK) return st;
+        pthread_mutex_lock(&jobs->lock);
+        fm_queue_push(jobs, j);
+        pthread_mutex_unlock(&jobs->lock);
+        fm_jobs_put(jobs, j);
+        return FM_OK;
     }
+    fm_job_doc_free(doc); /* the stored one stands */
     pthread_mutex_lock(&j->lock);
     int ended = j->state >= FM_JOB_DONE;
     pthread_mutex_unlock(&j->lock);
@@ -275,7 +276,7 @@ int fm_jobs_take(fm_jobs *jobs, const char *id, json_t *spec, fm_jobs_take_resul
         *final = fm_publish_status_json(j);
         *result = FM_JOBS_TAKEN_FINAL;
         fm_jobs_put(jobs, j);
-        return 0;
+        return FM_OK;
     }
     pthread_mutex_lock(&jobs->lock);
     if (j->held) {
@@ -289,7 +290,7 @@ int fm_jobs_take(fm_jobs *jobs, const char *id, json_t *spec, fm_jobs_take_resul
     }
     pthread_mutex_unlock(&jobs->lock);
     fm_jobs_put(jobs, j);
-    return 0;
+    return FM_OK;
 }
 
 void fm_jobs_set_end_hook(fm_jobs *jobs, fm_jobs_end_hook hook, void *user)
@@ -341,10 +342,15 @@ void fm_jobs_release(fm_jobs *jobs, const char *id)
     fm_jobs_put(jobs, j);
 }
 
-int fm_jobs_remove(fm_jobs *jobs, const char *id, fm_http_error *err)
+static fm_status not_found(const char *id, fm_error *err)
+{
+    return fm_error_set_reason(err, FM_ERR_INPUT, "not_found", "no job %.40s", id);
+}
+
+fm_status fm_jobs_remove(fm_jobs *jobs, const char *id, fm_error *err)
 {
     job *j = fm_jobs_get(jobs, id);
-    if (!j) return fm_http_error_set(err, 404, "not_found", "no job %s", id);
+    if (!j) return not_found(id, err);
     atomic_store(&j->cancel_requested, 1);
     pthread_mutex_lock(&j->lock);
     j->paused = 0;
@@ -353,9 +359,10 @@ int fm_jobs_remove(fm_jobs *jobs, const char *id, fm_http_error *err)
     /* Renamed first: one atomic step makes the job gone for a restart even
      * if the files are not all unlinked yet. */
     fm_error ferr;
+    fm_error_clear(&ferr);
     if (fm_job_store_mark_deleted(jobs, j, &ferr) != FM_OK) {
         fm_jobs_put(jobs, j);
-        return fm_http_error_set(err, 500, "storage", "%s", ferr.message);
+        return fm_error_set_reason(err, FM_ERR_IO, "storage", "%s", ferr.message);
     }
     pthread_mutex_lock(&jobs->lock);
     j->deleted = 1;
@@ -378,7 +385,7 @@ int fm_jobs_remove(fm_jobs *jobs, const char *id, fm_http_error *err)
     if (!running) fm_job_store_remove_deleted(j);
     fm_log(FM_LOG_INFO, "job %s: deleted", id);
     fm_jobs_put(jobs, j);
-    return 0;
+    return FM_OK;
 }
 
 /* ---------------------------------------------------------- lifecycle -- */
@@ -402,38 +409,31 @@ fm_jobs *fm_jobs_open(const fm_jobs_config *cfg, fm_error *err)
     pthread_mutex_init(&jobs->live_lock, NULL);
     pthread_cond_init(&jobs->queue_cond, NULL);
     fm_job_store_load_all(jobs);
-    /* Resume in creation order (the folders were read in any order). */
+    /* Resume in creation order (the folders were read in any order); an
+     * unfinished live job runs at once and takes positions again. */
+    job *live = NULL;
     pthread_mutex_lock(&jobs->lock);
     for (size_t i = 0; i < jobs->count; i++) {
         job *j = jobs->table[i];
         if (j->state >= FM_JOB_DONE) continue;
         /* A queue job waits for its queue (fm_jobs_take). */
         if (!strncmp(j->id, "q-", 2)) j->held = 1;
+        else if (j->doc->spec.program_kind == FM_PROGRAM_LIVE) live = j;
         else fm_queue_push(jobs, j);
     }
     pthread_mutex_unlock(&jobs->lock);
+    if (live) {
+        fm_error lerr;
+        fm_error_clear(&lerr);
+        fm_live_attach(jobs, live);
+        if (fm_queue_run_now(jobs, live, &lerr) != FM_OK)
+            fm_log(FM_LOG_ERROR, "job %s: cannot resume the live job: %s", live->id, lerr.message);
+    }
     if (fm_queue_start_workers(jobs, cfg->workers, err) != FM_OK) {
         fm_jobs_close(jobs);
         return NULL;
     }
     return jobs;
-}
-
-job *fm_jobs_add_unstored(fm_jobs *jobs, json_t *spec)
-{
-    char id[32];
-    make_id(jobs, id, sizeof id);
-    job *j = fm_jobs_record_new(id, jobs->jobs_dir, spec, fm_jobs_wall_s());
-    if (!j) return NULL;
-    /* The folder lets DELETE work like for any job; without spec.json the
-     * next start removes it. */
-    if (mkdir(j->dir, 0750) != 0)
-        fm_log(FM_LOG_WARN, "job %s: cannot create %s: %s", id, j->dir, strerror(errno));
-    pthread_mutex_lock(&jobs->lock);
-    fm_jobs_table_add(jobs, j);
-    j->refs++;
-    pthread_mutex_unlock(&jobs->lock);
-    return j;
 }
 
 void fm_jobs_begin_shutdown(fm_jobs *jobs)
@@ -454,8 +454,13 @@ void fm_jobs_close(fm_jobs *jobs)
 {
     if (!jobs) return;
     fm_jobs_begin_shutdown(jobs);
-    fm_jobs_live_close(jobs);
+    pthread_mutex_lock(&jobs->live_lock);
+    job *live = jobs->live_job;
+    jobs->live_job = NULL;
+    pthread_mutex_unlock(&jobs->live_lock);
+    if (live) fm_jobs_put(jobs, live);
     fm_queue_join_workers(jobs);
+    fm_queue_join_own(jobs, 1);
     fm_queue_drain(jobs);
     for (size_t i = 0; i < jobs->count; i++) {
         job *j = jobs->table[i];
@@ -497,21 +502,26 @@ int fm_jobs_view_slot(fm_jobs *jobs, int slot, fm_job_view *out)
     return 0;
 }
 
-int fm_jobs_pause(fm_jobs *jobs, const char *id, int pause)
+static fm_status ended(const char *id, fm_error *err)
+{
+    return fm_error_set_reason(err, FM_ERR_INPUT, "bad_state", "job %.40s has already ended", id);
+}
+
+fm_status fm_jobs_pause(fm_jobs *jobs, const char *id, int pause, fm_error *err)
 {
     job *j = fm_jobs_get(jobs, id);
-    if (!j) return -1;
+    if (!j) return not_found(id, err);
     pthread_mutex_lock(&j->lock);
     int ok = j->state <= FM_JOB_RUNNING;
     if (ok) {
         j->paused = pause;
         pthread_cond_broadcast(&j->cond);
-        fm_publish_event(j, "state", json_pack("{s:s, s:b}", "state", fm_job_state_name(j->state), "paused",
-                                   pause));
+        fm_publish_event(j, "state", json_pack("{s:s, s:b}", "state", fm_job_state_name(j->state),
+                                               "paused", pause));
     }
     pthread_mutex_unlock(&j->lock);
     fm_jobs_put(jobs, j);
-    return ok ? 0 : -2;
+    return ok ? FM_OK : ended(id, err);
 }
 
 void fm_jobs_pause_all(fm_jobs *jobs)
@@ -526,10 +536,10 @@ void fm_jobs_pause_all(fm_jobs *jobs)
     pthread_mutex_unlock(&jobs->lock);
 }
 
-int fm_jobs_cancel(fm_jobs *jobs, const char *id)
+fm_status fm_jobs_cancel(fm_jobs *jobs, const char *id, fm_error *err)
 {
     job *j = fm_jobs_get(jobs, id);
-    if (!j) return -1;
+    if (!j) return not_found(id, err);
     pthread_mutex_lock(&j->lock);
     int ok = j->state <= FM_JOB_RUNNING;
     int queued = j->state == FM_JOB_QUEUED;
@@ -543,5 +553,5 @@ int fm_jobs_cancel(fm_jobs *jobs, const char *id)
     pthread_mutex_unlock(&j->lock);
     if (queued) fm_queue_finish(jobs, j, FM_JOB_CANCELLED, "cancelled before it started");
     fm_jobs_put(jobs, j);
-    return ok ? 0 : -2;
+    return ok ? FM_OK : ended(id, err);
 }

@@ -11,7 +11,7 @@
 #include <stdint.h>
 
 #include "core/core.h"
-#include "http/http_server.h"
+#include "runner/job_doc.h"
 
 typedef struct fm_jobs fm_jobs;
 
@@ -79,9 +79,22 @@ void fm_jobs_close(fm_jobs *jobs);
 /* Wake everything that waits, so that the manager can be closed soon. */
 void fm_jobs_begin_shutdown(fm_jobs *jobs);
 
-/* Store a canonical job (fm_http_job_parse) durably and queue it: 0 and
- * its id, or the HTTP status of the refusal with err filled. */
-int fm_jobs_submit(fm_jobs *jobs, json_t *spec, char *id, size_t id_size, fm_http_error *err);
+/* Store a job document (fm_job_doc_parse) durably and queue it: FM_OK and
+ * its id once its spec is on disk. Takes doc, also on error. Refusals have
+ * their reason: "shutting_down", "job_limit", "memory_budget" (the stock's
+ * grid estimate over the budget), "storage" (not written: not accepted).
+ * This is the one way in for every source of jobs (HTTP, the demo, the
+ * queue of a fleet). */
+fm_status fm_jobs_submit(fm_jobs *jobs, fm_job_doc *doc, char *id, size_t id_size,
+                         fm_error *err);
+/* The byte budget of a job's grid: job_memory_mb, or the document's
+ * options.memory_budget_mb when lower. */
+size_t fm_jobs_memory_budget(const fm_jobs *jobs, const fm_job_doc *doc);
+/* The rules every job document is read with here: the daemon's G-code
+ * settings (dialect, subroutine_path) as the defaults; own = 0 for
+ * documents from clients (HTTP, a fleet's queue: no files, no live
+ * programs), 1 for the daemon's own (its store, live mode, the demo). */
+fm_job_doc_rules fm_jobs_doc_rules(const fm_jobs *jobs, int own);
 
 /* --------------------------------------------------- shared queues -- */
 /* Jobs taken from a shared queue (queue_redis.c, docs/fleet.md) carry the
@@ -93,11 +106,12 @@ typedef enum fm_jobs_take_result {
     FM_JOBS_TAKEN_ALREADY, /* already queued or running here */
     FM_JOBS_TAKEN_FINAL    /* it ended before (here or in a shared folder): *final is its status */
 } fm_jobs_take_result;
-/* Take a canonical job under the queue's id. 0, or the HTTP status of the
- * refusal (the same checks and budgets as fm_jobs_submit) with err filled.
- * *final (FM_JOBS_TAKEN_FINAL) is the caller's to json_decref. */
-int fm_jobs_take(fm_jobs *jobs, const char *id, json_t *spec, fm_jobs_take_result *result,
-                 json_t **final, fm_http_error *err);
+/* Take a job document under the queue's id (takes doc, also on error).
+ * FM_OK, or the refusal with its reason (the same checks and budgets as
+ * fm_jobs_submit). *final (FM_JOBS_TAKEN_FINAL) is the caller's to
+ * json_decref. */
+fm_status fm_jobs_take(fm_jobs *jobs, const char *id, fm_job_doc *doc,
+                       fm_jobs_take_result *result, json_t **final, fm_error *err);
 /* Called on a worker thread as each job ends (done, failed, cancelled),
  * with its final status (the GET /v1/jobs/{id} object, borrowed). */
 typedef void (*fm_jobs_end_hook)(void *user, const char *id, json_t *status);
@@ -108,30 +122,31 @@ int fm_jobs_busy(fm_jobs *jobs);
  * like a shutdown, it keeps its snapshot, writes no result and is held. */
 void fm_jobs_release(fm_jobs *jobs, const char *id);
 
-/* The fm_http_service over this manager. */
-void fm_jobs_http_service(fm_jobs *jobs, fm_http_service *out);
 
 /* For Modbus: jobs in creation order (slot 1 = the oldest kept job). */
 int fm_jobs_view_slot(fm_jobs *jobs, int slot, fm_job_view *out);
 int fm_jobs_count(fm_jobs *jobs);
-/* Pause (1) or resume (0) a running or queued job; cancel. 0 on success,
- * -1 unknown job, -2 wrong state. */
-int fm_jobs_pause(fm_jobs *jobs, const char *id, int pause);
-int fm_jobs_cancel(fm_jobs *jobs, const char *id);
+/* Pause (1) or resume (0) a running or queued job; cancel; remove (its
+ * folder goes). Refusals: reason "not_found" or "bad_state" (the job has
+ * ended). */
+fm_status fm_jobs_pause(fm_jobs *jobs, const char *id, int pause, fm_error *err);
+fm_status fm_jobs_cancel(fm_jobs *jobs, const char *id, fm_error *err);
+fm_status fm_jobs_remove(fm_jobs *jobs, const char *id, fm_error *err);
 void fm_jobs_pause_all(fm_jobs *jobs);
 
-/* Live mode (Modbus registers 110-117): a live job whose stock is cut along
- * the positions the controller writes, each a straight feed move from the
- * previous one (the first position only places the tool). Its stock and
- * tools come from the config (live_stock, live_tools) or from the job in
- * from_slot. The job is in the table (HTTP, viewer, Modbus read it) while
- * it lives; it is not stored (the machine's part is the record). All calls
- * return at once: a live thread cuts. Codes: 0 accepted, -1 refused (no
- * live session, no stock or tools, the session failed), -2 busy (the queue
- * is full or out of resources). */
-int fm_jobs_live_start(fm_jobs *jobs, int from_slot);
-int fm_jobs_live_position(fm_jobs *jobs, const double xyz[3], int tool);
-int fm_jobs_live_stop(fm_jobs *jobs);
+/* Live mode (Modbus registers 110-117): a live job is a job whose motions
+ * are the positions the controller writes, each a straight feed move from
+ * the previous one (the first position only places the tool), through the
+ * same runner as a program: the same cut, check, tool marks and
+ * publishing. Its stock and tools come from the config (live_stock,
+ * live_tools) or from the job in from_slot. It is stored like any job and
+ * its positions are journaled, so a restarted daemon resumes it (and takes
+ * positions for it again). All calls return at once: the job's own thread
+ * cuts. Refusals: FM_ERR_INPUT (live mode off, no stock or tools, the job
+ * ended), reason "busy" (the queue of positions is full, no thread). */
+fm_status fm_jobs_live_start(fm_jobs *jobs, int from_slot, fm_error *err);
+fm_status fm_jobs_live_position(fm_jobs *jobs, const double xyz[3], int tool, fm_error *err);
+fm_status fm_jobs_live_stop(fm_jobs *jobs, fm_error *err);
 int fm_jobs_live_active(fm_jobs *jobs);
 
 #endif

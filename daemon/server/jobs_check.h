@@ -1,14 +1,15 @@
-/* jobs_check.h: the collision check (lib/check) of a canonical job
- * (fm_http_job_parse): set up for a job's own pass (the runner checks as it
- * cuts, job.h), or run alone for POST /v1/check (check_pass.c, as
- * `frepmill check`). Both give the CLI's findings for the same inputs. */
+/* jobs_check.h: POST /v1/check, the collision check (lib/check) of a job
+ * document's run spec (spec->check: options, machine, voxel, fixtures) run
+ * alone: check_pass.c, the pass `frepmill check` runs. Jobs run the same
+ * check in their own pass (queue.c, job.h), so both give the CLI's
+ * findings for the same inputs. */
 #ifndef FM_DAEMON_JOBS_CHECK_H
 #define FM_DAEMON_JOBS_CHECK_H
 
 #include <jansson.h>
 
-#include "http/http_server.h"
 #include "runner/job.h"
+#include "runner/job_doc.h"
 
 /* The largest program (bytes of G-code or trajectory JSON) POST /v1/check
  * answers synchronously; larger programs go through POST /v1/jobs. */
@@ -17,43 +18,29 @@
  * coarse grid). */
 #define FM_JOBS_CHECK_SYNC_MAX_RUNNING 2
 
-/* Validate options.check of a canonical job (absent, false or an object of
- * clearance, rapid_clearance, tolerance, max_ramp, voxel, machine): 0, or
- * the HTTP status with err filled. */
-int fm_jobs_check_validate(json_t *spec, fm_http_error *err);
-/* 1 unless options.check is false. */
-int fm_jobs_check_enabled(json_t *spec);
-
-/* The check of a canonical job as the runner takes it (job.h): options,
- * the check's voxel and the fixtures, which are written to files in dir
- * (the job's folder, or a private temporary folder) because lib/check
- * reads models from files; *rapid_rate gets the machine's rapid rate (0
- * when none). Free with fm_jobs_check_setup_free. */
-typedef struct fm_jobs_check_setup fm_jobs_check_setup;
-fm_status fm_jobs_check_prepare(json_t *spec, const char *dir, fm_jobs_check_setup **out,
-                                fm_error *err);
-const fm_job_check *fm_jobs_check_of(const fm_jobs_check_setup *setup);
-void fm_jobs_check_setup_free(fm_jobs_check_setup *setup);
-
 typedef struct fm_jobs_check_result {
     json_t *findings;  /* array, as `frepmill check` prints it (new reference) */
     int count, errors, warnings;
     int first_line;    /* source line of the first finding, 0 if none */
 } fm_jobs_check_result;
 
-/* The check alone (check_pass.h), for POST /v1/check. memory_budget bounds
- * the grid; dialect and subroutine_path are the server's G-code settings
- * (NULL: the defaults), as for jobs. On failure err has the fm_status code
- * and where. */
-fm_status fm_jobs_check_run(json_t *spec, const char *dir, size_t memory_budget,
-                            const char *dialect, const char *subroutine_path,
-                            fm_jobs_check_result *out, fm_error *err);
+/* Run the check of spec (spec->check set; its stock and fixture files
+ * already written).
+ * memory_budget bounds the check's grid. Stopped early (*stopped = 1, FM_OK,
+ * no findings) when keep_going(user) returns 0 between cuts; keep_going
+ * may be NULL. */
+fm_status fm_jobs_check_run(const fm_job_spec *spec, size_t memory_budget,
+                            int (*keep_going)(void *user), void *user,
+                            fm_jobs_check_result *out, int *stopped, fm_error *err);
 
-/* POST /v1/check: the same inputs as a job; {"findings": [...], "errors",
- * "warnings"} or an error status. state_dir holds the private temporary
- * folder. */
-int fm_jobs_check_request(const char *state_dir, size_t memory_budget, const char *dialect,
-                          const char *subroutine_path, json_t *request,
-                          json_t **out, fm_http_error *err);
+/* POST /v1/check: a job document (read with rules: the server's G-code
+ * settings, as for jobs) checked at once; {"findings": [...], "errors",
+ * "warnings"}. Its inline models go to a private temporary folder under
+ * state_dir. Refusals: the document's own, "check_too_large" (the program
+ * is over FM_JOBS_CHECK_SYNC_MAX_PROGRAM), "busy", and options.check false
+ * (nothing to do). */
+fm_status fm_jobs_check_request(const char *state_dir, size_t job_memory_bytes,
+                                const fm_job_doc_rules *rules, json_t *request, json_t **out,
+                                fm_error *err);
 
 #endif

@@ -41,10 +41,13 @@ typedef struct job_event {
     char *data;
 } job_event;
 
+typedef struct job_live job_live; /* live.c */
+
 typedef struct job {
+    struct fm_jobs *jobs; /* the manager it belongs to */
     char id[32];
     char dir[JOB_DIR_MAX];
-    json_t *spec;      /* canonical job, immutable */
+    fm_job_doc *doc;   /* the job document, immutable once stored (its models in dir) */
     double created;    /* unix time */
     int refs;          /* guarded by fm_jobs.lock */
     int deleted;       /* guarded by fm_jobs.lock */
@@ -76,6 +79,7 @@ typedef struct job {
     uint64_t next_event;   /* id of the next event; ids start at 1 */
     int ended;             /* the "end" event was emitted */
     pthread_mutex_t load_lock; /* one lazy mesh load at a time */
+    job_live *live;        /* a live job's positions and journal (live.c), else NULL */
 } job;
 
 struct fm_jobs {
@@ -87,13 +91,16 @@ struct fm_jobs {
     job **table;
     size_t count, cap;
     job *queue_head, *queue_tail;
-    int stopping;
+    atomic_int stopping;
     pthread_t *workers;
     int worker_count;
     atomic_uint id_counter;
-    struct jobs_live *live; /* jobs_live.c: the session taking positions, or NULL */
-    struct jobs_live *live_ending; /* a stopped session whose thread is still to be joined */
-    pthread_mutex_t live_lock; /* guards live and live_ending */
+    /* Live mode (live.c): the live job taking positions (a reference), or
+     * NULL; live jobs run on threads of their own (queue.c), not waiting
+     * behind the queue. live_lock is taken before jobs->lock and j->lock. */
+    job *live_job;
+    pthread_mutex_t live_lock;
+    struct own_thread *own_threads; /* queue.c */
     /* Told of every job that ends (queue_redis.c); guarded by lock. */
     fm_jobs_end_hook end_hook;
     void *end_hook_user;
@@ -103,8 +110,9 @@ struct fm_jobs {
 
 double fm_jobs_mono_s(void);
 double fm_jobs_wall_s(void);
-/* A new record with one reference (the table's). */
-job *fm_jobs_record_new(const char *id, const char *jobs_dir, json_t *spec, double created);
+/* A new record with one reference (the table's); it owns doc (NULL: the
+ * record could not be made and doc is freed). */
+job *fm_jobs_record_new(const char *id, const char *jobs_dir, fm_job_doc *doc, double created);
 /* Insert in creation order (caller holds jobs->lock). */
 void fm_jobs_table_add(fm_jobs *jobs, job *j);
 /* Find a job and take a reference (NULL if unknown or deleted). */
@@ -112,13 +120,10 @@ job *fm_jobs_get(fm_jobs *jobs, const char *id);
 void fm_jobs_put(fm_jobs *jobs, job *j);
 /* 1 once fm_jobs_begin_shutdown was called. */
 int fm_jobs_stopping(fm_jobs *jobs);
-int fm_jobs_remove(fm_jobs *jobs, const char *id, fm_http_error *err);
-/* For jobs_live.c: a job record in the table that no worker runs and that is
- * not stored (its folder has no spec.json, so a restart drops it); returned
- * with a reference for the caller. */
-job *fm_jobs_add_unstored(fm_jobs *jobs, json_t *spec);
-/* Stop the live job's thread and free the session (fm_jobs_close). */
-void fm_jobs_live_close(fm_jobs *jobs);
+/* A live job's document stored like any job's, then run at once on a
+ * thread of its own and attached as the live session. */
+fm_status fm_jobs_submit_live(fm_jobs *jobs, fm_job_doc *doc, char *id, size_t id_size,
+                              fm_error *err);
 
 /* The end hook, if any, with the job's final status (queue.c calls it when
  * a job ends). */
@@ -127,10 +132,14 @@ void fm_jobs_notify_end(fm_jobs *jobs, job *j);
 /* ------------------------------------------------------- job_store.c -- */
 
 /* Make the job's folder and write its spec durably (temp file, fsync,
- * rename, fsync of the folder and of jobs/): after this the job survives a
- * crash. On failure nothing is left behind. */
-fm_status fm_job_store_create(fm_jobs *jobs, const char *id, double created, json_t *spec,
+ * rename, fsync of the folder and of jobs/), with the document's inline
+ * models beside it: after this the job survives a crash. On failure
+ * nothing is left behind. */
+fm_status fm_job_store_create(fm_jobs *jobs, const char *id, double created, fm_job_doc *doc,
                               fm_error *err);
+/* Write a document's inline models (stock, fixtures) into dir and point
+ * its run spec at the files (also for POST /v1/check's private folder). */
+fm_status fm_job_store_write_models(fm_job_doc *doc, const char *dir, fm_error *err);
 /* The terminal record: state, last status, error and report (result.json). */
 void fm_job_store_write_result(job *j);
 /* Read every job folder back at start (finished jobs with their results,
@@ -144,10 +153,6 @@ int fm_job_store_load_one(fm_jobs *jobs, const char *id);
 void fm_job_store_save_snapshot(job *j, fm_stock *stock, long resume_from);
 /* The snapshot to resume from, with its N; NULL if none or unusable. */
 fm_stock *fm_job_store_load_snapshot(job *j, const fm_stock_options *opt, long *resume_from);
-/* An inline stock model is written into the job's folder once, so that
- * the runner (and a resumed run) reads it like the CLI reads files. */
-fm_status fm_job_store_materialize_stock(job *j, char *path, size_t size, const char **spec_out,
-                                         fm_error *err);
 /* Delete: the folder is renamed to ID.deleted first (one atomic step that
  * a restart honours), then removed by fm_job_store_remove_deleted. */
 fm_status fm_job_store_mark_deleted(fm_jobs *jobs, job *j, fm_error *err);
@@ -162,8 +167,21 @@ fm_status fm_queue_start_workers(fm_jobs *jobs, int count, fm_error *err);
 void fm_queue_join_workers(fm_jobs *jobs);
 /* Drop the queue's references of jobs that never ran (at close). */
 void fm_queue_drain(fm_jobs *jobs);
+/* Run a job now on a thread of its own (live jobs); joined at close. */
+fm_status fm_queue_run_now(fm_jobs *jobs, job *j, fm_error *err);
+void fm_queue_join_own(fm_jobs *jobs, int all);
 /* End a job: state, result.json, the "end" event, a log line. */
 void fm_queue_finish(fm_jobs *jobs, job *j, fm_job_state state, const char *what);
+
+/* ------------------------------------------------------------ live.c -- */
+
+/* The live job's motion source for the runner; reads the journal back
+ * first after a restart, and opens it for the positions to come. */
+fm_status fm_live_prepare(job *j, fm_job_motion_source *src, fm_error *err);
+/* Make j the live session (it takes positions) / stop that if it is. */
+void fm_live_attach(fm_jobs *jobs, job *j);
+void fm_live_detach(fm_jobs *jobs, job *j);
+void fm_live_free(job_live *live);
 
 /* --------------------------------------------------------- publish.c -- */
 
@@ -188,7 +206,7 @@ void fm_publish_progress(job *j, const fm_job_progress *p, publish_pace *pace);
 void fm_publish_chunks(job *j, fm_stock *stock);
 /* Make sure the chunks of a finished job are published (loads its stock
  * snapshot once after a restart). */
-int fm_publish_ensure_meshes(job *j, fm_http_error *err);
+fm_status fm_publish_ensure_meshes(job *j, fm_error *err);
 void fm_publish_chunks_free(job *j);
 
 #endif

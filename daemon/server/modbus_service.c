@@ -3,7 +3,7 @@
  * manager: the status registers show the selected job (by default the
  * newest), commands start (resume), pause, cancel and select it, and live
  * mode cuts a live job's stock along the controller's positions
- * (jobs_live.c). */
+ * (live.c). */
 #include "modbus_service.h"
 
 #include <stdatomic.h>
@@ -50,46 +50,46 @@ static void read_status(void *ctx, fm_modbus_status *out)
     out->last_error = (uint16_t)v.error_code;
 }
 
-static int command(void *ctx, int cmd, uint32_t argument)
+static fm_status command(void *ctx, int cmd, uint32_t argument, fm_error *err)
 {
     fm_jobs *jobs = ctx;
     if (cmd == FM_MODBUS_CMD_SELECT) {
-        if (argument != 0 && (int)argument > fm_jobs_count(jobs)) return FM_MODBUS_ERR_BAD_SLOT;
+        if (argument != 0 && (int)argument > fm_jobs_count(jobs))
+            return fm_error_set_reason(err, FM_ERR_INPUT, "bad_slot", "no job in slot %u",
+                                       (unsigned)argument);
         atomic_store(&selected_slot, (int)argument);
-        return FM_MODBUS_ERR_NONE;
+        return FM_OK;
     }
     fm_job_view v;
-    if (fm_jobs_view_slot(jobs, current_slot(jobs), &v) != 0) return FM_MODBUS_ERR_NO_JOB;
-    int rc;
+    if (fm_jobs_view_slot(jobs, current_slot(jobs), &v) != 0)
+        return fm_error_set_reason(err, FM_ERR_INPUT, "no_job", "no job is selected");
+    fm_status st;
     switch (cmd) {
-    case FM_MODBUS_CMD_START: rc = fm_jobs_pause(jobs, v.id, 0); break;
-    case FM_MODBUS_CMD_PAUSE: rc = fm_jobs_pause(jobs, v.id, 1); break;
-    case FM_MODBUS_CMD_CANCEL: rc = fm_jobs_cancel(jobs, v.id); break;
-    default: return FM_MODBUS_ERR_UNKNOWN_COMMAND;
+    case FM_MODBUS_CMD_START: st = fm_jobs_pause(jobs, v.id, 0, err); break;
+    case FM_MODBUS_CMD_PAUSE: st = fm_jobs_pause(jobs, v.id, 1, err); break;
+    case FM_MODBUS_CMD_CANCEL: st = fm_jobs_cancel(jobs, v.id, err); break;
+    default:
+        return fm_error_set_reason(err, FM_ERR_INPUT, "unknown_command", "unknown command %d",
+                                   cmd);
     }
-    if (rc == 0) fm_log(FM_LOG_INFO, "modbus: command %d on job %s", cmd, v.id);
-    return rc == 0 ? FM_MODBUS_ERR_NONE : rc == -1 ? FM_MODBUS_ERR_NO_JOB : FM_MODBUS_ERR_BAD_STATE;
+    if (st == FM_OK) fm_log(FM_LOG_INFO, "modbus: command %d on job %s", cmd, v.id);
+    return st;
 }
 
-static int live_code(int rc)
+static fm_status live_position(void *ctx, const double xyz[3], int tool, fm_error *err)
 {
-    return rc == 0 ? FM_MODBUS_ERR_NONE : rc == -2 ? FM_MODBUS_ERR_BUSY : FM_MODBUS_ERR_LIVE_REFUSED;
-}
-
-static int live_position(void *ctx, const double xyz[3], int tool)
-{
-    return live_code(fm_jobs_live_position(ctx, xyz, tool));
+    return fm_jobs_live_position(ctx, xyz, tool, err);
 }
 
 /* On: a live job from the config's live_stock/live_tools, or from the
  * selected job's stock and tools; it becomes the newest job, so the status
  * registers follow it unless a slot is selected. Off: it ends once the
  * positions already written are cut. */
-static int live_mode(void *ctx, int on)
+static fm_status live_mode(void *ctx, int on, fm_error *err)
 {
     fm_jobs *jobs = ctx;
-    if (!on) return live_code(fm_jobs_live_stop(jobs));
-    return live_code(fm_jobs_live_start(jobs, current_slot(jobs)));
+    if (!on) return fm_jobs_live_stop(jobs, err);
+    return fm_jobs_live_start(jobs, current_slot(jobs), err);
 }
 
 static void watchdog_expired(void *ctx)

@@ -38,21 +38,15 @@ void fm_publish_event(job *j, const char *type, json_t *data)
 static json_t *tool_colors_json(const job *j)
 {
     json_t *out = json_array();
-    const char *color =
-        json_string_value(json_object_get(json_object_get(j->spec, "options"), "color"));
-    if (color && !strcmp(color, "none")) return out;
-    json_t *tools = json_object_get(json_object_get(j->spec, "tools"), "tools");
-    size_t i;
-    json_t *t;
-    json_array_foreach(tools, i, t) {
-        json_t *number = json_object_get(t, "number");
-        if (!json_is_integer(number)) continue;
+    if (!j->doc->color_tool) return out;
+    const fm_tool_table *tools = &j->doc->tools;
+    for (size_t i = 0; i < tools->count; i++) {
+        int number = tools->tools[i].number;
         uint8_t rgb[3];
-        fm_mesh_tool_color((int)json_integer_value(number), rgb);
+        fm_mesh_tool_color(number, rgb);
         char hex[8];
         snprintf(hex, sizeof hex, "#%02x%02x%02x", rgb[0], rgb[1], rgb[2]);
-        json_array_append_new(out, json_pack("{s:I, s:s}", "tool", json_integer_value(number),
-                                             "color", hex));
+        json_array_append_new(out, json_pack("{s:i, s:s}", "tool", number, "color", hex));
     }
     return out;
 }
@@ -61,10 +55,10 @@ json_t *fm_publish_status_json(job *j)
 {
     pthread_mutex_lock(&j->lock);
     const fm_job_view *v = &j->view;
-    json_t *name = json_object_get(json_object_get(j->spec, "options"), "name");
+    json_t *name = j->doc->name[0] ? json_string(j->doc->name) : NULL;
     json_t *out = json_pack(
         "{s:s, s:s, s:b, s:f, s:i, s:I, s:i, s:[f,f,f], s:f, s:f, s:f, s:f, s:I, s:I, s:o, "
-        "s:O?, s:I, s:f, s:O?}",
+        "s:O?, s:I, s:f, s:o?}",
         "id", j->id, "state", fm_job_state_name(j->state), "paused", j->paused, "progress",
         v->progress, "line", v->line, "block", (json_int_t)v->block, "tool", v->tool, "position",
         v->position[0], v->position[1], v->position[2], "program_time_s", v->program_time_s,
@@ -213,10 +207,7 @@ void fm_publish_chunks(job *j, fm_stock *stock)
     }
     fm_mesh_extract_options opt;
     fm_mesh_extract_default(&opt);
-    /* options.color (validated on submission): "tool" unless "none" */
-    const char *color =
-        json_string_value(json_object_get(json_object_get(j->spec, "options"), "color"));
-    opt.coloring = color && !strcmp(color, "none") ? FM_MESH_COLOR_NONE : FM_MESH_COLOR_TOOL;
+    opt.coloring = j->doc->color_tool ? FM_MESH_COLOR_TOOL : FM_MESH_COLOR_NONE;
     job_chunk *fresh = calloc(n ? n : 1, sizeof *fresh);
     if (!fresh) {
         free(changed);
@@ -271,17 +262,17 @@ void fm_publish_chunks(job *j, fm_stock *stock)
     free(fresh);
 }
 
-int fm_publish_ensure_meshes(job *j, fm_http_error *err)
+fm_status fm_publish_ensure_meshes(job *j, fm_error *err)
 {
     pthread_mutex_lock(&j->lock);
     int ready = j->meshes_loaded || j->state < FM_JOB_DONE;
     pthread_mutex_unlock(&j->lock);
-    if (ready) return 0;
+    if (ready) return FM_OK;
     pthread_mutex_lock(&j->load_lock);
     pthread_mutex_lock(&j->lock);
     ready = j->meshes_loaded;
     pthread_mutex_unlock(&j->lock);
-    int rc = 0;
+    fm_status rc = FM_OK;
     if (!ready) {
         char path[PATH_MAX];
         snprintf(path, sizeof path, "%s/stock.vdb", j->dir);
@@ -290,8 +281,8 @@ int fm_publish_ensure_meshes(job *j, fm_http_error *err)
         fm_error ferr;
         fm_stock *stock = access(path, R_OK) == 0 ? fm_stock_load_vdb(path, &opt, &ferr) : NULL;
         if (!stock) {
-            rc = fm_http_error_set(err, 404, "no_mesh", "job %s has no stored stock to mesh",
-                                   j->id);
+            rc = fm_error_set_reason(err, FM_ERR_INPUT, "no_mesh",
+                                     "job %s has no stored stock to mesh", j->id);
         } else {
             fm_publish_chunks(j, stock);
             fm_stock_free(stock);

@@ -3,7 +3,10 @@
  * progress hook that, between cuts and on the worker's own thread,
  * publishes the status (publish.c), snapshots the stock every
  * snapshot_interval_s of work (job_store.c), remeshes the chunks that
- * changed every publish_interval_s, and holds the job while it is paused. */
+ * changed every publish_interval_s (and at once when a live job has
+ * caught up with the machine), and holds the job while it is paused. Live
+ * jobs take the same path on a thread of their own (fm_queue_run_now), so
+ * that a controller never waits behind the queue. */
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -15,7 +18,15 @@
 #include "log.h"
 #include "runner/findings_json.h"
 #include "runner/report_json.h"
-#include "toolpaths/tooltable/tooltable.h"
+
+/* A thread running one job outside the queue (live jobs). */
+typedef struct own_thread {
+    pthread_t thread;
+    fm_jobs *jobs;
+    job *j;              /* a reference, dropped when the run ends */
+    atomic_int done;
+    struct own_thread *next;
+} own_thread;
 
 void fm_queue_push(fm_jobs *jobs, job *j)
 {
@@ -45,16 +56,13 @@ static int on_progress(void *user, const fm_job_progress *p)
     fm_publish_progress(j, p, &rc->pace);
     pthread_mutex_lock(&j->lock);
     /* Paused (Modbus): wait here, between cuts, until resumed. */
-    while (j->paused && !atomic_load(&j->cancel_requested) && !rc->jobs->stopping &&
+    while (j->paused && !atomic_load(&j->cancel_requested) && !atomic_load(&rc->jobs->stopping) &&
            !atomic_load(&j->released))
         pthread_cond_wait(&j->cond, &j->lock);
     pthread_mutex_unlock(&j->lock);
 
     if (atomic_load(&j->cancel_requested)) return 1;
-    pthread_mutex_lock(&rc->jobs->lock);
-    int stopping = rc->jobs->stopping || atomic_load(&j->released);
-    pthread_mutex_unlock(&rc->jobs->lock);
-    if (stopping) {
+    if (atomic_load(&rc->jobs->stopping) || atomic_load(&j->released)) {
         rc->stopped_for_shutdown = 1;
         return 1;
     }
@@ -62,7 +70,8 @@ static int on_progress(void *user, const fm_job_progress *p)
         fm_job_store_save_snapshot(j, p->stock, p->resume_from);
         rc->last_snapshot = fm_jobs_mono_s();
     }
-    if (now - rc->last_publish >= rc->jobs->cfg.publish_interval_s) {
+    /* A live job publishes as soon as it has caught up with the machine. */
+    if (p->idle || now - rc->last_publish >= rc->jobs->cfg.publish_interval_s) {
         fm_publish_chunks(j, p->stock);
         rc->last_publish = fm_jobs_mono_s();
     }
@@ -110,11 +119,13 @@ static void on_finding(void *user, const fm_check *check, size_t index)
 
 static void run_job(fm_jobs *jobs, job *j)
 {
-    fm_job_spec spec;
-    fm_job_spec_default(&spec);
+    /* The run spec as the document made it; the daemon adds its budget and
+     * threads. j->doc is immutable while the job is known. */
+    fm_job_spec spec = j->doc->spec;
     fm_error err;
     fm_error_clear(&err);
     run_ctx rc = {.jobs = jobs, .j = j, .pace = {.last_line = -1}};
+    int unfinished = 0; /* stopped by shutdown: resumes at the next start */
     rc.last_snapshot = rc.last_publish = fm_jobs_mono_s();
 
     pthread_mutex_lock(&j->lock);
@@ -122,70 +133,26 @@ static void run_job(fm_jobs *jobs, job *j)
     fm_publish_event(j, "state", json_pack("{s:s}", "state", "running"));
     pthread_mutex_unlock(&j->lock);
 
-    json_t *options = json_object_get(j->spec, "options");
-    spec.stock.voxel_mm = json_number_value(json_object_get(j->spec, "voxel"));
-    spec.stock.threads = jobs->cfg.threads_per_job;
-    spec.stock.memory_budget = jobs->cfg.job_memory_bytes;
-    json_t *v;
-    if ((v = json_object_get(options, "memory_budget_mb")) &&
-        json_number_value(v) * 1048576.0 < (double)spec.stock.memory_budget)
-        spec.stock.memory_budget = (size_t)(json_number_value(v) * 1048576.0);
-    if ((v = json_object_get(options, "band"))) spec.stock.band_voxels = (int)json_integer_value(v);
-    if ((v = json_object_get(options, "threads")))
-        spec.stock.threads = (int)json_integer_value(v);
-    if ((v = json_object_get(options, "batch"))) spec.batch_diameters = json_number_value(v);
-    if ((v = json_object_get(options, "rapid_rate"))) spec.rapid_rate = json_number_value(v);
-    /* the server's G-code settings unless the job names its dialect (jobs
-     * over HTTP cannot name folders: that would be a file access) */
-    spec.dialect = jobs->cfg.dialect;
-    if ((v = json_object_get(options, "dialect"))) spec.dialect = json_string_value(v);
-    spec.calculator_input = json_is_true(json_object_get(options, "calculator_input"));
-    spec.subroutine_path = jobs->cfg.subroutine_path;
-
-    fm_tool_table table;
-    memset(&table, 0, sizeof table);
-    char *tools_text = json_dumps(json_object_get(j->spec, "tools"), JSON_INDENT(1));
-    char *trajectory_text = NULL;
-    char stock_path[PATH_MAX];
-    fm_status st = tools_text ? fm_tooltable_parse_json(tools_text, strlen(tools_text), "tools",
-                                                        &table, &err)
-                              : fm_error_set(&err, FM_ERR_INPUT, "no tool table");
-    spec.tools = &table;
-    if (st == FM_OK) st = fm_job_store_materialize_stock(j, stock_path, sizeof stock_path, &spec.stock_spec, &err);
-    json_t *program = json_object_get(j->spec, "program");
-    json_t *gcode = json_object_get(program, "gcode");
-    if (gcode) {
-        spec.program_text = json_string_value(gcode);
-        spec.program_length = json_string_length(gcode);
-        spec.program_name = "program";
-        spec.program_kind = FM_PROGRAM_GCODE;
-    } else {
-        trajectory_text = json_dumps(json_object_get(program, "trajectory"), JSON_INDENT(1));
-        spec.program_text = trajectory_text ? trajectory_text : "";
-        spec.program_length = strlen(spec.program_text);
-        spec.program_name = "trajectory";
-        spec.program_kind = FM_PROGRAM_TRAJECTORY;
+    spec.stock.memory_budget = fm_jobs_memory_budget(jobs, j->doc);
+    if (!j->doc->threads_given) spec.stock.threads = jobs->cfg.threads_per_job;
+    fm_status st = FM_OK;
+    int live = spec.program_kind == FM_PROGRAM_LIVE;
+    fm_job_motion_source source;
+    if (live) {
+        st = fm_live_prepare(j, &source, &err);
+        spec.source = &source;
     }
 
     /* Resume from the last snapshot, if any. */
     long from = 0;
     if (st == FM_OK && (spec.resume_stock = fm_job_store_load_snapshot(j, &spec.stock, &from))) {
-        spec.skip_motions = from;
+        spec.skip_motions = rc.resume_from = from;
         fm_log(FM_LOG_INFO, "job %s: resuming from its snapshot at motion %ld", j->id, from);
     }
-    /* The collision check runs in the same pass as the cut, on a grid of
-     * its own voxel (job.h): findings are published as they are found and
-     * are the ones `frepmill check` gives. */
-    fm_jobs_check_setup *check_setup = NULL;
-    if (st == FM_OK && fm_jobs_check_enabled(j->spec)) {
-        st = fm_jobs_check_prepare(j->spec, j->dir, &check_setup, &err);
-        if (st == FM_OK) {
-            spec.check = fm_jobs_check_of(check_setup);
-            /* the machine's rapid rate times the job, unless options give one */
-            if (!json_object_get(options, "rapid_rate") && spec.check->options.machine.rapid_rate > 0)
-                spec.rapid_rate = spec.check->options.machine.rapid_rate;
-        }
-    }
+    /* The collision check (spec.check, from the document) runs in the
+     * same pass as the cut, on a grid of its own voxel (job.h): findings
+     * are published as they are found (on_finding) and are the ones
+     * `frepmill check` gives. */
     if (st == FM_OK) fm_log(FM_LOG_INFO, "job %s: running", j->id);
 
     fm_job_result result;
@@ -198,10 +165,6 @@ static void run_job(fm_jobs *jobs, job *j)
         fm_stock_free(spec.resume_stock);
         spec.resume_stock = NULL;
     }
-    free(tools_text);
-    free(trajectory_text);
-    fm_tool_table_free(&table);
-    fm_jobs_check_setup_free(check_setup);
     if (st == FM_OK && result.check) {
         /* the findings as the check closed them (final depths and extents) */
         json_t *findings = fm_findings_json_array(result.check);
@@ -214,7 +177,6 @@ static void run_job(fm_jobs *jobs, job *j)
                fm_check_count_severity(result.check, FM_CHECK_WARNING), result.check_time_s);
         json_decref(findings);
     }
-
     if (st != FM_OK) {
         pthread_mutex_lock(&j->lock);
         json_decref(j->error);
@@ -225,33 +187,35 @@ static void run_job(fm_jobs *jobs, job *j)
         char what[1200];
         snprintf(what, sizeof what, "failed: %s", fm_error_format(&err, buf, sizeof buf));
         fm_queue_finish(jobs, j, FM_JOB_FAILED, what);
-        return;
+        goto done;
     }
     pthread_mutex_lock(&j->lock);
     j->initial_mm3 = result.initial_volume_mm3;
     pthread_mutex_unlock(&j->lock);
-    if (result.stopped && rc.stopped_for_shutdown && !atomic_load(&j->cancel_requested)) {
+    if (result.stopped && (rc.stopped_for_shutdown || atomic_load(&jobs->stopping)) &&
+        !atomic_load(&j->cancel_requested)) {
         /* Stopping: keep the work done, resume at the next start. */
         fm_job_store_save_snapshot(j, result.stock, rc.resume_from);
         fm_stock_free(result.stock);
-        fm_check_free(result.check);
+        result.stock = NULL;
         pthread_mutex_lock(&j->lock);
         j->state = FM_JOB_QUEUED;
         pthread_mutex_unlock(&j->lock);
         fm_log(FM_LOG_INFO, "job %s: stopped by %s at motion %ld; will resume", j->id,
                atomic_load(&j->released) ? "its queue (another daemon has it)" : "shutdown",
                rc.resume_from);
-        return;
+        unfinished = 1;
+        goto done;
     }
     pthread_mutex_lock(&jobs->lock);
     int deleted = j->deleted;
     pthread_mutex_unlock(&jobs->lock);
     if (deleted) {
         fm_stock_free(result.stock);
-        fm_check_free(result.check);
+        result.stock = NULL;
         fm_job_store_remove_deleted(j);
         fm_log(FM_LOG_INFO, "job %s: stopped (deleted)", j->id);
-        return;
+        goto done;
     }
     fm_publish_chunks(j, result.stock);
     pthread_mutex_lock(&j->lock);
@@ -261,7 +225,7 @@ static void run_job(fm_jobs *jobs, job *j)
     pthread_mutex_unlock(&j->lock);
     fm_job_store_save_snapshot(j, result.stock, result.stopped ? rc.resume_from : result.motions);
     fm_stock_free(result.stock);
-    fm_check_free(result.check);
+    result.stock = NULL;
     if (result.stopped) {
         fm_queue_finish(jobs, j, FM_JOB_CANCELLED, "cancelled");
     } else {
@@ -270,6 +234,9 @@ static void run_job(fm_jobs *jobs, job *j)
                  result.motions, result.removed_volume_mm3, result.wall_time_s);
         fm_queue_finish(jobs, j, FM_JOB_DONE, what);
     }
+done:
+    fm_job_result_release(&result);
+    if (live && !unfinished) fm_live_detach(jobs, j);
 }
 
 static void *worker_main(void *arg)
@@ -277,7 +244,8 @@ static void *worker_main(void *arg)
     fm_jobs *jobs = arg;
     pthread_mutex_lock(&jobs->lock);
     for (;;) {
-        while (!jobs->stopping && !jobs->queue_head) pthread_cond_wait(&jobs->queue_cond, &jobs->lock);
+        while (!jobs->stopping && !jobs->queue_head)
+            pthread_cond_wait(&jobs->queue_cond, &jobs->lock);
         if (jobs->stopping) break;
         job *j = jobs->queue_head;
         jobs->queue_head = j->next_queued;
@@ -326,4 +294,58 @@ void fm_queue_drain(fm_jobs *jobs)
         j = next;
     }
     jobs->queue_head = jobs->queue_tail = NULL;
+}
+
+static void *own_main(void *arg)
+{
+    own_thread *t = arg;
+    run_job(t->jobs, t->j);
+    fm_jobs_put(t->jobs, t->j);
+    atomic_store(&t->done, 1);
+    return NULL;
+}
+
+fm_status fm_queue_run_now(fm_jobs *jobs, job *j, fm_error *err)
+{
+    fm_queue_join_own(jobs, 0); /* threads of live jobs that have ended */
+    own_thread *t = calloc(1, sizeof *t);
+    if (!t) return fm_error_set_reason(err, FM_ERR_LIMIT, "busy", "out of memory");
+    t->jobs = jobs;
+    t->j = j;
+    pthread_mutex_lock(&jobs->lock);
+    j->refs++; /* the thread's */
+    pthread_mutex_unlock(&jobs->lock);
+    if (pthread_create(&t->thread, NULL, own_main, t) != 0) {
+        fm_jobs_put(jobs, j);
+        free(t);
+        return fm_error_set_reason(err, FM_ERR_LIMIT, "busy", "cannot start a thread");
+    }
+    pthread_mutex_lock(&jobs->lock);
+    t->next = jobs->own_threads;
+    jobs->own_threads = t;
+    pthread_mutex_unlock(&jobs->lock);
+    return FM_OK;
+}
+
+void fm_queue_join_own(fm_jobs *jobs, int all)
+{
+    pthread_mutex_lock(&jobs->lock);
+    own_thread **link = &jobs->own_threads, *gone = NULL;
+    while (*link) {
+        own_thread *t = *link;
+        if (all || atomic_load(&t->done)) {
+            *link = t->next;
+            t->next = gone;
+            gone = t;
+        } else {
+            link = &t->next;
+        }
+    }
+    pthread_mutex_unlock(&jobs->lock);
+    while (gone) {
+        own_thread *next = gone->next;
+        pthread_join(gone->thread, NULL);
+        free(gone);
+        gone = next;
+    }
 }

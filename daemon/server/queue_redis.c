@@ -425,12 +425,14 @@ static void qr_start_entry(fm_redis_queue *q, const char *entry, const char *kin
         qr_fail_entry(q, entry, "too_large", msg);
         return;
     }
-    fm_http_error herr;
-    memset(&herr, 0, sizeof herr);
-    json_t *doc = fm_http_job_parse(value, value_len, &herr);
-    if (!doc) {
-        snprintf(msg, sizeof msg, "%s", herr.message);
-        qr_fail_entry(q, entry, herr.code[0] ? herr.code : "bad_job", msg);
+    /* The same job document as POST /v1/jobs, by the same parser. */
+    fm_error derr;
+    fm_error_clear(&derr);
+    fm_job_doc *doc = NULL;
+    const fm_job_doc_rules rules = fm_jobs_doc_rules(q->jobs, 0);
+    if (fm_job_doc_parse(value, value_len, &rules, &doc, &derr) != FM_OK) {
+        snprintf(msg, sizeof msg, "%s", derr.message);
+        qr_fail_entry(q, entry, derr.reason[0] ? derr.reason : "bad_job", msg);
         return;
     }
     char id[64];
@@ -441,19 +443,18 @@ static void qr_start_entry(fm_redis_queue *q, const char *entry, const char *kin
     pthread_mutex_unlock(&q->lock);
     fm_jobs_take_result taken;
     json_t *final = NULL;
-    memset(&herr, 0, sizeof herr);
-    int rc = fm_jobs_take(q->jobs, id, doc, &taken, &final, &herr);
-    json_decref(doc);
-    if (rc != 0) {
+    fm_error_clear(&derr);
+    if (fm_jobs_take(q->jobs, id, doc, &taken, &final, &derr) != FM_OK) {
         pthread_mutex_lock(&q->lock);
         qr_forget_running(q, entry);
         pthread_mutex_unlock(&q->lock);
-        if (herr.status == 503 || herr.status == 507) {
+        if (!strcmp(derr.reason, "shutting_down") || !strcmp(derr.reason, "storage") ||
+            !strcmp(derr.reason, "out_of_memory") || !strcmp(derr.reason, "busy")) {
             /* Ours to retry (stopping, storage): left pending. */
-            fm_log(FM_LOG_WARN, "queue: entry %s: not taken now: %s", entry, herr.message);
+            fm_log(FM_LOG_WARN, "queue: entry %s: not taken now: %s", entry, derr.message);
             return;
         }
-        qr_fail_entry(q, entry, herr.code[0] ? herr.code : "bad_job", herr.message);
+        qr_fail_entry(q, entry, derr.reason[0] ? derr.reason : "bad_job", derr.message);
         return;
     }
     if (taken == FM_JOBS_TAKEN_FINAL) {

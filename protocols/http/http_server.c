@@ -17,6 +17,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
+#include <math.h>
 #include <microhttpd.h>
 #include <netinet/in.h>
 #include <pthread.h>
@@ -183,6 +184,13 @@ static enum MHD_Result respond_error(struct MHD_Connection *con, const fm_http_e
                          close_after);
 }
 
+static enum MHD_Result respond_service_error(struct MHD_Connection *con, const fm_error *e)
+{
+    fm_http_error err;
+    fm_http_error_from(e, &err);
+    return respond_error(con, &err, err.status == 413 || err.status == 429 || err.status == 503);
+}
+
 static enum MHD_Result fail(struct MHD_Connection *con, int status, const char *code,
                             const char *fmt, ...)
 #if defined(__GNUC__)
@@ -262,7 +270,7 @@ static enum MHD_Result respond_file(struct MHD_Connection *con, const char *path
 static enum MHD_Result respond_job_index(fm_http_server *s, struct MHD_Connection *con)
 {
     json_t *list = NULL;
-    fm_http_error err;
+    fm_error err;
     size_t cap = 4096, n = 0;
     char *html = malloc(cap);
     if (!html) return MHD_NO;
@@ -270,7 +278,7 @@ static enum MHD_Result respond_job_index(fm_http_server *s, struct MHD_Connectio
                           "<!doctype html><html><head><meta charset=\"utf-8\"><title>frepmilld</title>"
                           "</head><body><h1>frepmilld</h1><p>The viewer is not installed; "
                           "jobs:</p><ul>\n");
-    if (s->svc.list && s->svc.list(s->svc.ctx, &list, &err) == 0) {
+    if (s->svc.list && s->svc.list(s->svc.ctx, &list, &err) == FM_OK) {
         json_t *jobs = json_object_get(list, "jobs");
         size_t i;
         json_t *job;
@@ -414,9 +422,9 @@ static void sse_free(void *cls)
 static enum MHD_Result serve_events(fm_http_server *s, struct MHD_Connection *con, const char *id)
 {
     json_t *status = NULL;
-    fm_http_error err;
-    int rc = s->svc.status(s->svc.ctx, id, &status, &err);
-    if (rc) return respond_error(con, &err, 0);
+    fm_error err;
+    if (s->svc.status(s->svc.ctx, id, &status, &err) != FM_OK)
+        return respond_service_error(con, &err);
     json_decref(status);
     sse_stream *st = calloc(1, sizeof *st);
     if (!st) return MHD_NO;
@@ -496,6 +504,21 @@ static enum MHD_Result method_not_allowed(struct MHD_Connection *con, const char
     return queue(con, 405, r);
 }
 
+/* A request body as JSON: syntax errors answered here with their line and
+ * column (what the document means is the service's to validate). */
+static json_t *parse_body_json(const request *req, const char *what, fm_http_error *err)
+{
+    json_error_t jerr;
+    /* JSON_REJECT_DUPLICATES: two "program" keys are a mistake, not a choice. */
+    json_t *v = json_loadb(req->body ? req->body : "", req->size, JSON_REJECT_DUPLICATES, &jerr);
+    if (!v) {
+        fm_http_error_set(err, 400, "bad_json", "%s is not valid JSON: %s", what, jerr.text);
+        err->line = jerr.line > 0 ? jerr.line : 0;
+        err->column = jerr.column > 0 ? jerr.column : 0;
+    }
+    return v;
+}
+
 static enum MHD_Result submit_job(fm_http_server *s, struct MHD_Connection *con, request *req)
 {
     fm_http_error err;
@@ -508,13 +531,15 @@ static enum MHD_Result submit_job(fm_http_server *s, struct MHD_Connection *con,
                                         FM_HTTP_MAX_PARTS, &err);
         job = n < 0 ? NULL : fm_http_job_from_multipart(parts, n, &err);
     } else {
-        job = fm_http_job_parse(req->body ? req->body : "", req->size, &err);
+        job = parse_body_json(req, "the job", &err);
     }
     if (!job) return respond_error(con, &err, 0);
     char id[64];
-    int rc = s->svc.submit(s->svc.ctx, job, id, sizeof id, &err);
+    fm_error serr;
+    fm_error_clear(&serr);
+    fm_status st = s->svc.submit(s->svc.ctx, job, id, sizeof id, &serr);
     json_decref(job);
-    if (rc) return respond_error(con, &err, 0);
+    if (st != FM_OK) return respond_service_error(con, &serr);
     char location[128];
     snprintf(location, sizeof location, "/v1/jobs/%s", id);
     json_t *body = json_pack("{s:s, s:s}", "id", id, "status_url", location);
@@ -532,39 +557,55 @@ static enum MHD_Result submit_job(fm_http_server *s, struct MHD_Connection *con,
     return queue(con, 202, r);
 }
 
-static enum MHD_Result reply_json_call(struct MHD_Connection *con, int rc, json_t *out,
-                                       const fm_http_error *err, int ok_status)
+static enum MHD_Result reply_json_call(struct MHD_Connection *con, fm_status st, json_t *out,
+                                       const fm_error *err, int ok_status)
 {
-    if (rc) return respond_error(con, err, 0);
+    if (st != FM_OK) return respond_service_error(con, err);
     return respond_json(con, ok_status, out);
 }
 
-static enum MHD_Result reply_blob(struct MHD_Connection *con, int rc, fm_http_blob *blob,
-                                  const fm_http_error *err)
+static enum MHD_Result reply_blob(struct MHD_Connection *con, fm_status st, fm_http_blob *blob,
+                                  const fm_error *err)
 {
-    if (rc) return respond_error(con, err, 0);
+    if (st != FM_OK) return respond_service_error(con, err);
     return respond_bytes(con, 200, blob->content_type ? blob->content_type
                                                       : "application/octet-stream",
                          blob->data, blob->size, 0);
+}
+
+/* A query argument as a number: 0 and *out, or 1 (absent: *out untouched),
+ * or -1 when it is not a number. */
+static int query_number(struct MHD_Connection *con, const char *key, int integer, double *out)
+{
+    const char *v = MHD_lookup_connection_value(con, MHD_GET_ARGUMENT_KIND, key);
+    if (!v) return 1;
+    char *end;
+    errno = 0;
+    double d = strtod(v, &end);
+    if (end == v || *end || errno || !isfinite(d) || d < 0 || (integer && (d != floor(d) || v[0] == '-')))
+        return -1;
+    *out = d;
+    return 0;
 }
 
 static enum MHD_Result route_job(fm_http_server *s, struct MHD_Connection *con, const char *method,
                                  const char *url, const char *id, const char *rest,
                                  int is_get, int is_post, int is_delete)
 {
-    fm_http_error err;
-    memset(&err, 0, sizeof err);
+    fm_error err;
+    fm_error_clear(&err);
     json_t *out = NULL;
+    fm_status st;
     if (!rest[0]) {
         if (is_get) {
-            int rc_ = s->svc.status(s->svc.ctx, id, &out, &err);
-            return reply_json_call(con, rc_, out, &err, 200);
+            st = s->svc.status(s->svc.ctx, id, &out, &err);
+            return reply_json_call(con, st, out, &err, 200);
         }
         if (is_delete) {
             if (!token_ok(s, con)) goto unauthorized;
-            int rc = s->svc.remove(s->svc.ctx, id, &err);
-            return reply_json_call(con, rc, rc ? NULL : json_pack("{s:s, s:b}", "id", id,
-                                                                  "deleted", 1),
+            st = s->svc.remove(s->svc.ctx, id, &err);
+            return reply_json_call(con, st,
+                                   st ? NULL : json_pack("{s:s, s:b}", "id", id, "deleted", 1),
                                    &err, 200);
         }
         return method_not_allowed(con, method, url, "GET, DELETE");
@@ -572,44 +613,31 @@ static enum MHD_Result route_job(fm_http_server *s, struct MHD_Connection *con, 
     if (!strcmp(rest, "/cancel")) {
         if (!is_post) return method_not_allowed(con, method, url, "POST");
         if (!token_ok(s, con)) goto unauthorized;
-        int rc = s->svc.cancel(s->svc.ctx, id, &err);
-        if (rc) return respond_error(con, &err, 0);
-        {
-            int rc_ = s->svc.status(s->svc.ctx, id, &out, &err);
-            return reply_json_call(con, rc_, out, &err, 200);
-        }
+        if ((st = s->svc.cancel(s->svc.ctx, id, &err)) != FM_OK)
+            return respond_service_error(con, &err);
+        st = s->svc.status(s->svc.ctx, id, &out, &err);
+        return reply_json_call(con, st, out, &err, 200);
     }
     if (!is_get) return method_not_allowed(con, method, url, "GET");
-    if (!strcmp(rest, "/report"))
-        {
-            int rc_ = s->svc.report(s->svc.ctx, id, &out, &err);
-            return reply_json_call(con, rc_, out, &err, 200);
-        }
+    if (!strcmp(rest, "/report")) {
+        st = s->svc.report(s->svc.ctx, id, &out, &err);
+        return reply_json_call(con, st, out, &err, 200);
+    }
     if (!strcmp(rest, "/events")) return serve_events(s, con, id);
     if (!strcmp(rest, "/mesh")) {
         const char *format = MHD_lookup_connection_value(con, MHD_GET_ARGUMENT_KIND, "format");
         fm_http_blob blob = {0};
-        {
-            int rc_ = s->svc.mesh(s->svc.ctx, id, format ? format : "drc", &blob, &err);
-            return reply_blob(con, rc_, &blob, &err);
-        }
+        st = s->svc.mesh(s->svc.ctx, id, format ? format : "drc", &blob, &err);
+        return reply_blob(con, st, &blob, &err);
     }
     if (!strcmp(rest, "/chunks")) {
-        const char *since = MHD_lookup_connection_value(con, MHD_GET_ARGUMENT_KIND, "since");
-        uint64_t v = 0;
-        if (since) {
-            char *end;
-            errno = 0;
-            unsigned long long x = strtoull(since, &end, 10);
-            if (end == since || *end || errno || since[0] == '-')
-                return fail(con, 400, "bad_parameter", "since=%.32s is not a version number",
-                            since);
-            v = x;
-        }
-        {
-            int rc_ = s->svc.chunks(s->svc.ctx, id, v, &out, &err);
-            return reply_json_call(con, rc_, out, &err, 200);
-        }
+        double since = 0, at = -1;
+        if (query_number(con, "since", 1, &since) < 0)
+            return fail(con, 400, "bad_parameter", "since: not a version number");
+        if (query_number(con, "at", 0, &at) < 0)
+            return fail(con, 400, "bad_parameter", "at: not a program time in seconds (>= 0)");
+        st = s->svc.chunks(s->svc.ctx, id, (uint64_t)since, at, &out, &err);
+        return reply_json_call(con, st, out, &err, 200);
     }
     if (!strncmp(rest, "/chunks/", 8)) {
         const char *name = rest + 8;
@@ -619,21 +647,22 @@ static enum MHD_Result route_job(fm_http_server *s, struct MHD_Connection *con, 
         char chunk[64];
         memcpy(chunk, name, n - 4);
         chunk[n - 4] = '\0';
+        double version = 0;
+        if (query_number(con, "v", 1, &version) < 0)
+            return fail(con, 400, "bad_parameter", "v: not a version number");
         fm_http_blob blob = {0};
-        {
-            int rc_ = s->svc.chunk(s->svc.ctx, id, chunk, &blob, &err);
-            return reply_blob(con, rc_, &blob, &err);
-        }
+        st = s->svc.chunk(s->svc.ctx, id, chunk, (uint64_t)version, &blob, &err);
+        return reply_blob(con, st, &blob, &err);
     }
     if (!strcmp(rest, "/toolpath") && s->svc.toolpath) {
         fm_http_blob blob = {0};
-        int rc_ = s->svc.toolpath(s->svc.ctx, id, &blob, &err);
-        return reply_blob(con, rc_, &blob, &err);
+        st = s->svc.toolpath(s->svc.ctx, id, &blob, &err);
+        return reply_blob(con, st, &blob, &err);
     }
     if (!strcmp(rest, "/stock.vdb")) {
         char path[PATH_MAX];
-        int rc = s->svc.stock_path(s->svc.ctx, id, path, sizeof path, &err);
-        if (rc) return respond_error(con, &err, 0);
+        if ((st = s->svc.stock_path(s->svc.ctx, id, path, sizeof path, &err)) != FM_OK)
+            return respond_service_error(con, &err);
         if (respond_file(con, path, "application/octet-stream") == MHD_YES) return MHD_YES;
         return fail(con, 404, "no_snapshot", "job %s has no stock snapshot yet", id);
     }
@@ -659,11 +688,10 @@ static enum MHD_Result route(fm_http_server *s, struct MHD_Connection *con, cons
     if (!strcmp(url, "/v1/jobs") || !strcmp(url, "/v1/jobs/")) {
         if (is_get) {
             json_t *out = NULL;
-            fm_http_error err;
-            {
-            int rc_ = s->svc.list(s->svc.ctx, &out, &err);
-            return reply_json_call(con, rc_, out, &err, 200);
-        }
+            fm_error err;
+            fm_error_clear(&err);
+            fm_status st = s->svc.list(s->svc.ctx, &out, &err);
+            return reply_json_call(con, st, out, &err, 200);
         }
         if (is_post) {
             if (!token_ok(s, con))
@@ -687,23 +715,15 @@ static enum MHD_Result route(fm_http_server *s, struct MHD_Connection *con, cons
                         "this endpoint needs the header Authorization: Bearer <token>");
         if (!s->svc.check)
             return fail(con, 501, "not_built", "the collision check (lib/check) is not built");
-        json_error_t jerr;
-        json_t *in = json_loadb(req->body ? req->body : "", req->size, JSON_REJECT_DUPLICATES,
-                                &jerr);
-        if (!in) {
-            fm_http_error err;
-            fm_http_error_set(&err, 400, "bad_json", "the request is not valid JSON: %s",
-                              jerr.text);
-            err.line = jerr.line > 0 ? jerr.line : 0;
-            err.column = jerr.column > 0 ? jerr.column : 0;
-            return respond_error(con, &err, 0);
-        }
+        fm_http_error herr;
+        json_t *in = parse_body_json(req, "the request", &herr);
+        if (!in) return respond_error(con, &herr, 0);
         json_t *out = NULL;
-        fm_http_error err;
-        memset(&err, 0, sizeof err);
-        int rc = s->svc.check(s->svc.ctx, in, &out, &err);
+        fm_error err;
+        fm_error_clear(&err);
+        fm_status st = s->svc.check(s->svc.ctx, in, &out, &err);
         json_decref(in);
-        return reply_json_call(con, rc, out, &err, 200);
+        return reply_json_call(con, st, out, &err, 200);
     }
     if (!strncmp(url, "/v1/", 4) || !strcmp(url, "/v1"))
         return fail(con, 404, "not_found", "no such endpoint: %s", url);

@@ -33,23 +33,15 @@ int fm_http_error_set(fm_http_error *err, int status, const char *code, const ch
 #endif
     ;
 
-/* ------------------------------------------------------------ job specs -- */
-
-/* Parse and validate a job request (docs/api.md, POST /v1/jobs) into its
- * canonical JSON form: {"stock": "SPEC" | {"hyperfun": TEXT} | {"stl_base64":
- * TEXT}, "voxel": MM, "tools": {...}, "program": {"gcode": TEXT} |
- * {"trajectory": {...}}, "fixtures": [...], "options": {...}}. Unknown keys
- * are refused (a typo must not be silently ignored). Returns a new
- * reference, or NULL with err filled (status 400 or 413). The daemon stores
- * this form and reads it back with the same function after a restart. */
-json_t *fm_http_job_parse(const char *text, size_t len, fm_http_error *err);
-
-/* Decode standard base64 (padding optional, no whitespace but line breaks)
- * into a malloc'd buffer. 0 on success, -1 for invalid text. */
-int fm_http_base64_decode(const char *in, size_t len, uint8_t **out, size_t *out_len);
-
-/* The most bytes of a program, a tool table, a stock model in a job. */
-#define FM_HTTP_JOB_MAX_TEXT ((size_t)256 << 20)
+/* The API error of a service call (fm_error with its reason) in HTTP terms:
+ * the reason is the machine code when it has one of its own status
+ * ("not_found" 404, "not_finished" and "bad_state" 409, "job_limit" 429,
+ * "shutting_down", "busy" and "out_of_memory" 503, "storage" 507,
+ * "memory_budget", "too_large", "check_too_large" and "limit" 413); any other
+ * reason keeps its name with the status of the fm_status: FM_ERR_INPUT 400
+ * (code "bad_job" without a reason), FM_ERR_LIMIT 413 ("limit"), FM_ERR_IO 507
+ * ("storage"), otherwise 500 ("internal"). Line and column are kept. */
+void fm_http_error_from(const fm_error *err, fm_http_error *out);
 
 /* ------------------------------------------------------------ multipart -- */
 
@@ -70,12 +62,12 @@ typedef struct fm_http_part {
 int fm_http_multipart_parse(const char *content_type, const char *body, size_t len,
                             fm_http_part *parts, int max_parts, fm_http_error *err);
 
-/* Turn a multipart job upload into the JSON job text fm_http_job_parse
- * takes: a "job" (or "spec") part with the JSON job (its program may be
- * absent), and optional "program" (G-code, or a trajectory when its file
- * name ends in .json) and "tools" (JSON tool table) parts that replace the
- * corresponding keys. Returns a new reference to the canonical job, or NULL
- * with err filled. */
+/* Turn a multipart job upload into the JSON job document: a "job" (or
+ * "spec") part with the JSON job (its program may be absent), and optional
+ * "program" (G-code, or a trajectory when its file name ends in .json) and
+ * "tools" (JSON tool table) parts that replace the corresponding keys.
+ * Returns a new reference (the service validates it), or NULL with err
+ * filled. */
 json_t *fm_http_job_from_multipart(const fm_http_part *parts, int count, fm_http_error *err);
 
 /* ------------------------------------------------------------- service -- */
@@ -96,40 +88,49 @@ typedef struct fm_http_event {
 
 /* What the daemon implements. Calls come from the server's connection
  * threads, many at once: each must be thread-safe and must never wait for a
- * job's simulation (read the published snapshots). Calls returning int give
- * 0 on success or the HTTP status of the error with err filled. */
+ * job's simulation (read the published snapshots). Calls return FM_OK, or
+ * an fm_status with err filled: its reason picks the HTTP status
+ * (fm_http_error_from). JSON bodies reach the service parsed (the server
+ * answers syntax errors with their line and column); what a job document
+ * means is the service's to validate. */
 typedef struct fm_http_service {
     void *ctx;
     /* 1 when ready to take jobs (GET /healthz). */
     int (*ready)(void *ctx);
-    /* Store the job durably, then return its id (202). job is the canonical
-     * form; the service takes a new reference if it keeps it. */
-    int (*submit)(void *ctx, json_t *job, char *id, size_t id_size, fm_http_error *err);
+    /* Validate the job document, store it durably, then give its id (202).
+     * The service takes a new reference if it keeps the value. */
+    fm_status (*submit)(void *ctx, json_t *job, char *id, size_t id_size, fm_error *err);
     /* New references. */
-    int (*status)(void *ctx, const char *id, json_t **out, fm_http_error *err);
-    int (*list)(void *ctx, json_t **out, fm_http_error *err);
-    int (*report)(void *ctx, const char *id, json_t **out, fm_http_error *err);
-    int (*chunks)(void *ctx, const char *id, uint64_t since, json_t **out, fm_http_error *err);
-    int (*cancel)(void *ctx, const char *id, fm_http_error *err);
-    int (*remove)(void *ctx, const char *id, fm_http_error *err);
+    fm_status (*status)(void *ctx, const char *id, json_t **out, fm_error *err);
+    fm_status (*list)(void *ctx, json_t **out, fm_error *err);
+    fm_status (*report)(void *ctx, const char *id, json_t **out, fm_error *err);
+    /* The chunk list: with at_s < 0 the current chunks changed after version
+     * since; with at_s >= 0 the chunks as they were at program time at_s
+     * (the viewer's timeline). */
+    fm_status (*chunks)(void *ctx, const char *id, uint64_t since, double at_s, json_t **out,
+                        fm_error *err);
+    fm_status (*cancel)(void *ctx, const char *id, fm_error *err);
+    fm_status (*remove)(void *ctx, const char *id, fm_error *err);
     /* format: drc | stl | ply | obj. */
-    int (*mesh)(void *ctx, const char *id, const char *format, fm_http_blob *out,
-                fm_http_error *err);
-    /* chunk: "I_J_K" (chunk indices). */
-    int (*chunk)(void *ctx, const char *id, const char *chunk, fm_http_blob *out,
-                 fm_http_error *err);
+    fm_status (*mesh)(void *ctx, const char *id, const char *format, fm_http_blob *out,
+                      fm_error *err);
+    /* chunk: "I_J_K" (chunk indices); version 0: the current mesh, else the
+     * mesh of that version (one the chunk list named). */
+    fm_status (*chunk)(void *ctx, const char *id, const char *chunk, uint64_t version,
+                       fm_http_blob *out, fm_error *err);
     /* The path of the job's stock snapshot (a file the daemon wrote). */
-    int (*stock_path)(void *ctx, const char *id, char *path, size_t size, fm_http_error *err);
+    fm_status (*stock_path)(void *ctx, const char *id, char *path, size_t size, fm_error *err);
     /* Wait up to timeout_ms for events after *after; fill up to cap events
      * and return how many (0 on timeout), or -1 when the job is unknown.
      * *finished is set once the job's last event ("end") has been given. */
     int (*events)(void *ctx, const char *id, uint64_t after, int timeout_ms, fm_http_event *out,
                   int cap, int *finished);
-    /* POST /v1/check: the synchronous collision check. NULL: 501. */
-    int (*check)(void *ctx, json_t *request, json_t **out, fm_http_error *err);
+    /* POST /v1/check: the synchronous collision check of a job document.
+     * NULL: 501. */
+    fm_status (*check)(void *ctx, json_t *job, json_t **out, fm_error *err);
     /* GET /v1/jobs/{id}/toolpath: the job's program and its motions as a
      * compact JSON polyline for the viewer (docs/api.md). NULL: 404. */
-    int (*toolpath)(void *ctx, const char *id, fm_http_blob *out, fm_http_error *err);
+    fm_status (*toolpath)(void *ctx, const char *id, fm_http_blob *out, fm_error *err);
 } fm_http_service;
 
 enum { FM_HTTP_LOG_ERROR = 0, FM_HTTP_LOG_WARN = 1, FM_HTTP_LOG_INFO = 2, FM_HTTP_LOG_DEBUG = 3 };

@@ -235,15 +235,38 @@ static void read_registers(fm_modbus_engine *e, enum block b, unsigned start, un
     }
 }
 
+uint16_t fm_modbus_error_code(const fm_error *err, int live)
+{
+    static const struct {
+        const char *reason;
+        uint16_t code;
+    } codes[] = {{"unknown_command", FM_MODBUS_ERR_UNKNOWN_COMMAND},
+                 {"no_job", FM_MODBUS_ERR_NO_JOB},
+                 {"not_found", FM_MODBUS_ERR_NO_JOB},
+                 {"bad_slot", FM_MODBUS_ERR_BAD_SLOT},
+                 {"bad_state", FM_MODBUS_ERR_BAD_STATE},
+                 {"busy", FM_MODBUS_ERR_BUSY}};
+    for (size_t i = 0; i < sizeof codes / sizeof codes[0]; i++)
+        if (!strcmp(err->reason, codes[i].reason)) return codes[i].code;
+    if (live) return FM_MODBUS_ERR_LIVE_REFUSED;
+    return err->code >= FM_ERR_INPUT && err->code <= FM_ERR_INTERNAL ? (uint16_t)err->code
+                                                                      : FM_MODBUS_ERR_JOB_INTERNAL;
+}
+
 static void run_command(fm_modbus_engine *e, uint16_t seq)
 {
-    int rc = FM_MODBUS_ERR_UNKNOWN_COMMAND;
+    uint16_t code = FM_MODBUS_ERR_UNKNOWN_COMMAND;
     int cmd = e->cmd_regs[0];
-    if (cmd >= FM_MODBUS_CMD_START && cmd <= FM_MODBUS_CMD_SELECT && e->svc.command)
-        rc = e->svc.command(e->svc.ctx, cmd, e->cmd_regs[2]);
+    if (cmd >= FM_MODBUS_CMD_START && cmd <= FM_MODBUS_CMD_SELECT && e->svc.command) {
+        fm_error err;
+        fm_error_clear(&err);
+        code = e->svc.command(e->svc.ctx, cmd, e->cmd_regs[2], &err) == FM_OK
+                   ? FM_MODBUS_ERR_NONE
+                   : fm_modbus_error_code(&err, 0);
+    }
     /* Acknowledged whatever the outcome: the HMI learns the result from 26. */
     e->ack_seq = seq;
-    e->last_error = (uint16_t)(rc < 0 || rc > 0xFFFF ? FM_MODBUS_ERR_BUSY : rc);
+    e->last_error = code;
 }
 
 /* Apply a validated write of count values (big-endian pairs at data) to
@@ -285,23 +308,25 @@ static void write_registers(fm_modbus_engine *e, enum block b, unsigned start, u
     if (mode_written) {
         int on = e->live_regs[7] != 0;
         if (on != e->live_on) {
-            int rc = e->svc.live_mode ? e->svc.live_mode(e->svc.ctx, on) : FM_MODBUS_ERR_LIVE_REFUSED;
-            if (rc == 0)
+            fm_error err;
+            fm_error_clear(&err);
+            if (e->svc.live_mode && e->svc.live_mode(e->svc.ctx, on, &err) == FM_OK)
                 e->live_on = on;
             else
-                e->last_error = FM_MODBUS_ERR_LIVE_REFUSED;
+                e->last_error = fm_modbus_error_code(&err, 1);
         }
     }
     if (position_written && e->live_on) {
         double xyz[3];
         for (int k = 0; k < 3; k++)
             xyz[k] = fm_modbus_unpack_f32(&e->live_regs[2 * k], e->word_order);
-        int rc = FM_MODBUS_ERR_LIVE_REFUSED;
+        fm_error err;
+        fm_error_clear(&err);
         /* A NaN or infinite axis is never a motion. */
-        if (isfinite(xyz[0]) && isfinite(xyz[1]) && isfinite(xyz[2]) && e->svc.live_position)
-            rc = e->svc.live_position(e->svc.ctx, xyz, e->live_regs[6]);
-        if (rc != 0)
+        if (!(isfinite(xyz[0]) && isfinite(xyz[1]) && isfinite(xyz[2]) && e->svc.live_position))
             e->last_error = FM_MODBUS_ERR_LIVE_REFUSED;
+        else if (e->svc.live_position(e->svc.ctx, xyz, e->live_regs[6], &err) != FM_OK)
+            e->last_error = fm_modbus_error_code(&err, 1);
     }
 }
 

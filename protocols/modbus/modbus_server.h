@@ -71,24 +71,31 @@ typedef struct fm_modbus_status {
 /* What the daemon implements. Every call comes from the server's own thread,
  * so each must be safe against the daemon's other threads (take a snapshot
  * under a lock, post to a queue) and must return quickly: the server serves
- * every client from that thread. Return values are FM_MODBUS_ERR_* codes
- * (0 = accepted). */
+ * every client from that thread. Calls return FM_OK, or an fm_status with
+ * err filled whose reason picks the error code register 26 shows
+ * (fm_modbus_error_code). */
 typedef struct fm_modbus_service {
     void *ctx;
     /* Fill *out with the current status. Called once per read request. */
     void (*read_status)(void *ctx, fm_modbus_status *out);
     /* FM_MODBUS_CMD_* with the argument register (102). Called once per new
      * sequence number. Only when the config enables commands. */
-    int (*command)(void *ctx, int command, uint32_t argument);
+    fm_status (*command)(void *ctx, int command, uint32_t argument, fm_error *err);
     /* The controller's new tool tip position (mm) and tool number; the daemon
      * treats it as a motion from the previous one. Only in live mode. */
-    int (*live_position)(void *ctx, const double xyz[3], int tool);
+    fm_status (*live_position)(void *ctx, const double xyz[3], int tool, fm_error *err);
     /* Live mode switched on (1) or off (0) by register 117. */
-    int (*live_mode)(void *ctx, int on);
+    fm_status (*live_mode)(void *ctx, int on, fm_error *err);
     /* The HMI watchdog (register 103) stopped changing for watchdog_ms: pause
      * every running job. Called once per expiry. */
     void (*watchdog_expired)(void *ctx);
 } fm_modbus_service;
+
+/* The register 26 code of a refused call: by its reason "unknown_command"
+ * 16, "no_job" (and "not_found") 17, "bad_slot" 18, "bad_state" 19, "busy"
+ * 22; other refusals of a live call 21 (live_refused), of a command the
+ * fm_status (2..5). */
+uint16_t fm_modbus_error_code(const fm_error *err, int live);
 
 typedef enum fm_modbus_word_order {
     FM_MODBUS_WORDS_ABCD = 0, /* high word first (default) */

@@ -1,8 +1,8 @@
-/* test_http_parse.c: unit tests of the HTTP layer's parsers: job requests
- * (canonical form, defaults, every refusal with its status and code, line
- * and column of syntax errors), base64 (RFC 4648 test vectors), multipart
- * bodies built here by hand (parts, file names, bounds, malformed input)
- * and the multipart-to-job assembly. */
+/* test_http_parse.c: unit tests of the HTTP layer's own parsing: multipart
+ * bodies built here by hand (parts, file names, bounds, malformed input),
+ * the multipart-to-job assembly, and the mapping of a service's error
+ * reasons to the statuses of docs/api.md. (The job document itself is
+ * validated in daemon/runner: tests/daemon/test_job_doc.c.) */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -12,124 +12,6 @@
 
 static const char *TOOLS = "{\"units\": \"mm\", \"tools\": [{\"number\": 1, \"shape\": \"flat\", "
                            "\"diameter\": 6, \"flute_length\": 20, \"length\": 40}]}";
-
-static json_t *parse(const char *text, fm_http_error *err)
-{
-    memset(err, 0, sizeof *err);
-    return fm_http_job_parse(text, strlen(text), err);
-}
-
-static void test_job_ok(void)
-{
-    char text[1024];
-    snprintf(text, sizeof text,
-             "{\"stock\": \"box:0,0,-30,100,60,0\", \"tools\": %s, \"program\": {\"gcode\": \"G0 X1\"}}",
-             TOOLS);
-    fm_http_error err;
-    json_t *job = parse(text, &err);
-    CHECK(job != NULL);
-    if (!job) return;
-    /* Defaults filled in: voxel 0.1 (the CLI's), empty fixtures and options. */
-    CHECK_NEAR(json_number_value(json_object_get(job, "voxel")), 0.1, 0);
-    CHECK(json_array_size(json_object_get(job, "fixtures")) == 0);
-    CHECK(json_object_size(json_object_get(job, "options")) == 0);
-    CHECK(!strcmp(json_string_value(json_object_get(job, "stock")), "box:0,0,-30,100,60,0"));
-    /* The canonical form parses to itself. */
-    char *again = json_dumps(job, JSON_COMPACT);
-    json_t *job2 = parse(again, &err);
-    CHECK(job2 && json_equal(job, job2));
-    free(again);
-    json_decref(job2);
-    json_decref(job);
-    /* options.color: "tool" and "none" are the two mesh colourings */
-    const char *colors[2] = {"tool", "none"};
-    for (int i = 0; i < 2; i++) {
-        snprintf(text, sizeof text,
-                 "{\"stock\": \"box:0,0,-30,100,60,0\", \"tools\": %s, \"program\": {\"gcode\": "
-                 "\"G0 X1\"}, \"options\": {\"color\": \"%s\"}}",
-                 TOOLS, colors[i]);
-        job = parse(text, &err);
-        CHECK(job != NULL);
-        json_decref(job);
-    }
-    snprintf(text, sizeof text,
-             "{\"stock\": \"box:0,0,-30,100,60,0\", \"tools\": %s, \"program\": {\"gcode\": "
-             "\"G0 X1\"}, \"options\": {\"color\": \"rainbow\"}}",
-             TOOLS);
-    job = parse(text, &err);
-    CHECK(job == NULL && err.status == 400);
-    CHECK_STR_CONTAINS(err.message, "options.color must be \"tool\"");
-    json_decref(job);
-}
-
-static void expect_error(const char *text, int status, const char *code)
-{
-    fm_http_error err;
-    json_t *job = parse(text, &err);
-    CHECK(job == NULL);
-    CHECK(err.status == status);
-    CHECK(!strcmp(err.code, code));
-    if (job || err.status != status || strcmp(err.code, code))
-        fprintf(stderr, "  for %s: got %d %s (%s)\n", text, err.status, err.code, err.message);
-    json_decref(job);
-}
-
-static void test_job_errors(void)
-{
-    char text[2048];
-    expect_error("", 400, "bad_json");
-    expect_error("[1, 2]", 400, "bad_job");
-    expect_error("{\"stock\": \"box:0,0,0,1,1,1\"}", 400, "missing_key");
-    snprintf(text, sizeof text, "{\"stock\": \"/etc/passwd\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
-    expect_error(text, 400, "bad_stock");
-    snprintf(text, sizeof text, "{\"stock\": {\"stl_base64\": \"@@@@\"}, \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
-    expect_error(text, 400, "bad_stock");
-    snprintf(text, sizeof text, "{\"stock\": {\"hyperfun\": \"x\", \"stl_base64\": \"AAAA\"}, \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
-    expect_error(text, 400, "bad_stock");
-    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"voxel\": 0, \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
-    expect_error(text, 400, "bad_value");
-    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"voxel\": \"fine\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
-    expect_error(text, 400, "bad_type");
-    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\", \"trajectory\": {}}}", TOOLS);
-    expect_error(text, 400, "bad_program");
-    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"basic\": \"10 PRINT\"}}", TOOLS);
-    expect_error(text, 400, "unknown_key");
-    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"options\": {\"band\": 1}}", TOOLS);
-    expect_error(text, 400, "bad_value");
-    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"options\": {\"color\": \"depth\"}}", TOOLS);
-    expect_error(text, 400, "bad_value");
-    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"options\": {\"color\": 1}}", TOOLS);
-    expect_error(text, 400, "bad_value");
-    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, \"fixtures\": [{\"stl\": \"x\"}]}", TOOLS);
-    expect_error(text, 400, "bad_fixture");
-    snprintf(text, sizeof text, "{\"stock\": \"box:0,0,0,1,1,1\", \"stock\": \"box:0,0,0,2,2,2\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}}", TOOLS);
-    expect_error(text, 400, "bad_json"); /* duplicate key */
-
-    /* Line and column of a syntax error: the '}' on line 3, column 12. */
-    fm_http_error err;
-    json_t *job = parse("{\n  \"stock\": \"box:0,0,0,1,1,1\",\n  \"voxel\": }", &err);
-    CHECK(job == NULL && err.line == 3 && err.column == 12);
-    if (err.line != 3 || err.column != 12) fprintf(stderr, "  line %d column %d\n", err.line, err.column);
-}
-
-static void test_base64(void)
-{
-    /* RFC 4648 section 10 test vectors. */
-    static const char *const plain[] = {"", "f", "fo", "foo", "foob", "fooba", "foobar"};
-    static const char *const coded[] = {"", "Zg==", "Zm8=", "Zm9v", "Zm9vYg==", "Zm9vYmE=", "Zm9vYmFy"};
-    for (int i = 0; i < 7; i++) {
-        uint8_t *out;
-        size_t n;
-        CHECK(fm_http_base64_decode(coded[i], strlen(coded[i]), &out, &n) == 0);
-        CHECK(n == strlen(plain[i]) && (n == 0 || !memcmp(out, plain[i], n)));
-        free(out);
-    }
-    uint8_t *out;
-    size_t n;
-    CHECK(fm_http_base64_decode("Zm9v!", 5, &out, &n) == -1);
-    CHECK(fm_http_base64_decode("Zg==Zg==", 8, &out, &n) == -1); /* data after padding */
-    CHECK(fm_http_base64_decode("Zh==", 4, &out, &n) == -1);     /* non-zero pad bits */
-}
 
 static void test_multipart(void)
 {
@@ -194,8 +76,18 @@ static void test_multipart_job(void)
         const char *g = json_string_value(json_object_get(json_object_get(job, "program"), "gcode"));
         CHECK(g && !strcmp(g, "G0 X1\nG1 X2 F100\n"));
         CHECK_NEAR(json_number_value(json_object_get(job, "voxel")), 0.5, 0);
+        /* the tools part is absent: the job part's table stays */
+        CHECK(json_is_object(json_object_get(job, "tools")));
     }
     json_decref(job);
+    /* a trajectory part (.json) becomes program.trajectory */
+    snprintf(parts[1].filename, sizeof parts[1].filename, "path.json");
+    parts[1].data = "{\"segments\": []}";
+    parts[1].size = strlen(parts[1].data);
+    job = fm_http_job_from_multipart(parts, 2, &err);
+    CHECK(job && json_is_object(json_object_get(json_object_get(job, "program"), "trajectory")));
+    json_decref(job);
+    snprintf(parts[1].filename, sizeof parts[1].filename, "a.ngc");
     parts[1].data = "G0\0X1";
     parts[1].size = 5;
     CHECK(fm_http_job_from_multipart(parts, 2, &err) == NULL && !strcmp(err.code, "bad_program"));
@@ -203,11 +95,49 @@ static void test_multipart_job(void)
     CHECK(fm_http_job_from_multipart(parts, 2, &err) == NULL && err.status == 400);
 }
 
+/* The statuses docs/api.md lists for each reason, and for errors without
+ * one by their fm_status. */
+static void test_error_mapping(void)
+{
+    static const struct {
+        fm_status code;
+        const char *reason;
+        int status;
+        const char *out;
+    } cases[] = {
+        {FM_ERR_INPUT, "not_found", 404, "not_found"},
+        {FM_ERR_INPUT, "no_snapshot", 404, "no_snapshot"},
+        {FM_ERR_INPUT, "not_finished", 409, "not_finished"},
+        {FM_ERR_INPUT, "bad_state", 409, "bad_state"},
+        {FM_ERR_LIMIT, "job_limit", 429, "job_limit"},
+        {FM_ERR_LIMIT, "shutting_down", 503, "shutting_down"},
+        {FM_ERR_LIMIT, "busy", 503, "busy"},
+        {FM_ERR_IO, "storage", 507, "storage"},
+        {FM_ERR_LIMIT, "memory_budget", 413, "memory_budget"},
+        {FM_ERR_LIMIT, "check_too_large", 413, "check_too_large"},
+        {FM_ERR_LIMIT, "too_large", 413, "too_large"},
+        {FM_ERR_INPUT, "unknown_key", 400, "unknown_key"},
+        {FM_ERR_INPUT, "bad_tools", 400, "bad_tools"},
+        {FM_ERR_INPUT, "", 400, "bad_job"},
+        {FM_ERR_LIMIT, "", 413, "limit"},
+        {FM_ERR_IO, "", 507, "storage"},
+        {FM_ERR_INTERNAL, "", 500, "internal"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        fm_error e;
+        fm_error_set_reason(&e, cases[i].code, cases[i].reason, "message %zu", i);
+        e.line = 3;
+        e.column = 7;
+        fm_http_error h;
+        fm_http_error_from(&e, &h);
+        CHECK(h.status == cases[i].status && !strcmp(h.code, cases[i].out));
+        CHECK(h.line == 3 && h.column == 7 && !strcmp(h.message, e.message));
+    }
+}
+
 int main(void)
 {
-    test_job_ok();
-    test_job_errors();
-    test_base64();
+    test_error_mapping();
     test_multipart();
     test_multipart_job();
     return test_summary("http_parse");

@@ -17,21 +17,29 @@ static void fz_read_status(void *ctx, fm_modbus_status *out)
     out->tool_tip[0] = 1.5;
     out->removed_mm3 = 1e40; /* beyond float: saturates */
 }
-static int fz_command(void *ctx, int command, uint32_t argument)
+/* Refusals of every kind the register map knows, picked by the input. */
+static const char *const fz_reasons[] = {"", "unknown_command", "no_job", "bad_slot",
+                                         "bad_state", "busy", "something_else"};
+static fm_status fz_command(void *ctx, int command, uint32_t argument, fm_error *err)
 {
     (void)ctx;
-    return (int)((unsigned)command + argument) % 24;
+    unsigned pick = ((unsigned)command + argument) % 8;
+    if (pick == 7) return FM_OK;
+    return fm_error_set_reason(err, (fm_status)(2 + pick % 4), fz_reasons[pick % 7], "refused");
 }
-static int fz_live_position(void *ctx, const double xyz[3], int tool)
+static fm_status fz_live_position(void *ctx, const double xyz[3], int tool, fm_error *err)
 {
     (void)ctx;
-    return xyz[0] > 1e6 || tool > 1000;
+    if (xyz[0] > 1e6) return fm_error_set_reason(err, FM_ERR_LIMIT, "busy", "busy");
+    if (tool > 1000) return fm_error_set(err, FM_ERR_INPUT, "refused");
+    return FM_OK;
 }
-static int fz_live_mode(void *ctx, int on)
+static fm_status fz_live_mode(void *ctx, int on, fm_error *err)
 {
     (void)ctx;
     (void)on;
-    return 0;
+    (void)err;
+    return FM_OK;
 }
 static void fz_watchdog(void *ctx)
 {

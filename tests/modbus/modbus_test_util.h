@@ -64,7 +64,7 @@ typedef struct mt_service {
     fm_modbus_status status;  /* returned by read_status */
     int64_t block_start_ms;   /* when > 0, block = status.block + elapsed/block_period_ms */
     int block_period_ms;
-    int command_result;       /* what command() returns */
+    const char *command_refusal; /* NULL: command() accepts; else the reason it refuses with */
     int read_count;
     mt_call calls[MT_MAX_CALLS];
     int ncalls;
@@ -89,29 +89,32 @@ static void mt_read_status(void *ctx, fm_modbus_status *out)
     pthread_mutex_unlock(&m->lock);
 }
 
-static int mt_command(void *ctx, int command, uint32_t argument)
+static fm_status mt_command(void *ctx, int command, uint32_t argument, fm_error *err)
 {
     mt_service *m = ctx;
     mt_call c = {'c', command, argument, {0, 0, 0}, 0};
     mt_record(m, c);
     pthread_mutex_lock(&m->lock);
-    int rc = m->command_result;
+    const char *refusal = m->command_refusal;
     pthread_mutex_unlock(&m->lock);
-    return rc;
+    if (refusal) return fm_error_set_reason(err, FM_ERR_INPUT, refusal, "refused by the test");
+    return FM_OK;
 }
 
-static int mt_live_position(void *ctx, const double xyz[3], int tool)
+static fm_status mt_live_position(void *ctx, const double xyz[3], int tool, fm_error *err)
 {
+    (void)err;
     mt_call c = {'p', 0, 0, {xyz[0], xyz[1], xyz[2]}, tool};
     mt_record(ctx, c);
-    return 0;
+    return FM_OK;
 }
 
-static int mt_live_mode(void *ctx, int on)
+static fm_status mt_live_mode(void *ctx, int on, fm_error *err)
 {
+    (void)err;
     mt_call c = {'m', on, 0, {0, 0, 0}, 0};
     mt_record(ctx, c);
-    return 0;
+    return FM_OK;
 }
 
 static void mt_watchdog(void *ctx)

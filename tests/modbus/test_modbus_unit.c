@@ -307,13 +307,13 @@ static void test_commands(void)
     CHECK(reg_at(&r, 0) == 0x1234);
 
     /* A refused command shows its error at 26 and is still acknowledged. */
-    r.svc.command_result = FM_MODBUS_ERR_BAD_SLOT;
+    r.svc.command_refusal = "bad_slot";
     uint16_t sel3[3] = {FM_MODBUS_CMD_SELECT, 3, 99};
     rig_send(&r, pdu, write_pdu(pdu, 100, sel3, 3));
     rig_send(&r, pdu, read_pdu(pdu, 0x03, 26, 3));
     CHECK(reg_at(&r, 0) == FM_MODBUS_ERR_BAD_SLOT && reg_at(&r, 2) == 3);
     /* An unknown command never reaches the service. */
-    r.svc.command_result = 0;
+    r.svc.command_refusal = NULL;
     uint16_t unknown[2] = {9, 4};
     rig_send(&r, pdu, write_pdu(pdu, 100, unknown, 2));
     CHECK(r.svc.ncalls == 4);

@@ -1,4 +1,4 @@
-/* jobs_http.c: the daemon's implementation of the HTTP server's service
+/* http_service.c: the daemon's implementation of the HTTP server's service
  * interface (protocols/http/http_server.h) over the job manager. Every
  * call reads what the workers published, under the job's lock, and copies
  * it out; the full mesh is assembled from the published chunk meshes, so a
@@ -12,6 +12,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "http_service.h"
 #include "jobs_check.h"
 #include "jobs_internal.h"
 #include "sweep/sweep.h"
@@ -19,9 +20,9 @@
 #include "toolpaths/tooltable/tooltable.h"
 #include "toolpaths/traj/traj.h"
 
-static int not_found(const char *id, fm_http_error *err)
+static fm_status not_found(const char *id, fm_error *err)
 {
-    return fm_http_error_set(err, 404, "not_found", "no job %s", id);
+    return fm_error_set_reason(err, FM_ERR_INPUT, "not_found", "no job %.40s", id);
 }
 
 static int svc_ready(void *ctx)
@@ -30,21 +31,26 @@ static int svc_ready(void *ctx)
     return 1;
 }
 
-static int svc_submit(void *ctx, json_t *spec, char *id, size_t id_size, fm_http_error *err)
+static fm_status svc_submit(void *ctx, json_t *document, char *id, size_t id_size,
+                            fm_error *err)
 {
-    return fm_jobs_submit(ctx, spec, id, id_size, err);
+    fm_job_doc *doc = NULL;
+    const fm_job_doc_rules rules = fm_jobs_doc_rules(ctx, 0);
+    fm_status st = fm_job_doc_from_json(document, &rules, &doc, err);
+    if (st != FM_OK) return st;
+    return fm_jobs_submit(ctx, doc, id, id_size, err);
 }
 
-static int svc_status(void *ctx, const char *id, json_t **out, fm_http_error *err)
+static fm_status svc_status(void *ctx, const char *id, json_t **out, fm_error *err)
 {
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
     *out = fm_publish_status_json(j);
     fm_jobs_put(ctx, j);
-    return 0;
+    return FM_OK;
 }
 
-static int svc_list(void *ctx, json_t **out, fm_http_error *err)
+static fm_status svc_list(void *ctx, json_t **out, fm_error *err)
 {
     (void)err;
     fm_jobs *jobs = ctx;
@@ -59,7 +65,7 @@ static int svc_list(void *ctx, json_t **out, fm_http_error *err)
             copy[i]->refs++;
         }
     pthread_mutex_unlock(&jobs->lock);
-    if (!copy) return fm_http_error_set(err, 503, "out_of_memory", "out of memory");
+    if (!copy) return fm_error_set_reason(err, FM_ERR_LIMIT, "out_of_memory", "out of memory");
     json_t *list = json_array();
     for (size_t i = 0; i < n; i++) {
         json_array_append_new(list, fm_publish_status_json(copy[i]));
@@ -67,15 +73,15 @@ static int svc_list(void *ctx, json_t **out, fm_http_error *err)
     }
     free(copy);
     *out = json_pack("{s:o}", "jobs", list);
-    return 0;
+    return FM_OK;
 }
 
-static int svc_report(void *ctx, const char *id, json_t **out, fm_http_error *err)
+static fm_status svc_report(void *ctx, const char *id, json_t **out, fm_error *err)
 {
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
     pthread_mutex_lock(&j->lock);
-    int rc = 0;
+    fm_status rc = FM_OK;
     if (j->report) {
         *out = json_deep_copy(j->report);
         json_object_set_new(*out, "id", json_string(j->id));
@@ -83,9 +89,9 @@ static int svc_report(void *ctx, const char *id, json_t **out, fm_http_error *er
     } else if (j->state == FM_JOB_FAILED) {
         *out = json_pack("{s:s, s:s, s:O?}", "id", j->id, "state", "failed", "error", j->error);
     } else {
-        rc = fm_http_error_set(err, 409, "not_finished",
-                               "job %s is %s; its report exists once it is done", j->id,
-                               fm_job_state_name(j->state));
+        rc = fm_error_set_reason(err, FM_ERR_INPUT, "not_finished",
+                                 "job %s is %s; its report exists once it is done", j->id,
+                                 fm_job_state_name(j->state));
     }
     pthread_mutex_unlock(&j->lock);
     fm_jobs_put(ctx, j);
@@ -97,11 +103,15 @@ static void chunk_name(const job_chunk *c, char *out, size_t size)
     snprintf(out, size, "%d_%d_%d", c->index[0], c->index[1], c->index[2]);
 }
 
-static int svc_chunks(void *ctx, const char *id, uint64_t since, json_t **out, fm_http_error *err)
+static fm_status svc_chunks(void *ctx, const char *id, uint64_t since, double at_s, json_t **out,
+                            fm_error *err)
 {
+    if (at_s >= 0)
+        return fm_error_set_reason(err, FM_ERR_INPUT, "bad_parameter",
+                                   "at: this daemon keeps no mesh history");
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
-    int rc = fm_publish_ensure_meshes(j, err);
+    fm_status rc = fm_publish_ensure_meshes(j, err);
     if (rc) {
         fm_jobs_put(ctx, j);
         return rc;
@@ -125,20 +135,22 @@ static int svc_chunks(void *ctx, const char *id, uint64_t since, json_t **out, f
                      "since", (json_int_t)since, "chunks", list);
     pthread_mutex_unlock(&j->lock);
     fm_jobs_put(ctx, j);
-    return 0;
+    return FM_OK;
 }
 
-static int svc_chunk(void *ctx, const char *id, const char *name, fm_http_blob *out,
-                     fm_http_error *err)
+static fm_status svc_chunk(void *ctx, const char *id, const char *name, uint64_t version,
+                           fm_http_blob *out, fm_error *err)
 {
+    (void)version;
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
-    int rc = fm_publish_ensure_meshes(j, err);
+    fm_status rc = fm_publish_ensure_meshes(j, err);
     if (rc) {
         fm_jobs_put(ctx, j);
         return rc;
     }
-    rc = fm_http_error_set(err, 404, "not_found", "job %s has no chunk %s", id, name);
+    rc = fm_error_set_reason(err, FM_ERR_INPUT, "not_found", "job %s has no chunk %.64s", id,
+                             name);
     pthread_mutex_lock(&j->lock);
     for (size_t i = 0; i < j->chunk_count; i++) {
         char n[48];
@@ -147,12 +159,12 @@ static int svc_chunk(void *ctx, const char *id, const char *name, fm_http_blob *
         out->size = j->chunks[i].drc_size;
         out->data = malloc(out->size ? out->size : 1);
         if (!out->data) {
-            rc = fm_http_error_set(err, 503, "out_of_memory", "out of memory");
+            rc = fm_error_set_reason(err, FM_ERR_LIMIT, "out_of_memory", "out of memory");
             break;
         }
         if (out->size) memcpy(out->data, j->chunks[i].drc, out->size);
         out->content_type = "application/octet-stream";
-        rc = 0;
+        rc = FM_OK;
         break;
     }
     pthread_mutex_unlock(&j->lock);
@@ -160,8 +172,8 @@ static int svc_chunk(void *ctx, const char *id, const char *name, fm_http_blob *
     return rc;
 }
 
-static int svc_mesh(void *ctx, const char *id, const char *format, fm_http_blob *out,
-                    fm_http_error *err)
+static fm_status svc_mesh(void *ctx, const char *id, const char *format, fm_http_blob *out,
+                    fm_error *err)
 {
     fm_mesh_format f = !strcmp(format, "drc")   ? FM_MESH_FORMAT_DRACO
                        : !strcmp(format, "stl") ? FM_MESH_FORMAT_STL
@@ -169,11 +181,11 @@ static int svc_mesh(void *ctx, const char *id, const char *format, fm_http_blob 
                        : !strcmp(format, "obj") ? FM_MESH_FORMAT_OBJ
                                                 : FM_MESH_FORMAT_UNKNOWN;
     if (f == FM_MESH_FORMAT_UNKNOWN)
-        return fm_http_error_set(err, 400, "bad_parameter",
-                                 "format=%.16s: expected drc, stl, ply or obj", format);
+        return fm_error_set_reason(err, FM_ERR_INPUT, "bad_parameter",
+                                   "format=%.16s: expected drc, stl, ply or obj", format);
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
-    int rc = fm_publish_ensure_meshes(j, err);
+    fm_status rc = fm_publish_ensure_meshes(j, err);
     if (rc) {
         fm_jobs_put(ctx, j);
         return rc;
@@ -206,35 +218,32 @@ static int svc_mesh(void *ctx, const char *id, const char *format, fm_http_blob 
     }
     fm_mesh_free(mesh);
     if (st != FM_OK)
-        return fm_http_error_set(err, st == FM_ERR_INPUT ? 404 : 503, "mesh",
-                                 "cannot build the mesh: %s", ferr.message);
+        return fm_error_set_reason(err, st, st == FM_ERR_INPUT ? "no_mesh" : "out_of_memory",
+                                   "cannot build the mesh: %s", ferr.message);
     out->content_type = f == FM_MESH_FORMAT_OBJ ? "text/plain" : "application/octet-stream";
-    return 0;
+    return FM_OK;
 }
 
-static int svc_cancel(void *ctx, const char *id, fm_http_error *err)
+static fm_status svc_cancel(void *ctx, const char *id, fm_error *err)
 {
-    int rc = fm_jobs_cancel(ctx, id);
-    if (rc == -1) return not_found(id, err);
-    if (rc == -2)
-        return fm_http_error_set(err, 409, "bad_state", "job %s has already ended", id);
-    return 0;
+    return fm_jobs_cancel(ctx, id, err);
 }
 
-static int svc_remove(void *ctx, const char *id, fm_http_error *err)
+static fm_status svc_remove(void *ctx, const char *id, fm_error *err)
 {
     return fm_jobs_remove(ctx, id, err);
 }
 
-static int svc_stock_path(void *ctx, const char *id, char *path, size_t size, fm_http_error *err)
+static fm_status svc_stock_path(void *ctx, const char *id, char *path, size_t size, fm_error *err)
 {
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
     snprintf(path, size, "%s/stock.vdb", j->dir);
     fm_jobs_put(ctx, j);
     if (access(path, R_OK) != 0)
-        return fm_http_error_set(err, 404, "no_snapshot", "job %s has no stock snapshot yet", id);
-    return 0;
+        return fm_error_set_reason(err, FM_ERR_INPUT, "no_snapshot",
+                                   "job %s has no stock snapshot yet", id);
+    return FM_OK;
 }
 
 static int svc_events(void *ctx, const char *id, uint64_t after, int timeout_ms,
@@ -375,51 +384,26 @@ static int tp_sink(void *user, const fm_motion *m)
     return c->motions.failed || c->points.failed;
 }
 
-static int svc_toolpath(void *ctx, const char *id, fm_http_blob *out, fm_http_error *err)
+static fm_status svc_toolpath(void *ctx, const char *id, fm_http_blob *out, fm_error *err)
 {
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
-    /* j->spec is immutable: no lock needed while we hold a reference. */
-    json_t *options = json_object_get(j->spec, "options");
-    json_t *program = json_object_get(j->spec, "program");
-    json_t *gcode = json_object_get(program, "gcode");
-    double rapid_rate = json_number_value(json_object_get(options, "rapid_rate"));
-    char *tools_text = json_dumps(json_object_get(j->spec, "tools"), JSON_INDENT(1));
-    char *traj_text = gcode ? NULL
-                            : json_dumps(json_object_get(program, "trajectory"), JSON_INDENT(1));
-    fm_tool_table table;
-    memset(&table, 0, sizeof table);
+    /* The document is immutable: no lock needed while we hold a reference. */
+    const fm_job_spec *spec = &j->doc->spec;
+    int is_gcode = spec->program_kind == FM_PROGRAM_GCODE;
     fm_error ferr;
     fm_error_clear(&ferr);
-    fm_status st = tools_text ? fm_tooltable_parse_json(tools_text, strlen(tools_text), "tools",
-                                                        &table, &ferr)
-                              : fm_error_set(&ferr, FM_ERR_INPUT, "no tool table");
     tp_ctx c;
     memset(&c, 0, sizeof c);
-    if (st == FM_OK) {
-        if (gcode) {
-            fm_gcode_options opt;
-            fm_gcode_options_default(&opt);
-            if (rapid_rate > 0) opt.rapid_rate = rapid_rate;
-            opt.tools = &table;
-            st = fm_gcode_run_string(json_string_value(gcode), json_string_length(gcode),
-                                     "program", &opt, tp_sink, &c, NULL, &ferr);
-        } else if (traj_text) {
-            fm_traj_options topt;
-            fm_traj_options_default(&topt);
-            if (rapid_rate > 0) topt.rapid_rate = rapid_rate;
-            st = fm_traj_run_string(traj_text, strlen(traj_text), "trajectory", &topt, tp_sink,
-                                    &c, NULL, &ferr);
-        }
-    }
+    fm_status st = spec->program_kind == FM_PROGRAM_LIVE ? FM_OK
+                                                          : fm_job_interpret(spec, tp_sink, &c, &ferr);
+    json_t *prog = json_stringn(spec->program_text ? spec->program_text : "", spec->program_length);
+    const char *kind = is_gcode ? "gcode"
+                       : spec->program_kind == FM_PROGRAM_LIVE ? "live"
+                                                               : "trajectory";
     fm_jobs_put(ctx, j);
-    fm_tool_table_free(&table);
-    free(tools_text);
-
-    json_t *prog = gcode ? json_incref(gcode) : json_string(traj_text ? traj_text : "");
-    char *prog_json = json_dumps(prog, JSON_ENCODE_ANY);
+    char *prog_json = prog ? json_dumps(prog, JSON_ENCODE_ANY) : NULL;
     json_decref(prog);
-    free(traj_text);
     char msg[1024] = "";
     json_t *emsg = st == FM_OK ? json_null() : json_string(fm_error_format(&ferr, msg, sizeof msg));
     char *err_json = json_dumps(emsg, JSON_ENCODE_ANY);
@@ -428,7 +412,7 @@ static int svc_toolpath(void *ctx, const char *id, fm_http_blob *out, fm_http_er
     tp_buf b = {0};
     tp_printf(&b, "{\"id\":\"%s\",\"kind\":\"%s\",\"program\":%s,\"motions\":[%s],\"points\":[%s],"
                   "\"truncated\":%s,\"error\":%s}\n",
-              id, gcode ? "gcode" : "trajectory", prog_json ? prog_json : "\"\"",
+              id, kind, prog_json ? prog_json : "\"\"",
               c.motions.text ? c.motions.text : "", c.points.text ? c.points.text : "",
               c.truncated ? "true" : "false", err_json ? err_json : "null");
     free(prog_json);
@@ -438,22 +422,23 @@ static int svc_toolpath(void *ctx, const char *id, fm_http_blob *out, fm_http_er
     free(c.points.text);
     if (failed) {
         free(b.text);
-        return fm_http_error_set(err, 503, "out_of_memory", "out of memory");
+        return fm_error_set_reason(err, FM_ERR_LIMIT, "out_of_memory", "out of memory");
     }
     out->data = (uint8_t *)b.text;
     out->size = b.len;
     out->content_type = "application/json";
-    return 0;
+    return FM_OK;
 }
 
 /* Runs on the request's own connection thread (libmicrohttpd's thread per
  * connection), so a check blocks only its caller; size and concurrency are
  * bounded in fm_jobs_check_request. */
-static int svc_check(void *ctx, json_t *request, json_t **out, fm_http_error *err)
+static fm_status svc_check(void *ctx, json_t *request, json_t **out, fm_error *err)
 {
     fm_jobs *jobs = ctx;
-    return fm_jobs_check_request(jobs->state_dir, jobs->cfg.job_memory_bytes, jobs->cfg.dialect,
-                                 jobs->cfg.subroutine_path, request, out, err);
+    const fm_job_doc_rules rules = fm_jobs_doc_rules(jobs, 0);
+    return fm_jobs_check_request(jobs->state_dir, jobs->cfg.job_memory_bytes, &rules, request, out,
+                                 err);
 }
 
 void fm_jobs_http_service(fm_jobs *jobs, fm_http_service *out)
