@@ -20,8 +20,11 @@ class Daemon:
         self.state_dir = state_dir
         os.makedirs(state_dir, exist_ok=True)
         addr_file = os.path.join(state_dir, "http.addr")
-        if os.path.exists(addr_file):
-            os.unlink(addr_file)
+        # A killed daemon leaves its address files: a restart must not be
+        # mistaken for the old one (modbus_port reads modbus.addr).
+        for name in ("http.addr", "modbus.addr"):
+            if os.path.exists(os.path.join(state_dir, name)):
+                os.unlink(os.path.join(state_dir, name))
         self.log_path = os.path.join(state_dir, "daemon.log")
         self.log = open(self.log_path, "ab")
         self.proc = subprocess.Popen(
