@@ -426,6 +426,34 @@ static fm_status parse_gcode_options(fm_job_doc *doc, json_t *options,
     return FM_OK;
 }
 
+/* "design": the intended part to compare the stock with (issue 16,
+ * docs/simulate.md), given like a stock model: inline over the network, a
+ * file (.stl, .hf, .vdb) only under rules that allow files. */
+static fm_status parse_design(fm_job_doc *doc, json_t *design, const fm_job_doc_rules *rules,
+                              fm_error *err)
+{
+    if (json_is_string(design)) {
+        fm_status st = text_ok(design, "design", DOC_STOCK_TEXT_MAX, err);
+        if (st != FM_OK) return st;
+        const char *s = json_string_value(design);
+        if (!rules->allow_files)
+            return refuse(err, "bad_design",
+                          "design \"%.64s\" names a file on the server; give {\"hyperfun\": "
+                          "TEXT} or {\"stl_base64\": TEXT}",
+                          s);
+        if (!fm_path_has_extension(s, ".stl") && !fm_path_has_extension(s, ".hf") &&
+            !fm_path_has_extension(s, ".vdb"))
+            return refuse(err, "bad_design", "design \"%.64s\": give a .stl, .hf or .vdb file", s);
+        doc->design_text = dup_bytes(s, json_string_length(design));
+        return doc->design_text ? FM_OK : fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    }
+    if (!json_is_object(design) || json_object_size(design) != 1)
+        return refuse(err, "bad_design",
+                      "design must be an object with exactly one of \"hyperfun\" and "
+                      "\"stl_base64\"");
+    return model_of(design, "design", "bad_design", 0, &doc->design_model, err);
+}
+
 static fm_status parse_options(fm_job_doc *doc, json_t *options, const fm_job_doc_rules *rules,
                                fm_error *err)
 {
@@ -438,7 +466,8 @@ static fm_status parse_options(fm_job_doc *doc, json_t *options, const fm_job_do
     static const char *const keys[] = {"name",    "band",    "batch",
                                        "rapid_rate", "memory_budget_mb", "threads",
                                        "check",   "color",   "dialect",
-                                       "subroutine_path", "calculator_input", NULL};
+                                       "subroutine_path", "calculator_input",
+                                       "tolerance", "stop_at", NULL};
     st = only_keys(options, keys, "options", err);
     if (st != FM_OK) return st;
     json_t *v;
@@ -470,6 +499,14 @@ static fm_status parse_options(fm_job_doc *doc, json_t *options, const fm_job_do
         if ((st = integer_in(v, "options.threads", 0, 1024, &spec->stock.threads, err))) return st;
         doc->threads_given = 1;
     }
+    /* the design comparison's tolerance (mm; 0: half a voxel) and the
+     * source line to stop after (`frepmill simulate --tolerance/--stop-at`) */
+    if ((v = json_object_get(options, "tolerance")) &&
+        (st = number_in(v, "options.tolerance", 0, 100, &spec->tolerance_mm, err)))
+        return st;
+    if ((v = json_object_get(options, "stop_at")) &&
+        (st = integer_in(v, "options.stop_at", 1, 1e9, &spec->stop_at_line, err)))
+        return st;
     return parse_check(doc, json_object_get(options, "check"), rules, err);
 }
 
@@ -502,6 +539,8 @@ void fm_job_doc_free(fm_job_doc *doc)
     free(doc->stock_text);
     free(doc->subroutine_path);
     free(doc->stock_model.data);
+    free(doc->design_text);
+    free(doc->design_model.data);
     for (int i = 0; i < FM_JOB_MAX_FIXTURES; i++) {
         free(doc->fixtures[i].data);
         free(doc->fixture_paths[i]);
@@ -516,8 +555,8 @@ fm_status fm_job_doc_from_json(json_t *job, const fm_job_doc_rules *rules_in, fm
     const fm_job_doc_rules *rules = rules_in ? rules_in : &strict;
     *out = NULL;
     if (!json_is_object(job)) return refuse(err, "bad_job", "the job must be a JSON object");
-    static const char *const keys[] = {"stock",    "voxel",   "tools",   "program",
-                                       "fixtures", "machine", "options", NULL};
+    static const char *const keys[] = {"stock",   "voxel",   "tools",   "program", "fixtures",
+                                       "machine", "design",  "options", NULL};
     fm_status st = only_keys(job, keys, "job", err);
     if (st != FM_OK) return st;
     static const char *const required[] = {"stock", "tools", "program"};
@@ -541,6 +580,7 @@ fm_status fm_job_doc_from_json(json_t *job, const fm_job_doc_rules *rules_in, fm
     if ((v = json_object_get(job, "fixtures")) && (st = parse_fixtures(doc, v, err))) goto fail;
     if ((v = json_object_get(job, "machine")) && (st = parse_machine(doc, v, "machine", rules, err)))
         goto fail;
+    if ((v = json_object_get(job, "design")) && (st = parse_design(doc, v, rules, err))) goto fail;
     json_t *options = json_object_get(job, "options");
     if ((st = parse_options(doc, options, rules, err))) goto fail;
     /* The machine's rapid rate times the whole job unless the options give
@@ -559,6 +599,7 @@ fm_status fm_job_doc_from_json(json_t *job, const fm_job_doc_rules *rules_in, fm
     /* The run spec's pointers into the document. */
     doc->spec.tools = &doc->tools;
     doc->spec.stock_spec = doc->stock_text; /* NULL for an inline model until it has a file */
+    doc->spec.design_path = doc->design_text; /* the same for an inline design */
     doc->spec.check = doc->check_enabled ? &doc->check : NULL;
 
     /* The canonical form: every key present, defaults filled in; the
@@ -573,7 +614,9 @@ fm_status fm_job_doc_from_json(json_t *job, const fm_job_doc_rules *rules_in, fm
         json_object_set_new(doc->json, "fixtures", fixtures ? json_incref(fixtures) : json_array()) ||
         json_object_set_new(doc->json, "options", options ? json_incref(options) : json_object()) ||
         (json_object_get(job, "machine") &&
-         json_object_set(doc->json, "machine", json_object_get(job, "machine")))) {
+         json_object_set(doc->json, "machine", json_object_get(job, "machine"))) ||
+        (json_object_get(job, "design") &&
+         json_object_set(doc->json, "design", json_object_get(job, "design")))) {
         st = fm_error_set(err, FM_ERR_LIMIT, "out of memory");
         goto fail;
     }
@@ -614,6 +657,16 @@ fm_status fm_job_doc_set_stock_file(fm_job_doc *doc, const char *path, fm_error 
     free(doc->stock_text);
     doc->stock_text = copy;
     doc->spec.stock_spec = copy;
+    return FM_OK;
+}
+
+fm_status fm_job_doc_set_design_file(fm_job_doc *doc, const char *path, fm_error *err)
+{
+    char *copy = dup_bytes(path, strlen(path));
+    if (!copy) return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    free(doc->design_text);
+    doc->design_text = copy;
+    doc->spec.design_path = copy;
     return FM_OK;
 }
 

@@ -18,6 +18,9 @@
  *     "machine": {"limits": {"x": [LO, HI], ...}, "rapid_rate": MM_PER_MIN,
  *                 "start": [X, Y, Z], "reference_points": [[X, Y, Z], ...]}
  *                                                    (docs/check.md's machine file)
+ *     "design":  {"hyperfun": TEXT} | {"stl_base64": BASE64}         (the intended part:
+ *                | "FILE.stl" | "FILE.hf" | "FILE.vdb"  the report's "design" compares the
+ *                                                     stock with it; files: CLI only)
  *     "options": {
  *       "name": TEXT, "band": 2..32, "batch": -1..1000, "rapid_rate": MM_PER_MIN,
  *       "memory_budget_mb": MB, "threads": 0..1024, "color": "tool" | "none",
@@ -26,6 +29,9 @@
  *       "subroutine_path": "DIR:DIR"                 (subprogram folders: files, CLI only;
  *                                                     the daemon's own setting otherwise)
  *       "calculator_input": false | true             (Fanuc: X5 is 5 mm, not 0.005)
+ *       "tolerance": MM                              (design: deviations up to it count as on
+ *                                                     the design; 0..100, default half a voxel)
+ *       "stop_at": LINE                              (stop after this source line's motions)
  *       "check": false | {"clearance", "rapid_clearance", "tolerance", "max_ramp", "voxel",
  *                         "machine": {...}  (the same as the top-level "machine")}
  *     }
@@ -38,9 +44,9 @@
  *
  * The machine's reference_points are the run's (Fanuc G28/G30).
  *
- * Room for what is coming (fields in fm_job_spec, keys here when they land):
- * "design", "options.tolerance", "options.stop_at" (design comparison,
- * issue 16), machine kinematics under "machine" (issue 17). */
+ * "design", "options.tolerance" and "options.stop_at" are `frepmill simulate
+ * --design/--tolerance/--stop-at` (fm_job_spec.design_path, tolerance_mm,
+ * stop_at_line). */
 #ifndef FM_JOB_DOC_H
 #define FM_JOB_DOC_H
 
@@ -98,6 +104,8 @@ typedef struct fm_job_doc {
     char dialect[16];          /* spec.dialect's storage */
     char *subroutine_path;     /* spec.subroutine_path's */
     fm_job_model stock_model;  /* an inline stock model (size 0 if none) */
+    char *design_text;         /* the design's file (given, or the materialized model's) */
+    fm_job_model design_model; /* an inline design model (size 0 if none) */
     fm_job_model fixtures[FM_JOB_MAX_FIXTURES];
     char *fixture_paths[FM_JOB_MAX_FIXTURES];
 } fm_job_doc;
@@ -106,7 +114,7 @@ typedef struct fm_job_doc {
  * fm_job_doc_free). On error *out is NULL and err has FM_ERR_INPUT (or
  * FM_ERR_LIMIT for sizes), the reason ("bad_json", "missing_key",
  * "unknown_key", "bad_type", "bad_value", "bad_stock", "bad_program",
- * "bad_fixture", "bad_tools", "too_large") and, for JSON syntax errors, the
+ * "bad_fixture", "bad_tools", "bad_design", "too_large") and, for JSON syntax errors, the
  * line and column in text. rules may be NULL (the strict network rules). */
 fm_status fm_job_doc_parse(const char *text, size_t len, const fm_job_doc_rules *rules,
                            fm_job_doc **out, fm_error *err);
@@ -120,6 +128,7 @@ void fm_job_doc_free(fm_job_doc *doc);
  * it points the spec at it. */
 fm_status fm_job_doc_set_stock_file(fm_job_doc *doc, const char *path, fm_error *err);
 fm_status fm_job_doc_set_fixture_file(fm_job_doc *doc, int i, const char *path, fm_error *err);
+fm_status fm_job_doc_set_design_file(fm_job_doc *doc, const char *path, fm_error *err);
 
 /* Would the stock's grid exceed budget bytes? Known before anything is
  * built for box and cylinder stocks only (others pass and meet the budget

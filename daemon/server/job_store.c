@@ -68,6 +68,11 @@ fm_status fm_job_store_write_models(fm_job_doc *doc, const char *dir, fm_error *
         st = write_model(dir, name, &doc->stock_model, path, sizeof path, err);
         if (st == FM_OK) st = fm_job_doc_set_stock_file(doc, path, err);
     }
+    if (st == FM_OK && doc->design_model.size) {
+        snprintf(name, sizeof name, "design.%s", doc->design_model.is_stl ? "stl" : "hf");
+        st = write_model(dir, name, &doc->design_model, path, sizeof path, err);
+        if (st == FM_OK) st = fm_job_doc_set_design_file(doc, path, err);
+    }
     for (int i = 0; st == FM_OK && i < doc->check.fixture_count; i++) {
         snprintf(name, sizeof name, "fixture%d.%s", i, doc->fixtures[i].is_stl ? "stl" : "hf");
         st = write_model(dir, name, &doc->fixtures[i], path, sizeof path, err);

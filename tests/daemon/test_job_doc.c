@@ -375,6 +375,85 @@ static void test_gcode_options(void)
     fm_job_doc_free(doc);
 }
 
+/* "design", options.tolerance and options.stop_at (issue 16): the run
+ * spec's design_path, tolerance_mm and stop_at_line; the design obeys the
+ * stock's rules (inline over the network, files only for the daemon's own
+ * documents). */
+static void test_design(void)
+{
+    char text[2048];
+    char b64[120];
+    memset(b64, 'A', 112); /* 84 bytes: the smallest binary STL */
+    b64[112] = '\0';
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-5,40,40,0\", \"tools\": %s, \"program\": {\"gcode\": \"G0 X1\"}, "
+             "\"design\": {\"stl_base64\": \"%s\"}, \"options\": {\"tolerance\": 0.02, "
+             "\"stop_at\": 12}}",
+             TOOLS, b64);
+    fm_error err;
+    fm_job_doc *doc = parse(text, &err);
+    CHECK(doc != NULL);
+    if (doc) {
+        CHECK(doc->design_model.is_stl && doc->design_model.size == 84);
+        CHECK(doc->spec.design_path == NULL); /* until written to a file */
+        CHECK_NEAR(doc->spec.tolerance_mm, 0.02, 0);
+        CHECK(doc->spec.stop_at_line == 12);
+        CHECK(json_object_get(doc->json, "design") != NULL);
+        CHECK(fm_job_doc_set_design_file(doc, "/tmp/x/design.stl", &err) == FM_OK);
+        CHECK(!strcmp(doc->spec.design_path, "/tmp/x/design.stl"));
+        char *again = json_dumps(doc->json, JSON_COMPACT);
+        fm_job_doc *doc2 = parse(again, &err);
+        CHECK(doc2 && json_equal(doc->json, doc2->json) && doc2->design_model.size == 84);
+        free(again);
+        fm_job_doc_free(doc2);
+    }
+    fm_job_doc_free(doc);
+    /* a HyperFun design */
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-5,40,40,0\", \"tools\": %s, \"program\": {\"gcode\": \"G0 X1\"}, "
+             "\"design\": {\"hyperfun\": \"my_model(x[3], a[1]) { my_model = 1; }\"}}",
+             TOOLS);
+    doc = parse(text, &err);
+    CHECK(doc && !doc->design_model.is_stl && doc->spec.tolerance_mm == 0 &&
+          doc->spec.stop_at_line == 0);
+    fm_job_doc_free(doc);
+    /* a file: the daemon's own documents (the CLI) only */
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-5,40,40,0\", \"tools\": %s, \"program\": {\"gcode\": \"G0 X1\"}, "
+             "\"design\": \"/srv/part.stl\"}",
+             TOOLS);
+    expect_error(text, 400, "bad_design");
+    const fm_job_doc_rules own = {.allow_files = 1, .allow_live = 1};
+    doc = parse_with(text, &own, &err);
+    CHECK(doc && doc->spec.design_path && !strcmp(doc->spec.design_path, "/srv/part.stl"));
+    fm_job_doc_free(doc);
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-5,40,40,0\", \"tools\": %s, \"program\": {\"gcode\": \"G0 X1\"}, "
+             "\"design\": \"/srv/part.step\"}",
+             TOOLS);
+    doc = parse_with(text, &own, &err);
+    CHECK(doc == NULL && !strcmp(err.reason, "bad_design"));
+    CHECK_STR_CONTAINS(err.message, ".stl, .hf or .vdb");
+    /* refusals */
+    static const char *const bad[][2] = {
+        {"\"design\": {\"stl_base64\": \"AAAA\"}", "bad_design"},      /* 3 bytes */
+        {"\"design\": {\"obj\": \"v 0 0 0\"}", "bad_design"},
+        {"\"design\": 5", "bad_design"},
+        {"\"options\": {\"tolerance\": -0.1}", "bad_value"},
+        {"\"options\": {\"tolerance\": 101}", "bad_value"},
+        {"\"options\": {\"tolerance\": \"0.1\"}", "bad_type"},
+        {"\"options\": {\"stop_at\": 0}", "bad_value"},
+        {"\"options\": {\"stop_at\": 2.5}", "bad_type"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        snprintf(text, sizeof text,
+                 "{\"stock\": \"box:0,0,-5,40,40,0\", \"tools\": %s, \"program\": {\"gcode\": "
+                 "\"G0 X1\"}, %s}",
+                 TOOLS, bad[i][0]);
+        expect_error(text, 400, bad[i][1]);
+    }
+}
+
 int main(void)
 {
     test_job_ok();
@@ -382,6 +461,7 @@ int main(void)
     test_rapid_rate();
     test_rules_and_parts();
     test_gcode_options();
+    test_design();
     test_memory();
     test_stock_spec();
     test_base64();
