@@ -54,7 +54,13 @@ scene.add(axes);
 const stockGroup = new THREE.Group();
 const pathGroup = new THREE.Group();
 const findingGroup = new THREE.Group();
-scene.add(stockGroup, pathGroup, findingGroup);
+// The workpiece frame: on a machine whose rotary axes turn the table, the
+// stock, its toolpath and findings turn with it during replay (tablePlacement);
+// the tool marker stays in the machine frame.
+const workpiece = new THREE.Group();
+workpiece.matrixAutoUpdate = false;
+workpiece.add(stockGroup, pathGroup, findingGroup);
+scene.add(workpiece);
 
 const stockMaterial = new THREE.MeshStandardMaterial({
   color: 0xc8ccd2, metalness: 0.25, roughness: 0.55, side: THREE.DoubleSide,
@@ -363,7 +369,31 @@ function showPathUpTo(t) {
   invalidate();
 }
 
-// The motion at program time t and the tool tip there.
+// Where the table axes put the workpiece at joint values [a, b, c] (degrees):
+// x_machine = M x, M = T_1 T_2 ... T_n from the base (the daemon's
+// fm_machine_table_transform), T_i a right-handed turn about axis i's line.
+function tablePlacement(joints) {
+  const M = new THREE.Matrix4();
+  const table = S.toolpath && S.toolpath.machine && S.toolpath.machine.table;
+  if (!table || !joints) return M;
+  for (const ax of table) {
+    const th = joints['abc'.indexOf(ax.axis)] * Math.PI / 180;
+    const [bx, by, bz] = ax.through;
+    M.multiply(new THREE.Matrix4().makeTranslation(bx, by, bz))
+      .multiply(new THREE.Matrix4().makeRotationAxis(new THREE.Vector3(...ax.around).normalize(), th))
+      .multiply(new THREE.Matrix4().makeTranslation(-bx, -by, -bz));
+  }
+  return M;
+}
+
+function placeWorkpiece(joints) {
+  workpiece.matrix.copy(tablePlacement(joints));
+  workpiece.matrixWorldNeedsUpdate = true;
+  S.joints = joints || null;
+}
+
+// The motion at program time t, the tool tip there (workpiece frame) and the
+// joints (degrees, when the motion carries them: they move linearly in time).
 function poseAt(t) {
   const tp = S.toolpath;
   if (!tp || !tp.motions.length) return null;
@@ -377,7 +407,9 @@ function poseAt(t) {
   const x = f * (count - 1), i = Math.min(Math.floor(x), Math.max(count - 2, 0)), r = count > 1 ? x - i : 0;
   const a = 3 * (first + i), b = 3 * (first + Math.min(i + 1, count - 1));
   const pos = [0, 1, 2].map((k) => P[a + k] + (P[b + k] - P[a + k]) * r);
-  return { line, tool, pos };
+  const m = M[lo];
+  const joints = m.length >= 13 ? [0, 1, 2].map((k) => m[7 + k] + (m[10 + k] - m[7 + k]) * f) : null;
+  return { line, tool, pos, joints };
 }
 
 // --------------------------------------------------------------- program --
@@ -484,16 +516,28 @@ function showStatus(st) {
     if (t !== null) {
       showPathUpTo(t);
       setScrub(t);
+      // the table where the program has turned it by now
+      const pose = poseAt(t);
+      if (pose && pose.joints) {
+        placeWorkpiece(pose.joints);
+        if (Array.isArray(j.position)) {
+          const p = new THREE.Vector3(...j.position).applyMatrix4(workpiece.matrix);
+          showPosition(j.position, j.tool, [p.x, p.y, p.z]);
+        }
+      }
     }
   }
 }
 
-function showPosition(pos, tool) {
+// pos: the tip in the workpiece frame (the readout); at: where to draw the
+// marker in the machine frame (default pos).
+function showPosition(pos, tool, at) {
   $('pos-x').textContent = fmt(pos[0]);
   $('pos-y').textContent = fmt(pos[1]);
   $('pos-z').textContent = fmt(pos[2]);
   if (tool != null) $('tool').textContent = tool;
-  marker.position.set(pos[0], pos[1], pos[2]);
+  const m = at || pos;
+  marker.position.set(m[0], m[1], m[2]);
   marker.visible = true;
   invalidate();
 }
@@ -511,7 +555,13 @@ function applyReplay() {
   showPathUpTo(t);
   setScrub(t);
   const pose = poseAt(t);
-  if (pose) { showPosition(pose.pos, pose.tool); setLine(pose.line); }
+  if (pose) {
+    placeWorkpiece(pose.joints);
+    // the marker shows the tool where the machine holds it
+    const p = new THREE.Vector3(...pose.pos).applyMatrix4(workpiece.matrix);
+    showPosition(pose.pos, pose.tool, [p.x, p.y, p.z]);
+    setLine(pose.line);
+  }
   $('live').classList.toggle('on', S.live);
   $('play').innerHTML = S.playing ? '&#10074;&#10074;' : '&#9654;';
 }
@@ -670,6 +720,8 @@ const api = {
   state: S,
   triangleCount,
   vertexColors,
+  // The workpiece's placement on the machine now (column-major 4x4).
+  workpieceMatrix: () => workpiece.matrix.toArray(),
   chunkCount: () => S.chunks.size,
   open: (id) => { location.hash = `job=${id}`; },
   // Ended and the chunks shown match the daemon's list.

@@ -378,10 +378,33 @@ static int tp_sink(void *user, const fm_motion *m)
             tp_point(c, p);
         }
     }
-    tp_printf(&c->motions, "%s[%d,%d,%.4f,%.4f,%d,%ld,%ld]", c->motion_count ? "," : "", kind,
+    tp_printf(&c->motions, "%s[%d,%d,%.4f,%.4f,%d,%ld,%ld", c->motion_count ? "," : "", kind,
               m->line, m->t0, m->t1, m->tool, first, c->point_count - first);
+    /* on a rotary machine the joints at both ends, for the viewer's table */
+    if (m->machine && m->machine->rotary_count)
+        tp_printf(&c->motions, ",%.6f,%.6f,%.6f,%.6f,%.6f,%.6f", m->rotary_start[0], m->rotary_start[1],
+                  m->rotary_start[2], m->rotary_end[0], m->rotary_end[1], m->rotary_end[2]);
+    tp_printf(&c->motions, "]");
     c->motion_count++;
     return c->motions.failed || c->points.failed;
+}
+
+/* The opening of the document with "machine": {"table": [{"axis", "around",
+ * "through"}, ...]} (the axes that turn the workpiece, in chain order from
+ * the base) when the job's machine has any, so the viewer can turn the
+ * workpiece as fm_machine_table_transform does. */
+static void tp_machine(tp_buf *b, const fm_machine *mc)
+{
+    tp_printf(b, "{");
+    int n = 0;
+    for (int i = 0; mc && i < mc->rotary_count; i++) {
+        const fm_rotary_axis *ax = &mc->rotary[i];
+        if (ax->carries != FM_ROTARY_TABLE) continue;
+        tp_printf(b, "%s{\"axis\":\"%c\",\"around\":[%.9g,%.9g,%.9g],\"through\":[%.9g,%.9g,%.9g]}",
+                  n++ ? "," : "\"machine\":{\"table\":[", 'a' + ax->letter, ax->around[0], ax->around[1],
+                  ax->around[2], ax->through[0], ax->through[1], ax->through[2]);
+    }
+    if (n) tp_printf(b, "]},");
 }
 
 static fm_status svc_toolpath(void *ctx, const char *id, fm_http_blob *out, fm_error *err)
@@ -410,7 +433,8 @@ static fm_status svc_toolpath(void *ctx, const char *id, fm_http_blob *out, fm_e
     json_decref(emsg);
 
     tp_buf b = {0};
-    tp_printf(&b, "{\"id\":\"%s\",\"kind\":\"%s\",\"program\":%s,\"motions\":[%s],\"points\":[%s],"
+    tp_machine(&b, spec->machine);
+    tp_printf(&b, "\"id\":\"%s\",\"kind\":\"%s\",\"program\":%s,\"motions\":[%s],\"points\":[%s],"
                   "\"truncated\":%s,\"error\":%s}\n",
               id, kind, prog_json ? prog_json : "\"\"",
               c.motions.text ? c.motions.text : "", c.points.text ? c.points.text : "",

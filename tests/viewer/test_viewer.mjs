@@ -279,6 +279,41 @@ async function main() {
     ok(!mid.live && mid.line > 0 && mid.line !== status.line,
       `replay at t=${mid.t.toFixed(1)} s shows line ${mid.line}, x ${mid.x}`);
 
+    // A rotary table (issue 17): C turns the workpiece one full turn at 60
+    // degrees a second before a slot is cut; scrubbed into the turn, the
+    // page's workpiece stands at Rz(60 t) (written out here), the tool where
+    // the machine holds it.
+    const turnJob = {
+      stock: 'box:-30,-5,-20,30,5,-10',
+      voxel: 0.5,
+      tools: JSON.parse(fs.readFileSync(path.join(ROOT, 'deploy/demo/tools.json'), 'utf8')),
+      program: { gcode: 'G21 G90 G94\nT1 M6\nG1 C360 F3600\nG0 X-20 Y0 Z0\nG1 Z-12 F600\nG1 X0\nG0 Z0\nM2\n' },
+      machine: { rotary: [{ axis: 'c', around: [0, 0, 1], through: [0, 0, 0], carries: 'table' }] },
+      options: { name: 'viewer-table-test' },
+    };
+    const r2 = await fetch(`${url}/v1/jobs`, {
+      method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(turnJob),
+    });
+    ok(r2.status === 202, `rotary-table job accepted (HTTP ${r2.status})`);
+    const id2 = (await r2.json()).id;
+    await page.evaluate((jid) => window.frepmillViewer.open(jid), id2);
+    await page.waitForFunction(() => window.frepmillViewer.idle() && window.frepmillViewer.state.toolpath
+      && window.frepmillViewer.state.jobState === 'done', null, { timeout: 60000 });
+    const turn = await page.evaluate(() => {
+      const s = document.getElementById('scrub');
+      s.value = 150;
+      s.dispatchEvent(new Event('input'));
+      return { t: window.frepmillViewer.state.replayT, m: window.frepmillViewer.workpieceMatrix(),
+        table: window.frepmillViewer.state.toolpath.machine };
+    });
+    const deg = 60 * turn.t, c = Math.cos(deg * Math.PI / 180), sn = Math.sin(deg * Math.PI / 180);
+    // column-major Rz
+    const want = [c, sn, 0, 0, -sn, c, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1];
+    const worst = Math.max(...want.map((v, k) => Math.abs(v - turn.m[k])));
+    console.log(`rotary table at t=${turn.t.toFixed(3)} s: C ${deg.toFixed(2)} deg, matrix ${turn.m.map((v) => v.toFixed(4)).join(' ')}`);
+    ok(turn.table && turn.table.table && turn.table.table.length === 1, 'the toolpath names the table axis');
+    ok(turn.t > 0.5 && turn.t < 5.5 && worst < 1e-6, `the workpiece stands at Rz(${deg.toFixed(1)}) (worst ${worst.toExponential(1)})`);
+
     ok(problems.length === 0, `no page errors${problems.length ? ': ' + problems.join('; ') : ''}`);
     ok(foreign.length === 0, `every request went to the daemon${foreign.length ? ': ' + foreign.join(' ') : ''}`);
     passed = true;
