@@ -1,4 +1,5 @@
-/* stock_spec.c: the one parser of stock specs and the stocks they make
+/* stock_spec.c: the one parser of stock specs and the stocks they make,
+ * and the one builder of HyperFun models as fields, for stocks and designs
  * (stock_spec.h). */
 #include "stock_spec.h"
 
@@ -12,7 +13,7 @@
 #include "hf/hf.h"
 #include "job.h"
 
-/* Stock models given as HyperFun are searched for within this cube (mm). */
+/* HyperFun stocks and designs are searched for within this cube (mm). */
 #define STOCK_MODEL_SEARCH_MM 2000.0
 #define STOCK_MODEL_MAX_BOXES 4000000u
 #define STOCK_PI 3.14159265358979323846
@@ -107,78 +108,229 @@ double fm_stock_spec_projected_area(const fm_stock_spec *s)
     return -1;
 }
 
-static fm_stock *stock_from_model(const char *path, const fm_stock_options *opt, fm_error *err)
+/* A HyperFun model as a field for a stock or a design.
+ *
+ * Values: HyperFun functions are rarely distances (hfSphere is R^2 - r^2)
+ * and the narrow band needs first-order distances, so the model is
+ * normalized, f / sqrt(f^2 + |grad f|^2) (Shapiro eq. 4.9), with the
+ * gradient from forward differences of batch evaluations (three more
+ * points a step of 1e-6 of the coordinates' size away; one forward-mode
+ * gradient per point costs ten times as much), on the model's tape
+ * shortened to the points' box (the min/max branches of features far
+ * away dropped). The value is then cut by the distance to the model's
+ * bounding box, as fm_field asks.
+ *
+ * Boxes: the normalized function's interval is useless for classifying
+ * boxes (its modulus is below 1 everywhere, so no box would ever be found
+ * deep inside or outside, and the rasterizer would evaluate every voxel of
+ * the bounding box). A box whose widening by `reach` (the grid's band) the
+ * model's interval shows all inside or all outside is at least the band
+ * from the surface: a tile. Other boxes get voxel work. */
+
+#define MODEL_CHUNK 256
+
+typedef struct model_worker {
+    fm_evaluator *ev;
+    double x[4 * MODEL_CHUNK], y[4 * MODEL_CHUNK], z[4 * MODEL_CHUNK], f[4 * MODEL_CHUNK];
+} model_worker;
+
+static void *model_worker_new(void *ctx)
 {
-    fm_graph *g = fm_graph_new(0);
-    if (!g) {
-        fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    fm_model_field *mf = ctx;
+    model_worker *w = malloc(sizeof *w);
+    if (!w) return NULL;
+    w->ev = fm_evaluator_new(mf->tape, NULL);
+    if (!w->ev) {
+        free(w);
         return NULL;
     }
-    fm_stock *stock = NULL;
-    fm_tape *tape = NULL, *raw_tape = NULL;
+    return w;
+}
+
+static void model_worker_free(void *ctx, void *worker)
+{
+    (void)ctx;
+    model_worker *w = worker;
+    if (!w) return;
+    fm_evaluator_free(w->ev);
+    free(w);
+}
+
+/* Exact signed distance to the field's bounds, positive inside. */
+static double model_box_distance(const fm_field *f, const double p[3])
+{
+    double out2 = 0, in = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        const double below = f->lo[k] - p[k], above = p[k] - f->hi[k];
+        const double d = below > above ? below : above;
+        if (d > 0) out2 += d * d;
+        if (-d < in) in = -d;
+    }
+    return out2 > 0 ? -sqrt(out2) : in;
+}
+
+static void model_batch(void *ctx, void *worker, size_t n, const double *x, const double *y,
+                        const double *z, double *out)
+{
+    fm_model_field *mf = ctx;
+    model_worker *w = worker;
+    for (size_t start = 0; start < n; start += MODEL_CHUNK) {
+        const size_t m = n - start < MODEL_CHUNK ? n - start : MODEL_CHUNK;
+        /* the point, then its +x, +y and +z neighbours, each block m long */
+        fm_interval box[4] = {{INFINITY, -INFINITY}, {INFINITY, -INFINITY},
+                              {INFINITY, -INFINITY}, {0, 0}};
+        for (size_t i = 0; i < m; i++) {
+            const double p[3] = {x[start + i], y[start + i], z[start + i]};
+            for (int j = 0; j < 4; j++) {
+                double q[3] = {p[0], p[1], p[2]};
+                if (j > 0) q[j - 1] += 1e-6 * (1 + fabs(p[j - 1]));
+                w->x[j * m + i] = q[0];
+                w->y[j * m + i] = q[1];
+                w->z[j * m + i] = q[2];
+            }
+            for (int k = 0; k < 3; k++) {
+                if (p[k] < box[k].lo) box[k].lo = p[k];
+                if (p[k] > box[k].hi) box[k].hi = p[k];
+            }
+        }
+        /* the neighbours lie a step above */
+        for (int k = 0; k < 3; k++) box[k].hi += 2e-6 * (1 + fabs(box[k].hi));
+        fm_interval range;
+        fm_tape *shorter = fm_eval_interval_shorten(w->ev, box, &range);
+        if (shorter) fm_evaluator_use(w->ev, shorter);
+        fm_eval_batch(w->ev, 4 * m, w->x, w->y, w->z, NULL, w->f);
+        if (shorter) {
+            fm_evaluator_use(w->ev, NULL);
+            fm_tape_free(shorter);
+        }
+        for (size_t i = 0; i < m; i++) {
+            const double f = w->f[i];
+            double g2 = 0;
+            for (int k = 0; k < 3; k++) {
+                const size_t j = (1 + (size_t)k) * m + i;
+                const double step = k == 0 ? w->x[j] - w->x[i] : k == 1 ? w->y[j] - w->y[i]
+                                                                        : w->z[j] - w->z[i];
+                const double d = (w->f[j] - f) / step;
+                g2 += d * d;
+            }
+            const double v = f / sqrt(f * f + g2);
+            const double p[3] = {x[start + i], y[start + i], z[start + i]};
+            const double b = model_box_distance(&mf->field, p);
+            /* NaN (and 0 / 0 at a flat zero) takes the box distance */
+            out[start + i] = v < b ? v : b;
+        }
+    }
+}
+
+static fm_interval model_interval(void *ctx, void *worker, const fm_interval box[3])
+{
+    fm_model_field *mf = ctx;
+    model_worker *w = worker;
+    fm_interval wide[4];
+    for (int k = 0; k < 3; k++) {
+        wide[k].lo = box[k].lo - mf->reach;
+        wide[k].hi = box[k].hi + mf->reach;
+    }
+    wide[3].lo = wide[3].hi = 0;
+    const fm_interval f = fm_eval_interval(w->ev, wide);
+    /* a hair beyond the band, so that the float band compares below it */
+    const double beyond = mf->reach * (1 + 1e-6);
+    if (f.lo > 0) return (fm_interval){beyond, INFINITY};
+    /* outside the model, or beyond the bounds box by more than the band */
+    double c[3], half2 = 0;
+    for (int k = 0; k < 3; k++) {
+        c[k] = 0.5 * (box[k].lo + box[k].hi);
+        half2 += 0.25 * (box[k].hi - box[k].lo) * (box[k].hi - box[k].lo);
+    }
+    const double bound = model_box_distance(&mf->field, c) + sqrt(half2);
+    if (f.hi < 0 || bound <= -beyond) return (fm_interval){-INFINITY, -beyond};
+    return (fm_interval){-1, fmin(1, bound)};
+}
+
+void fm_model_field_close(fm_model_field *mf)
+{
+    fm_tape_free(mf->tape);
+    fm_graph_free(mf->graph);
+    memset(mf, 0, sizeof *mf);
+}
+
+fm_status fm_model_field_open(const char *path, double voxel, double reach, const char *what,
+                              fm_model_field *mf, fm_error *err)
+{
+    memset(mf, 0, sizeof *mf);
+    mf->reach = reach;
+    mf->graph = fm_graph_new(0);
+    if (!mf->graph) return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    fm_graph *g = mf->graph;
     fm_evaluator *ev = NULL;
-    fm_field field;
-    memset(&field, 0, sizeof field);
+    fm_status st = FM_OK;
     fm_hf_model model;
-    if (fm_hf_compile_file(g, path, NULL, &model, err) != FM_OK) goto done;
+    if ((st = fm_hf_compile_file(g, path, NULL, &model, err)) != FM_OK) goto done;
     if (model.dimension > 3) {
-        fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
-                    "the stock model '%s' is %dD; a stock is a 3D object (x[3])", model.name,
-                    model.dimension);
+        st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                         "the %s model '%s' is %dD; a %s is a 3D object (x[3])", what,
+                         model.name, model.dimension, what);
         goto done;
     }
-    /* HyperFun functions are rarely distances (hfSphere is R^2 - r^2), and
-     * the stock's narrow band needs first-order distances: normalize
-     * (Shapiro eq. 4.9). */
-    fm_node root = fm_normalize(g, model.root);
-    if (!root) {
-        *err = *fm_graph_error(g);
+    mf->tape = fm_tape_compile(g, model.root, err);
+    if (!mf->tape) {
+        st = err && err->code ? err->code : FM_ERR_INPUT;
         goto done;
     }
-    tape = fm_tape_compile(g, root, err);
-    if (!tape) goto done;
-    /* The bounds are searched on the model itself: it has the same sign as
-     * its normalization, whose interval bounds are much looser. */
-    raw_tape = fm_tape_compile(g, model.root, err);
-    if (!raw_tape) goto done;
-    ev = fm_evaluator_new(raw_tape, err);
-    if (!ev) goto done;
-    double voxel = opt && opt->voxel_mm > 0 ? opt->voxel_mm : 0.1;
+    ev = fm_evaluator_new(mf->tape, err);
+    if (!ev) {
+        st = err && err->code ? err->code : FM_ERR_INPUT;
+        goto done;
+    }
     fm_inside_bounds s;
     fm_interval start[3];
     for (int a = 0; a < 3; a++) start[a] = (fm_interval){-STOCK_MODEL_SEARCH_MM, STOCK_MODEL_SEARCH_MM};
     double min_size = fmax(voxel, 2 * STOCK_MODEL_SEARCH_MM / 1024.0);
     if (fm_find_inside_bounds(ev, start, min_size, STOCK_MODEL_MAX_BOXES, &s) != FM_OK) {
-        fm_error_at(err, FM_ERR_LIMIT, path, 0, 0,
-                    "the stock model's boundary is too complex to bound (over %u boxes)",
-                    STOCK_MODEL_MAX_BOXES);
+        st = fm_error_at(err, FM_ERR_LIMIT, path, 0, 0,
+                         "the %s model's boundary is too complex to bound (over %u boxes)", what,
+                         STOCK_MODEL_MAX_BOXES);
         goto done;
     }
     if (!s.found) {
-        fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
-                    "the stock model '%s' is empty within +-%.0f mm", model.name,
-                    STOCK_MODEL_SEARCH_MM);
+        st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "the %s model '%s' is empty within +-%.0f mm",
+                         what, model.name, STOCK_MODEL_SEARCH_MM);
         goto done;
     }
     for (int a = 0; a < 3; a++) {
         if (s.lo[a] <= -STOCK_MODEL_SEARCH_MM || s.hi[a] >= STOCK_MODEL_SEARCH_MM) {
-            fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
-                        "the stock model '%s' is not bounded within +-%.0f mm along %c; "
-                        "intersect it with a block",
-                        model.name, STOCK_MODEL_SEARCH_MM, "xyz"[a]);
+            st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                             "the %s model '%s' is not bounded within +-%.0f mm along %c; "
+                             "intersect it with a block",
+                             what, model.name, STOCK_MODEL_SEARCH_MM, "xyz"[a]);
             goto done;
         }
-        s.lo[a] -= 4 * voxel;
-        s.hi[a] += 4 * voxel;
+        mf->field.lo[a] = s.lo[a] - 4 * voxel;
+        mf->field.hi[a] = s.hi[a] + 4 * voxel;
     }
-    if (fm_field_from_tape(&field, tape, s.lo, s.hi, 0.0, err) != FM_OK) goto done;
-    stock = fm_stock_new_from_field(&field, opt, err);
-    fm_field_release(&field);
+    mf->field.ctx = mf;
+    mf->field.worker_new = model_worker_new;
+    mf->field.worker_free = model_worker_free;
+    mf->field.batch = model_batch;
+    mf->field.interval = model_interval;
 done:
     fm_evaluator_free(ev);
-    fm_tape_free(raw_tape);
-    fm_tape_free(tape);
-    fm_graph_free(g);
+    if (st != FM_OK) fm_model_field_close(mf);
+    return st;
+}
+
+static fm_stock *stock_from_model(const char *path, const fm_stock_options *opt, fm_error *err)
+{
+    fm_stock_options o;
+    fm_stock_options_default(&o);
+    if (opt && opt->voxel_mm > 0) o.voxel_mm = opt->voxel_mm;
+    if (opt && opt->band_voxels > 0) o.band_voxels = opt->band_voxels;
+    /* reach = the grid's band: boxes the model's interval decides are tiles */
+    fm_model_field mf;
+    if (fm_model_field_open(path, o.voxel_mm, o.band_voxels * o.voxel_mm, "stock", &mf, err) != FM_OK)
+        return NULL;
+    fm_stock *stock = fm_stock_new_from_field(&mf.field, opt, err);
+    fm_model_field_close(&mf);
     return stock;
 }
 
