@@ -1,8 +1,11 @@
 /* cmd_simulate.c: `frepmill simulate`: run a program against a stock with
  * the job runner (job.c), write the final stock and a JSON report, and
- * show a progress bar on a terminal. */
+ * show a progress bar on a terminal. The job comes from flags, or from a
+ * job document (--job FILE, daemon/runner/job_doc.h: what POST /v1/jobs
+ * takes, read by the same parser). */
 #include <errno.h>
 #include <jansson.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -12,6 +15,7 @@
 #include "commands.h"
 #include "toolpaths/gcode/gcode.h"
 #include "runner/job.h"
+#include "runner/job_doc.h"
 #include "runner/report_json.h"
 #include "runner/outputs.h"
 #include "runner/check_pass.h"
@@ -23,6 +27,7 @@ static void usage(FILE *out)
 {
     fprintf(out,
             "usage: frepmill simulate PROGRAM --stock SPEC --tools TOOLS [--voxel MM]\n"
+            "       frepmill simulate --job FILE.json\n"
             "                         [--out FILE]... [--report FILE.json] [--progress]\n"
             "                         [--band VOXELS] [--memory-budget MB] [--threads N]\n"
             "                         [--rapid-rate MM_PER_MIN] [--batch DIAMETERS]\n"
@@ -35,6 +40,11 @@ static void usage(FILE *out)
             "                         [--calculator-input]\n"
             "\n"
             "PROGRAM   G-code, or a parametric trajectory (.json)\n"
+            "--job     the job as a job document (docs/api.md, POST /v1/jobs; model files\n"
+            "          relative to the working folder): stock, tools, program, fixtures,\n"
+            "          machine, design and options, the check included unless options.check\n"
+            "          is false; only output flags (--out, --png, --report, --color, --pose-at,\n"
+            "          --progress) and --sweep-evaluations go with it\n"
             "SPEC      box:X0,Y0,Z0,X1,Y1,Z1 | cylinder:X,Y,Z0,Z1,R | FILE.hf | FILE.stl | FILE.vdb\n"
             "TOOLS     JSON tool table or LinuxCNC .tbl file\n"
             "--voxel   voxel edge in mm (default 0.1)\n"
@@ -158,7 +168,119 @@ static int exit_status(fm_status st)
     }
 }
 
+/* --job: the document and the private folder its inline models are
+ * written to (lib/stock and lib/check read models from files). */
+typedef struct job_file {
+    fm_job_doc *doc;
+    char dir[PATH_MAX];
+    char paths[FM_JOB_MAX_FIXTURES + 2][PATH_MAX];
+    int path_count;
+} job_file;
+
+static fm_status write_model(job_file *jf, const fm_job_model *m, const char *stem,
+                             char **path_out, fm_error *err)
+{
+    if (!jf->dir[0]) {
+        const char *tmp = getenv("TMPDIR");
+        snprintf(jf->dir, sizeof jf->dir, "%.3000s/frepmill-job-XXXXXX", tmp && *tmp ? tmp : "/tmp");
+        if (!mkdtemp(jf->dir)) {
+            jf->dir[0] = '\0';
+            return fm_error_set(err, FM_ERR_IO, "cannot create a temporary folder: %s",
+                                strerror(errno));
+        }
+    }
+    char *path = jf->paths[jf->path_count++];
+    snprintf(path, PATH_MAX, "%.3000s/%s.%s", jf->dir, stem, m->is_stl ? "stl" : "hf");
+    FILE *f = fopen(path, "wb");
+    size_t n = f ? fwrite(m->data, 1, m->size, f) : 0;
+    if (!f || n != m->size || fclose(f) != 0) {
+        int e = errno;
+        if (f && n != m->size) fclose(f);
+        return fm_error_set(err, FM_ERR_IO, "cannot write %s: %s", path, strerror(e));
+    }
+    *path_out = path;
+    return FM_OK;
+}
+
+static fm_status load_job(const char *path, job_file *jf, fm_error *err)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return fm_error_set(err, FM_ERR_IO, "cannot open %s: %s", path, strerror(errno));
+    char *text = NULL;
+    size_t len = 0, cap = 0;
+    fm_status st = FM_OK;
+    for (;;) {
+        if (len + 65536 > cap) {
+            if (cap > 2 * FM_JOB_DOC_MAX_TEXT) {
+                st = fm_error_set(err, FM_ERR_LIMIT, "%s: larger than %zu bytes", path,
+                                  2 * FM_JOB_DOC_MAX_TEXT);
+                break;
+            }
+            char *bigger = realloc(text, cap = cap ? cap * 2 : 1 << 20);
+            if (!bigger) {
+                st = fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+                break;
+            }
+            text = bigger;
+        }
+        size_t n = fread(text + len, 1, cap - len, f);
+        len += n;
+        if (n == 0) break;
+    }
+    if (st == FM_OK && ferror(f)) st = fm_error_set(err, FM_ERR_IO, "cannot read %s", path);
+    fclose(f);
+    /* The CLI's documents may name files on this machine; live programs
+     * are the daemon's. */
+    const fm_job_doc_rules rules = {.allow_files = 1};
+    if (st == FM_OK) st = fm_job_doc_parse(text, len, &rules, &jf->doc, err);
+    free(text);
+    if (st != FM_OK) {
+        if (err && !err->file[0]) snprintf(err->file, sizeof err->file, "%s", path);
+        return st;
+    }
+    fm_job_doc *doc = jf->doc;
+    char *model;
+    if (doc->stock_model.size &&
+        ((st = write_model(jf, &doc->stock_model, "stock", &model, err)) != FM_OK ||
+         (st = fm_job_doc_set_stock_file(doc, model, err)) != FM_OK))
+        return st;
+    if (doc->design_model.size &&
+        ((st = write_model(jf, &doc->design_model, "design", &model, err)) != FM_OK ||
+         (st = fm_job_doc_set_design_file(doc, model, err)) != FM_OK))
+        return st;
+    for (int i = 0; i < doc->check.fixture_count; i++) {
+        char stem[32];
+        snprintf(stem, sizeof stem, "fixture%d", i);
+        if ((st = write_model(jf, &doc->fixtures[i], stem, &model, err)) != FM_OK ||
+            (st = fm_job_doc_set_fixture_file(doc, i, model, err)) != FM_OK)
+            return st;
+    }
+    return FM_OK;
+}
+
+static void job_file_free(job_file *jf)
+{
+    for (int i = 0; i < jf->path_count; i++) unlink(jf->paths[i]);
+    if (jf->dir[0]) rmdir(jf->dir);
+    fm_job_doc_free(jf->doc);
+}
+
+static int simulate(int argc, char **argv, job_file *jf);
+
 int fm_cmd_simulate(int argc, char **argv)
+{
+    job_file *jf = calloc(1, sizeof *jf);
+    if (!jf) {
+        fprintf(stderr, "frepmill simulate: out of memory\n");
+        return 3;
+    }
+    int status = simulate(argc, argv, jf);
+    job_file_free(jf);
+    free(jf);
+    return status;
+}
+
+static int simulate(int argc, char **argv, job_file *jf)
 {
     fm_job_spec spec;
     fm_job_spec_default(&spec);
@@ -176,6 +298,8 @@ int fm_cmd_simulate(int argc, char **argv)
     int rapid_rate_given = 0;
     int color_given = 0;
     double pose_time = NAN; /* --pose-at; NAN: none */
+    const char *job_path = NULL;
+    const char *job_flag = NULL; /* a flag that --job gives instead */
 
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -189,9 +313,11 @@ int fm_cmd_simulate(int argc, char **argv)
             continue;
         } else if (!strcmp(a, "--check")) {
             want_check = 1;
+            job_flag = a;
             continue;
         } else if (!strcmp(a, "--calculator-input")) {
             spec.calculator_input = 1;
+            job_flag = a;
             continue;
         } else if (a[0] != '-' || !a[1]) {
             if (spec.program_path) {
@@ -200,6 +326,7 @@ int fm_cmd_simulate(int argc, char **argv)
                 return 2;
             }
             spec.program_path = a;
+            job_flag = "PROGRAM";
             continue;
         }
         if (!v) {
@@ -207,6 +334,10 @@ int fm_cmd_simulate(int argc, char **argv)
             return 2;
         }
         i++;
+        if (strcmp(a, "--out") && strcmp(a, "--png") && strcmp(a, "--png-size") &&
+            strcmp(a, "--color") && strcmp(a, "--report") && strcmp(a, "--pose-at") &&
+            strcmp(a, "--sweep-evaluations") && strcmp(a, "--job"))
+            job_flag = a;
         int is_png = !strcmp(a, "--png");
         if (is_png || !strcmp(a, "--out")) {
             if (output_count == SIMULATE_MAX_OUTPUTS) {
@@ -243,6 +374,8 @@ int fm_cmd_simulate(int argc, char **argv)
                         v);
                 return 2;
             }
+        } else if (!strcmp(a, "--job")) {
+            job_path = v;
         } else if (!strcmp(a, "--design")) {
             spec.design_path = v;
         } else if (!strcmp(a, "--tolerance") && parse_double(v, &d) && d > 0) {
@@ -309,7 +442,27 @@ int fm_cmd_simulate(int argc, char **argv)
             return 2;
         }
     }
-    if (!spec.program_path || !spec.stock_spec || !spec.tools_path) {
+    if (job_path) {
+        if (job_flag) {
+            fprintf(stderr, "frepmill simulate: %s: the job file gives it (with --job only output "
+                            "flags and --sweep-evaluations)\n", job_flag);
+            return 2;
+        }
+        fm_error jerr;
+        fm_error_clear(&jerr);
+        fm_status st = load_job(job_path, jf, &jerr);
+        if (st != FM_OK) {
+            char buf[1024];
+            fprintf(stderr, "frepmill simulate: %s\n", fm_error_format(&jerr, buf, sizeof buf));
+            return exit_status(st);
+        }
+        size_t evaluations = spec.sweep_evaluations;
+        spec = jf->doc->spec;
+        spec.sweep_evaluations = evaluations;
+        if (jf->doc->memory_budget_mb > 0)
+            spec.stock.memory_budget = (size_t)(jf->doc->memory_budget_mb * 1048576.0);
+        if (jf->doc->has_machine) machine_path = job_path; /* for --pose-at */
+    } else if (!spec.program_path || !spec.stock_spec || !spec.tools_path) {
         fprintf(stderr, "frepmill simulate: %s\n",
                 !spec.program_path ? "no PROGRAM given"
                 : !spec.stock_spec ? "no --stock given"
@@ -342,7 +495,7 @@ int fm_cmd_simulate(int argc, char **argv)
      * serve Fanuc's G28/G30, and the check gets its limits. */
     fm_job_check check;
     fm_job_check_default(&check);
-    if (machine_path) {
+    if (machine_path && !job_path) {
         fm_error merr;
         fm_error_clear(&merr);
         if (fm_check_machine_load(machine_path, &check.options.machine, &merr) != FM_OK) {

@@ -2,8 +2,8 @@
  * job_doc.c are where it is defined, parsed and validated, once, into the
  * run spec the job runner takes (fm_job_spec, job.h). The daemon's HTTP API
  * (POST /v1/jobs, POST /v1/check), its job store (spec.json), Modbus live
- * mode and the Redis queue read jobs through here (the CLI builds its run
- * spec from flags; a --job FILE option is still to come).
+ * mode, the Redis queue and `frepmill simulate --job FILE` read jobs
+ * through here (the CLI otherwise builds its run spec from flags).
  *
  *   {
  *     "stock":   "box:X0,Y0,Z0,X1,Y1,Z1" | "cylinder:X,Y,Z0,Z1,R"      (mm)
