@@ -886,7 +886,6 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     /* The design before any cut: its errors come at once, and progress
      * hooks can colour by deviation while the job runs. */
     fm_design *design = NULL;
-    double design_wall = 0, design_cpu = 0;
     if (spec->design_path) {
         const double w0 = now_s(), c0 = process_cpu_s();
         design = make_design(spec, stock, err);
@@ -895,8 +894,8 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
             free_tools(&tools);
             return err && err->code ? err->code : FM_ERR_INPUT;
         }
-        design_wall += now_s() - w0;
-        design_cpu += process_cpu_s() - c0;
+        result->design_build_wall_s = now_s() - w0;
+        result->design_build_cpu_s = process_cpu_s() - c0;
     }
 
     double initial_lo[3] = {0, 0, 0}, initial_hi[3] = {0, 0, 0};
@@ -942,10 +941,13 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
         const double w0 = now_s(), c0 = process_cpu_s();
         st = fm_stock_compare_design(stock, design, FM_JOB_MAX_REGIONS, &result->deviation, err);
         result->has_deviation = st == FM_OK;
+        const double w1 = now_s(), c1 = process_cpu_s();
+        result->design_compare_wall_s = w1 - w0;
+        result->design_compare_cpu_s = c1 - c0;
         if (st == FM_OK)
             st = blame_gouges(spec, &tools, fm_stock_voxel_size(stock), result, err);
-        design_wall += now_s() - w0;
-        design_cpu += process_cpu_s() - c0;
+        result->design_blame_wall_s = now_s() - w1;
+        result->design_blame_cpu_s = process_cpu_s() - c1;
     }
     if (st != FM_OK) {
         free_check(c);
@@ -992,8 +994,10 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     result->uncertain_line = c->progress.uncertain_line;
     result->stopped_at_line = c->stopped_at_line ? spec->stop_at_line : 0;
     result->design = design;
-    result->design_wall_s = design_wall;
-    result->design_cpu_s = design_cpu;
+    result->design_wall_s =
+        result->design_build_wall_s + result->design_compare_wall_s + result->design_blame_wall_s;
+    result->design_cpu_s =
+        result->design_build_cpu_s + result->design_compare_cpu_s + result->design_blame_cpu_s;
     result->wall_time_s = now_s() - started;
     result->peak_memory_bytes = fm_job_peak_rss();
 

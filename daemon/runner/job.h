@@ -226,12 +226,16 @@ typedef struct fm_job_result {
     /* With a design: the design (for deviation colours; owned by the
      * caller, fm_design_free), the deviation (fm_deviation_free) and the
      * blame of each listed gouge; the time the comparison took (building
-     * the design, comparing, blaming), wall and CPU of the process. */
+     * the design, comparing, blaming), wall and CPU of the process, and
+     * its three steps' shares (for bench/design). */
     fm_design *design;
     int has_deviation;
     fm_deviation deviation;
     fm_job_blame gouge_blame[FM_JOB_MAX_REGIONS];
     double design_wall_s, design_cpu_s;
+    double design_build_wall_s, design_build_cpu_s;
+    double design_compare_wall_s, design_compare_cpu_s;
+    double design_blame_wall_s, design_blame_cpu_s;
 } fm_job_result;
 
 /* Free what a result owns (stock, design, deviation, check); safe on a zeroed
