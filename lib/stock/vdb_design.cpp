@@ -374,14 +374,17 @@ void connect(const Members &m, UnionFind &uf)
  * distance to the nearest is the distance to the design's surface within
  * the crossings' spacing (at most a voxel apart along the surface, so
  * within sqrt(d^2 + h^2 / 2) - d of it). Built only when a region's depth
- * is beyond the design's band. */
+ * is beyond the design's band, and only from the design's leaves that
+ * touch roi (index space): a pass over every leaf of the design took most
+ * of the comparison's time (bench/design). */
 class SurfacePoints {
 public:
-    explicit SurfacePoints(const Setup &s) : s_(s)
+    SurfacePoints(const Setup &s, const CoordBBox &roi) : s_(s)
     {
         CAcc acc(s.design->constTree());
         std::vector<std::pair<Coord, openvdb::Vec3f>> pts;
         for (auto leaf = s.design->constTree().cbeginLeaf(); leaf; ++leaf) {
+            if (!roi.hasOverlap(leaf->getNodeBoundingBox())) continue;
             for (int i = 0; i < LEAF_SIZE; i++) {
                 const float a = leaf->getValue(i);
                 const Coord c = leaf->offsetToGlobalCoord(i);
@@ -418,6 +421,7 @@ public:
     }
 
     size_t bytes() const { return points_.size() * (sizeof(openvdb::Vec3f) + 12); }
+    bool empty() const { return points_.empty(); }
 
     /* Distance from p to the nearest crossing (which goes to *at when
      * given); infinity when there is none. */
@@ -720,18 +724,39 @@ fm_status compare(const fm_vdb *sv, const fm_vdb *dv, const fm_vdb_compare_optio
      * bound until none can beat the deepest found by more than a quarter
      * voxel (on a flat face every cell ties, and p* right under the centre
      * makes the bound the depth plus a hair). */
-    std::unique_ptr<SurfacePoints> surface;
     CAcc sa(s.stock->constTree());
     for (Region &reg : regions) {
         if (!reg.has_surface || !reg.clamped) continue;
-        if (!surface) {
-            surface = std::make_unique<SurfacePoints>(s);
-            if (surface->bytes() > opt.budget)
-                return fm_error_set(err, FM_ERR_LIMIT,
-                                    "comparing with the design: its surface points (%.0f MB) "
-                                    "exceed the memory budget",
-                                    double(surface->bytes()) / 1048576.0);
+        /* The region (design material the stock lacks, or stock where the
+         * design has none) is bounded by the stock's surface and the
+         * design's, so the design's surface meets its box widened by a
+         * voxel (unless it is a closed void of the stock inside the design,
+         * where no crossing is found near and the whole design is read).
+         * Every foot point lies within the stock's band of a member, so
+         * its nearest crossing is no farther than that box's diagonal plus
+         * the band: the crossings of the box widened by as much are all it
+         * needs. */
+        const int band = int(std::ceil(double(s.bgs) * s.inv)) + 2;
+        const Coord ext = reg.hi - reg.lo;
+        const int reach =
+            band + 1 +
+            int(std::ceil(std::sqrt(double(ext.x() + 3) * (ext.x() + 3) +
+                                    double(ext.y() + 3) * (ext.y() + 3) +
+                                    double(ext.z() + 3) * (ext.z() + 3)))) +
+            band;
+        CoordBBox roi(reg.lo, reg.hi);
+        roi.expand(reach);
+        std::unique_ptr<SurfacePoints> surface = std::make_unique<SurfacePoints>(s, roi);
+        if (surface->empty()) {
+            CoordBBox all;
+            s.design->constTree().evalLeafBoundingBox(all);
+            surface = std::make_unique<SurfacePoints>(s, all);
         }
+        if (surface->bytes() > opt.budget)
+            return fm_error_set(err, FM_ERR_LIMIT,
+                                "comparing with the design: its surface points (%.0f MB) "
+                                "exceed the memory budget",
+                                double(surface->bytes()) / 1048576.0);
         const int32_t me = int32_t(&reg - regions.data());
         /* the clamped members of reg in cell ci, with their foot points */
         auto members = [&](uint32_t ci, auto &&visit) {
@@ -751,7 +776,7 @@ fm_status compare(const fm_vdb *sv, const fm_vdb *dv, const fm_vdb_compare_optio
             double c[3];
             world_of(s, m.cells[ci].origin, c);
             for (int k = 0; k < 3; k++) c[k] += 0.5 * s.h * (LEAF_DIM - 1);
-            openvdb::Vec3d at;
+            openvdb::Vec3d at(0.0);
             if (!std::isfinite(surface->nearest(c, &at))) continue;
             double b = 0;
             members(ci, [&](uint32_t, const double q[3]) {
@@ -768,7 +793,7 @@ fm_status compare(const fm_vdb *sv, const fm_vdb *dv, const fm_vdb_compare_optio
             double c[3];
             world_of(s, m.cells[bc.second].origin, c);
             for (int k = 0; k < 3; k++) c[k] += 0.5 * s.h * (LEAF_DIM - 1);
-            openvdb::Vec3d at;
+            openvdb::Vec3d at(0.0);
             surface->nearest(c, &at);
             struct Foot {
                 double bound;
