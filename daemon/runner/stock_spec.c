@@ -115,7 +115,8 @@ double fm_stock_spec_projected_area(const fm_stock_spec *s)
  * normalized, f / sqrt(f^2 + |grad f|^2) (Shapiro eq. 4.9), with the
  * gradient from forward differences of batch evaluations (three more
  * points a step of 1e-6 of the coordinates' size away; one forward-mode
- * gradient per point costs ten times as much), on the model's tape
+ * gradient per point costs ten times as much; where that gradient is
+ * short, at exact min/max ties, backward differences too), on the model's tape
  * shortened to the points' box (the min/max branches of features far
  * away dropped). The value is then cut by the distance to the model's
  * bounding box, as fm_field asks.
@@ -193,16 +194,18 @@ static void model_batch(void *ctx, void *worker, size_t n, const double *x, cons
                 if (p[k] > box[k].hi) box[k].hi = p[k];
             }
         }
-        /* the neighbours lie a step above */
-        for (int k = 0; k < 3; k++) box[k].hi += 2e-6 * (1 + fabs(box[k].hi));
+        /* the neighbours lie a step above (and, for the points below, a
+         * step below) */
+        for (int k = 0; k < 3; k++) {
+            box[k].hi += 2e-6 * (1 + fabs(box[k].hi));
+            box[k].lo -= 2e-6 * (1 + fabs(box[k].lo));
+        }
         fm_interval range;
         fm_tape *shorter = fm_eval_interval_shorten(w->ev, box, &range);
         if (shorter) fm_evaluator_use(w->ev, shorter);
         fm_eval_batch(w->ev, 4 * m, w->x, w->y, w->z, NULL, w->f);
-        if (shorter) {
-            fm_evaluator_use(w->ev, NULL);
-            fm_tape_free(shorter);
-        }
+        double value[MODEL_CHUNK], grad[3][MODEL_CHUNK];
+        size_t flat[MODEL_CHUNK], nflat = 0;
         for (size_t i = 0; i < m; i++) {
             const double f = w->f[i];
             double g2 = 0;
@@ -210,9 +213,52 @@ static void model_batch(void *ctx, void *worker, size_t n, const double *x, cons
                 const size_t j = (1 + (size_t)k) * m + i;
                 const double step = k == 0 ? w->x[j] - w->x[i] : k == 1 ? w->y[j] - w->y[i]
                                                                         : w->z[j] - w->z[i];
-                const double d = (w->f[j] - f) / step;
-                g2 += d * d;
+                grad[k][i] = (w->f[j] - f) / step;
+                g2 += grad[k][i] * grad[k][i];
             }
+            value[i] = f;
+            /* Where a min or max ties exactly (a box's edge with its faces
+             * half a voxel off the grid puts voxel centres on the ties), every
+             * forward difference can follow the branch that does not change:
+             * a gradient of 0 would make the value +-1 and the box distance
+             * would take over. Such points (and any whose gradient is short
+             * of a distance's 1) get backward differences as well, and each
+             * axis the larger of the two: a gradient no shorter than a
+             * one-sided one, so the value stays a lower bound of a distance. */
+            if (g2 < 0.81) flat[nflat++] = i;
+        }
+        if (nflat > 0) {
+            for (size_t a = 0; a < nflat; a++) {
+                const size_t i = flat[a];
+                const double p[3] = {x[start + i], y[start + i], z[start + i]};
+                for (int k = 0; k < 3; k++) {
+                    double q[3] = {p[0], p[1], p[2]};
+                    q[k] -= 1e-6 * (1 + fabs(p[k]));
+                    w->x[k * nflat + a] = q[0];
+                    w->y[k * nflat + a] = q[1];
+                    w->z[k * nflat + a] = q[2];
+                }
+            }
+            fm_eval_batch(w->ev, 3 * nflat, w->x, w->y, w->z, NULL, w->f);
+            for (size_t a = 0; a < nflat; a++) {
+                const size_t i = flat[a];
+                const double p[3] = {x[start + i], y[start + i], z[start + i]};
+                for (int k = 0; k < 3; k++) {
+                    const size_t j = (size_t)k * nflat + a;
+                    const double q = k == 0 ? w->x[j] : k == 1 ? w->y[j] : w->z[j];
+                    const double back = (value[i] - w->f[j]) / (p[k] - q);
+                    if (fabs(back) > fabs(grad[k][i])) grad[k][i] = back;
+                }
+            }
+        }
+        if (shorter) {
+            fm_evaluator_use(w->ev, NULL);
+            fm_tape_free(shorter);
+        }
+        for (size_t i = 0; i < m; i++) {
+            const double f = value[i];
+            const double g2 =
+                grad[0][i] * grad[0][i] + grad[1][i] * grad[1][i] + grad[2][i] * grad[2][i];
             const double v = f / sqrt(f * f + g2);
             const double p[3] = {x[start + i], y[start + i], z[start + i]};
             const double b = model_box_distance(&mf->field, p);
