@@ -4,7 +4,9 @@
 #  1. runs `frepmill simulate` on the bundled demo (deploy/demo: a pocket,
 #     contour, circular pocket, holes and chamfer program for three tools in
 #     a 100x60x30 mm block) at 0.1 mm and leaves the stock as .drc, .stl,
-#     .vdb, a picture (.png) and a JSON report in demo-output/;
+#     .vdb, a picture (.png) and a JSON report in demo-output/, then again
+#     compared with the part it is meant to make (deploy/demo/part.hf): a
+#     picture coloured by deviation and the report's "design" figures;
 #  2. starts the daemon, frepmilld, with the same demo job submitted and
 #     prints the viewer's URL. On a terminal it runs until you stop it
 #     (Ctrl-C); without one (scripts, CI) it stops once the demo job is done,
@@ -32,6 +34,13 @@ echo "== frepmill simulate: deploy/demo/pocket.ngc at 0.1 mm"
     --out "$out/pocket.drc" --out "$out/pocket.stl" --out "$out/pocket.vdb" \
     --png "$out/pocket.png" --report "$out/report.json"
 echo "demo: outputs in $out/: pocket.drc pocket.stl pocket.vdb pocket.png report.json"
+
+echo "== frepmill simulate: the same job compared with the part it is meant to make (deploy/demo/part.hf)"
+"$frepmill" simulate deploy/demo/pocket.ngc --stock box:0,0,-30,100,60,0 \
+    --tools deploy/demo/tools.json --voxel 0.1 --design deploy/demo/part.hf --color deviation \
+    --png "$out/pocket-deviation.png" --report "$out/deviation.json"
+echo "demo: deviation picture $out/pocket-deviation.png (green within 0.05 mm, red gouge, blue excess)," \
+    "figures in $out/deviation.json"
 
 if [ ! -x "$frepmilld" ]; then
     exit 0
