@@ -235,6 +235,67 @@ static void test_u_and_axis(void)
     CHECK_NEAR(got[0].t1, 4, 0);
 }
 
+/* Axis components far above 1e154, where their squares overflow: the axis
+ * is still (0, 0, 1), and pose_bounds still hold it with lo <= hi (fuzz_traj
+ * once found the z bound [0.99999999999999, 1e-14]; the document is kept
+ * as tests/traj/corpus/regress_axis_overflow.json). An axis of 1e200 mm
+ * normalizes like any other; one of 5e-200 (squares that vanish) is refused
+ * as shorter than TRAJ_MIN_AXIS, as it should be. */
+static int huge_checked;
+
+static void check_huge_axis(const fm_motion *m)
+{
+    const fm_path *p = m->path;
+    for (int k = 0; k < 8; k++) {
+        double ta = m->t0 + (m->t1 - m->t0) * k / 8, tb = m->t0 + (m->t1 - m->t0) * (k + 1) / 8;
+        double lo[3], hi[3], alo[3], ahi[3];
+        p->pose_bounds(p->ctx, ta, tb, lo, hi, alo, ahi);
+        for (int i = 0; i < 3; i++) CHECK(alo[i] <= ahi[i]);
+        for (int j = 0; j <= 4; j++) {
+            double pos[3], ax[3];
+            p->pose(p->ctx, ta + (tb - ta) * j / 4, pos, ax);
+            CHECK_NEAR(ax[0], 0, 1e-15);
+            CHECK_NEAR(ax[1], 0, 1e-15);
+            CHECK_NEAR(ax[2], 1, 1e-15);
+            for (int i = 0; i < 3; i++) CHECK(ax[i] >= alo[i] && ax[i] <= ahi[i]);
+        }
+        CHECK(ahi[2] == 1 && alo[2] > 0.99);
+    }
+    huge_checked++;
+}
+
+static void check_scaled_axis(const fm_motion *m)
+{
+    double pos[3], ax[3];
+    m->path->pose(m->path->ctx, 0.5 * (m->t0 + m->t1), pos, ax);
+    CHECK_NEAR(ax[0], 0.6, 1e-15); /* (3, 4, 0) scaled by 1e200 or 1e-200 */
+    CHECK_NEAR(ax[1], 0.8, 1e-15);
+    CHECK_NEAR(ax[2], 0, 0);
+    double lo[3], hi[3], alo[3], ahi[3];
+    m->path->pose_bounds(m->path->ctx, m->t0, m->t1, lo, hi, alo, ahi);
+    CHECK(alo[0] <= 0.6 && ahi[0] >= 0.6 && ahi[0] - alo[0] < 1e-12);
+    CHECK(alo[1] <= 0.8 && ahi[1] >= 0.8 && ahi[1] - alo[1] < 1e-12);
+    huge_checked++;
+}
+
+static void test_axis_overflow(void)
+{
+    const char *doc = "{\"segments\":[{\"t\":[4,5],\"x\":1,\"y\":0,\"z\":3,"
+                      "\"axis\":[\"(0)\",\"0\",\"exp(620*u)\"]}]}";
+    CHECK(strlen(doc) == 76);
+    fm_error err;
+    huge_checked = 0;
+    in_sink = check_huge_axis;
+    CHECK(run(doc, NULL, &err) == FM_OK);
+    in_sink = check_scaled_axis;
+    CHECK(run("{\"segments\":[{\"t\":[0,1],\"x\":\"t\",\"y\":0,\"z\":0,"
+              "\"axis\":[\"3e200+0*t\",\"4e200\",0]}]}", NULL, &err) == FM_OK);
+    CHECK(run("{\"segments\":[{\"t\":[0,1],\"x\":\"t\",\"y\":0,\"z\":0,"
+              "\"axis\":[\"3e-200+0*t\",\"4e-200\",0]}]}", NULL, &err) == FM_ERR_INPUT);
+    in_sink = NULL;
+    CHECK(huge_checked == 2);
+}
+
 static void check_inch(const fm_motion *m)
 {
     if (m->block != 0) return;
@@ -538,6 +599,7 @@ int main(void)
     test_helix();
     test_threads();
     test_u_and_axis();
+    test_axis_overflow();
     test_inch();
     test_rapid();
     test_stop();

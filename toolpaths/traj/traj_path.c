@@ -90,11 +90,19 @@ static double clamp(double x, double lo, double hi)
     return x < lo ? lo : x > hi ? hi : x;
 }
 
+/* The axis is normalized with hypot, which scales before squaring: the
+ * squares of components above about 1.3e154 overflow to infinity (and below
+ * 1e-154 vanish), which made the axis 0 where its direction is plain. */
+static double norm3(double x, double y, double z)
+{
+    return hypot(hypot(x, y), z);
+}
+
 static void finish_pose(const traj_seg *s, const double v[TRAJ_COMPONENTS], double pos[3],
                         double axis[3])
 {
     for (int i = 0; i < 3; i++) pos[i] = v[i] * s->scale;
-    double n = sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
+    double n = norm3(v[3], v[4], v[5]);
     for (int i = 0; i < 3; i++) axis[i] = clamp(v[3 + i] / n, -1, 1);
 }
 
@@ -113,14 +121,17 @@ static void path_pose(void *ctx, double t, double pos[3], double axis[3])
     traj_seg_pose_doc(s, t - s->shift, pos, axis);
 }
 
-/* Bounds of a / sqrt(a^2 + r2) with a in [alo, ahi], r2 in [r2lo, r2hi]:
- * it grows with a, and for a >= 0 (a < 0) shrinks (grows) with r2. 0/0 and
- * inf/inf only arise when the box reaches the origin or infinity; then the
- * whole [-1, 1] is the honest answer. */
-static void unit_bounds(double alo, double ahi, double r2lo, double r2hi, double *lo, double *hi)
+/* Bounds of a / hypot(a, r) with a in [alo, ahi], r in [rlo, rhi] (r >= 0,
+ * the length of the other two components): it grows with a, and for a >= 0
+ * (a < 0) shrinks (grows) with r. hypot, not the square root of squares,
+ * whose overflow above 1.3e154 once gave an upper end of 0 below the lower
+ * (tests/traj/corpus/regress_axis_overflow.json). 0/0 and inf/inf only arise
+ * when the box reaches the origin or infinity; then the whole [-1, 1] is the
+ * honest answer. */
+static void unit_bounds(double alo, double ahi, double rlo, double rhi, double *lo, double *hi)
 {
-    double l = alo / sqrt(alo * alo + (alo >= 0 ? r2hi : r2lo));
-    double h = ahi / sqrt(ahi * ahi + (ahi >= 0 ? r2lo : r2hi));
+    double l = alo / hypot(alo, alo >= 0 ? rhi : rlo);
+    double h = ahi / hypot(ahi, ahi >= 0 ? rlo : rhi);
     /* A few ulps of rounding in here and in finish_pose's division. */
     *lo = isnan(l) ? -1 : clamp(l - 1e-14, -1, 1);
     *hi = isnan(h) ? 1 : clamp(h + 1e-14, -1, 1);
@@ -142,7 +153,8 @@ static void path_pose_bounds(void *ctx, double ta, double tb, double pos_lo[3], 
         pos_lo[i] = isnan(lo) ? -INFINITY : s->scale == 1 ? lo : dn(lo);
         pos_hi[i] = isnan(hi) ? INFINITY : s->scale == 1 ? hi : up(hi);
     }
-    double sqlo[3], sqhi[3];
+    /* The range of each component's magnitude. */
+    double mlo[3], mhi[3];
     for (int i = 0; i < 3; i++) {
         double lo = r[3 + i].lo, hi = r[3 + i].hi;
         if (isnan(lo) || isnan(hi)) {
@@ -151,15 +163,16 @@ static void path_pose_bounds(void *ctx, double ta, double tb, double pos_lo[3], 
             r[3 + i].lo = lo;
             r[3 + i].hi = hi;
         }
-        sqhi[i] = fmax(lo * lo, hi * hi);
-        sqlo[i] = lo <= 0 && hi >= 0 ? 0 : fmin(lo * lo, hi * hi);
+        mhi[i] = fmax(fabs(lo), fabs(hi));
+        mlo[i] = lo <= 0 && hi >= 0 ? 0 : fmin(fabs(lo), fabs(hi));
     }
     for (int i = 0; i < 3; i++) {
         int j = (i + 1) % 3, k = (i + 2) % 3;
-        /* Rounding the sums down and up keeps the r2 range outward. */
-        unit_bounds(r[3 + i].lo, r[3 + i].hi, dn(sqlo[j] + sqlo[k]), up(sqhi[j] + sqhi[k]),
+        /* Rounding the lengths down and up keeps the r range outward. */
+        double rlo = hypot(mlo[j], mlo[k]);
+        unit_bounds(r[3 + i].lo, r[3 + i].hi, rlo > 0 ? dn(rlo) : 0, up(hypot(mhi[j], mhi[k])),
                     &axis_lo[i], &axis_hi[i]);
-        if (axis_lo[i] > 0 && sqlo[j] + sqlo[k] == 0) axis_lo[i] = dn(axis_lo[i]);
+        if (axis_lo[i] > 0 && rlo == 0) axis_lo[i] = dn(axis_lo[i]);
     }
 }
 
@@ -186,12 +199,9 @@ static int piece_fails(const fm_interval r[TRAJ_COMPONENTS])
 {
     for (int i = 0; i < TRAJ_COMPONENTS; i++)
         if (!isfinite(r[i].lo) || !isfinite(r[i].hi)) return i + 1;
-    double d2 = 0;
-    for (int i = 3; i < 6; i++) {
-        double g = r[i].lo > 0 ? r[i].lo : r[i].hi < 0 ? -r[i].hi : 0;
-        d2 += g * g;
-    }
-    return d2 >= TRAJ_MIN_AXIS * TRAJ_MIN_AXIS ? 0 : 7;
+    double g[3];
+    for (int i = 3; i < 6; i++) g[i - 3] = r[i].lo > 0 ? r[i].lo : r[i].hi < 0 ? -r[i].hi : 0;
+    return norm3(g[0], g[1], g[2]) >= TRAJ_MIN_AXIS ? 0 : 7;
 }
 
 /* Interval bisection: pieces narrower than this that still fail are real
@@ -218,10 +228,10 @@ int traj_seg_check(traj_seg *s, int samples, double *t_bad, double *value, int *
                 *value = v[i];
             }
         }
-        if (!bad && sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5]) < TRAJ_MIN_AXIS) {
+        if (!bad && norm3(v[3], v[4], v[5]) < TRAJ_MIN_AXIS) {
             bad = 7;
             *t_bad = t;
-            *value = sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
+            *value = norm3(v[3], v[4], v[5]);
         }
     }
     /* Depth-first bisection with an explicit stack (depth <= CHECK_DEPTH). */
