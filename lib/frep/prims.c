@@ -33,11 +33,19 @@ static fm_node dot_from(fm_graph *g, const double e[3], const double o[3])
     return sum;
 }
 
+/* The length of a direction by hypot, which scales before squaring: the sum
+ * of squares overflows above 1.3e154 and vanishes below 1e-154, which
+ * refused directions like (1e200, 0, 0) or (1e-200, 0, 0). */
+static double length3(const double a[3])
+{
+    return hypot(hypot(a[0], a[1]), a[2]);
+}
+
 /* Unit axis from a direction; 0 if it has no length. */
 static int unit_axis(const double axis[3], double u[3])
 {
     if (!finite3(axis)) return 0;
-    double len = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    double len = length3(axis);
     if (!(len > 0.0) || !isfinite(len)) return 0;
     for (int i = 0; i < 3; i++) u[i] = axis[i] / len;
     return 1;
@@ -76,7 +84,7 @@ fm_node fm_halfspace(fm_graph *g, const double n[3], double d)
     if (!unit_axis(n, u) || !isfinite(d))
         return fm_graph_fail(g, FM_ERR_INPUT,
                              "half-space: the normal must be finite and non-zero, d finite");
-    double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    double len = length3(n);
     double origin[3] = {0.0, 0.0, 0.0};
     return fm_sub(g, k(g, d / len), dot_from(g, u, origin));
 }

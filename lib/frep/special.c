@@ -247,11 +247,24 @@ static double tape_point(void *ctx, const double q[4])
 
 /* --------------------------------------------------- gradient users -- */
 
+/* Lengths by hypot, which scales before squaring: the sum of squares
+ * overflows above 1.3e154 (a gradient of 1e200 had no direction; a value of
+ * 1e200 normalized to 0 instead of 1) and vanishes below 1e-154. */
+static double norm3(double a, double b, double c)
+{
+    return hypot(hypot(a, b), c);
+}
+
+static double normalize_value(double v, const double g[3])
+{
+    return v / hypot(hypot(v, g[0]), hypot(g[1], g[2]));
+}
+
 static double normal_offset_point(fm_evaluator *sub, const double p[4], double d)
 {
     double g[4];
     double v = fm_eval_grad(sub, p, g);
-    double n = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    double n = norm3(g[0], g[1], g[2]);
     if (!(n > 0) || !isfinite(n)) return v; /* no direction: the value in place */
     double q[4] = {p[0] + d * g[0] / n, p[1] + d * g[1] / n, p[2] + d * g[2] / n, p[3]};
     return fm_eval_point(sub, q);
@@ -261,7 +274,7 @@ static double normalize_point(fm_evaluator *sub, const double p[4])
 {
     double g[4];
     double v = fm_eval_grad(sub, p, g);
-    return v / sqrt(v * v + g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    return normalize_value(v, g);
 }
 
 /* --------------------------------------------------------- dispatch -- */
@@ -478,7 +491,7 @@ double fm_reference_special(const fm_graph *g, fm_node n, const double p[4])
     case FM_OP_NORMAL_OFFSET: {
         double gr[3], v = ref_point(&c, p);
         ref_grad(&c, p, gr);
-        double len = sqrt(gr[0] * gr[0] + gr[1] * gr[1] + gr[2] * gr[2]);
+        double len = norm3(gr[0], gr[1], gr[2]);
         if (!(len > 0) || !isfinite(len)) return v;
         double q[4] = {p[0] + r->value * gr[0] / len, p[1] + r->value * gr[1] / len,
                        p[2] + r->value * gr[2] / len, p[3]};
@@ -487,7 +500,7 @@ double fm_reference_special(const fm_graph *g, fm_node n, const double p[4])
     case FM_OP_NORMALIZE: {
         double gr[3], v = ref_point(&c, p);
         ref_grad(&c, p, gr);
-        return v / sqrt(v * v + gr[0] * gr[0] + gr[1] * gr[1] + gr[2] * gr[2]);
+        return normalize_value(v, gr);
     }
     case FM_OP_VOXELS: {
         if (r->aux >= g->grid_count) return NAN;

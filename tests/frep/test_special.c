@@ -171,6 +171,40 @@ static void check_offsets_and_normalize(void)
     fm_graph_free(g);
 }
 
+/* Values and gradients beyond 1e154, whose squares overflow: f = 1e200 (x +
+ * 2) normalizes to (x + 2) / sqrt((x + 2)^2 + 1) as if the factor were 1
+ * (not to 0), its normal offset moves along x, and half-spaces with normals of length 1e200 or 1e-200 are the
+ * half-space x <= 1 (issue 22: lengths by hypot). */
+static void check_huge_normalize(void)
+{
+    fm_graph *g = fm_graph_new(0);
+    fm_node f = fm_mul(g, fm_const(g, 1e200), fm_add(g, fm_var(g, FM_X), fm_const(g, 2.0)));
+    fm_node nodes[2] = {fm_normalize(g, f), special(g, FM_OP_NORMAL_OFFSET, f, 0, 0.5, 0)};
+    for (int n = 0; n < 2; n++) {
+        fm_error err;
+        fm_tape *tp = fm_tape_compile(g, nodes[n], &err);
+        fm_evaluator *ev = fm_evaluator_new(tp, &err);
+        for (int k = 0; k < 20; k++) {
+            double p[4] = {test_uniform(-1, 3), test_uniform(-3, 3), test_uniform(-3, 3), 0};
+            /* normal offset: f at x + 0.5 (the gradient points along +x) */
+            double exact = n == 0 ? (p[0] + 2) / sqrt((p[0] + 2) * (p[0] + 2) + 1) : 1e200 * (p[0] + 2.5);
+            CHECK_NEAR(fm_eval_point(ev, p), exact, 1e-12 * fabs(exact));
+            CHECK_NEAR(fm_graph_eval_reference(g, nodes[n], p), exact, 1e-6 * fabs(exact));
+        }
+        fm_evaluator_free(ev);
+        fm_tape_free(tp);
+    }
+    for (int k = 0; k < 2; k++) {
+        double len = k ? 1e-200 : 1e200, nrm[3] = {len, 0, 0};
+        fm_node h = fm_halfspace(g, nrm, len);
+        CHECK(h != FM_NONE);
+        if (h == FM_NONE) continue;
+        double p[4] = {0.25, 7, -3, 0};
+        CHECK_NEAR(fm_graph_eval_reference(g, h, p), 0.75, 1e-15);
+    }
+    fm_graph_free(g);
+}
+
 /* A grid sampled from a linear function is reproduced exactly by trilinear
  * interpolation inside; outside, the rule of fm_voxels applies. The tape
  * agrees with the reference, and intervals are sound across the edges. */
@@ -238,6 +272,7 @@ int main(void)
     check_project_nonconcave();
     check_project_capsule();
     check_offsets_and_normalize();
+    check_huge_normalize();
     check_voxels();
     check_depth_limit();
     return test_summary("test_special");
