@@ -3,22 +3,23 @@
 # idempotently (packages already present are not touched; apt-get update
 # runs only when something is missing). Usage:
 #   deploy/install-deps.sh build   compilers and libraries to build frepmill
-#   deploy/install-deps.sh test    build + what the tests use (valgrind, rs274, mbpoll, python3,
-#                                  chromium; and the viewer's npm packages, deploy/install-viewer.sh)
-#   deploy/install-deps.sh dev     test + clang with libFuzzer for the fuzz targets
+#   deploy/install-deps.sh test    build + everything the tests use: valgrind, rs274, mbpoll,
+#                                  python3, chromium, clang with libFuzzer (the sanitizer and fuzz
+#                                  runs of deploy/test.sh), and from npm the viewer's packages
+#                                  (deploy/install-viewer.sh --dev) and the Node Modbus client of the
+#                                  Modbus tests (tests/modbus/node_modules): no test downloads
+#   deploy/install-deps.sh dev     the same as test
 set -eu
 
 group=${1:-build}
 
 build_pkgs="build-essential cmake pkg-config libopenvdb-dev libboost-iostreams-dev libtbb-dev libhiredis-dev \
 libblosc-dev libdraco-dev libmodbus-dev libmicrohttpd-dev libjansson-dev libstb-dev curl"
-test_pkgs="valgrind python3 linuxcnc-uspace mbpoll draco curl chromium redis-server"
-dev_pkgs="clang libclang-rt-14-dev"
+test_pkgs="valgrind python3 linuxcnc-uspace mbpoll draco curl chromium redis-server clang libclang-rt-14-dev"
 
 case "$group" in
 build) pkgs=$build_pkgs ;;
-test) pkgs="$build_pkgs $test_pkgs" ;;
-dev) pkgs="$build_pkgs $test_pkgs $dev_pkgs" ;;
+test | dev) pkgs="$build_pkgs $test_pkgs" ;;
 *) echo "install-deps.sh: unknown group '$group' (build, test or dev)" >&2; exit 2 ;;
 esac
 
@@ -35,13 +36,40 @@ if ! command -v npm >/dev/null 2>&1; then
     missing="$missing nodejs npm"
 fi
 
-# The viewer's three.js and the browser test's playwright-core, from npm
-# (idempotent); without npm the browser test skips.
+# From npm (idempotent: nothing is done when node_modules matches the lock
+# file): the viewer's three.js and the browser test's playwright-core, and
+# the Node Modbus client (modbus-serial) of tests/modbus and tests/daemon.
+# Tests never download; without these they skip, and under CI=true (where no
+# test may skip) a failed install stops here.
+npm_test_deps() {
+    here=$(cd "$(dirname "$0")" && pwd)
+    "$here/install-viewer.sh" --dev || return 1
+    cd "$here/../tests/modbus"
+    lock_sum=$(sha256sum package-lock.json | cut -d' ' -f1)
+    stamp=node_modules/.frepmill-installed
+    if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$lock_sum" ] &&
+        [ -f node_modules/modbus-serial/package.json ]; then
+        return 0
+    fi
+    echo "install-deps.sh: npm ci in tests/modbus" >&2
+    # Exactly the locked versions; serialport (optional) and install scripts
+    # are not needed for Modbus/TCP.
+    npm ci --omit=optional --ignore-scripts --no-audit --no-fund || return 1
+    echo "$lock_sum" >"$stamp"
+}
+
 viewer_deps() {
     case "$group" in
     test | dev)
-        "$(dirname "$0")/install-viewer.sh" --dev ||
-            echo "install-deps.sh: viewer/node_modules not installed; tests/viewer will skip" >&2
+        if ! (npm_test_deps); then
+            case "${CI:-}" in
+            [Tt][Rr][Uu][Ee] | 1)
+                echo "install-deps.sh: the npm packages the tests need could not be installed" >&2
+                exit 1
+                ;;
+            esac
+            echo "install-deps.sh: npm packages not installed; tests/viewer and the Node Modbus tests will skip" >&2
+        fi
         ;;
     esac
 }

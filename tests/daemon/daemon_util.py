@@ -8,9 +8,12 @@ import signal
 import socket
 import struct
 import subprocess
+import sys
 import time
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+sys.path.insert(0, os.path.join(ROOT, "tests", "support"))
+from fm_skip import skip  # noqa: E402  (re-exported: the tests' skip rule)
 DEMO = os.path.join(ROOT, "deploy", "demo")
 DEMO_STOCK = "box:0,0,-30,100,60,0"
 

@@ -15,7 +15,7 @@ import time
 import urllib.request
 
 from daemon_util import Daemon, check, curl_json, modbus_port
-from test_live import client, node_ready
+from test_live import client, need_node_client
 
 STOCK = "box:0,0,-20,60,60,0"
 TOOLS = {"units": "mm", "tools": [{"number": 1, "shape": "flat", "diameter": 6,
@@ -50,9 +50,7 @@ def events(url, job_id, until, timeout=5):
 
 def main():
     frepmilld, frepmill = sys.argv[1], sys.argv[2]
-    if not node_ready():
-        print("node, npm or modbus-serial not available: skipped")
-        sys.exit(77)
+    need_node_client()
     with tempfile.TemporaryDirectory(prefix="fm-live-check-") as tmp:
         t0 = time.time()
         tools = os.path.join(tmp, "tools.json")

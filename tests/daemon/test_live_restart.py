@@ -15,7 +15,7 @@ import tempfile
 import time
 
 from daemon_util import Daemon, check, curl_json, modbus_port
-from test_live import client, gcode_of, node_ready
+from test_live import client, gcode_of, need_node_client
 
 STOCK = "box:0,0,-10,60,60,0"
 VOXEL = 0.25
@@ -46,9 +46,7 @@ def wait_moves(d, job_id, moves, timeout=60):
 
 def main():
     frepmilld, frepmill = sys.argv[1], sys.argv[2]
-    if not node_ready():
-        print("node, npm or modbus-serial not available: skipped")
-        sys.exit(77)
+    need_node_client()
     with tempfile.TemporaryDirectory(prefix="fm-live-restart-") as tmp:
         t0 = time.time()
         tools = os.path.join(tmp, "tools.json")

@@ -1,7 +1,7 @@
 /* test_mesh_draco_cli.c: our Draco files open in Debian's draco_decoder (a
  * separate program, not our bridge): it decodes a .drc we wrote to OBJ, and
  * the OBJ (parsed here) has our triangle count and every vertex within the
- * quantization bound of one of ours. Skips (77) without the tool. */
+ * quantization bound of one of ours. Skips without the tool (test_skip). */
 #include "fixtures.h"
 #include "test.h"
 
@@ -12,10 +12,8 @@
 
 int main(void)
 {
-    if (access(DECODER, X_OK) != 0) {
-        printf("mesh_draco_cli: %s not installed, skipped\n", DECODER);
-        return 77;
-    }
+    if (access(DECODER, X_OK) != 0)
+        return test_skip("mesh_draco_cli: " DECODER " is not installed (Debian package draco)");
     const double c[3] = {3, 4, -5};
     fm_mesh *m = fixture_sphere(c, 12, 16, 32);
     char drc[96], obj[96], cmd[400];

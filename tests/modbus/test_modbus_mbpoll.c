@@ -3,7 +3,7 @@
  * 20 ms: the status block as input and holding registers, the block number
  * advancing and the heartbeat ticking between two polls, float32 and uint32
  * in both word orders (mbpoll -B is ABCD, its default CDAB), and a write
- * refused when commands are disabled. Skips (77) without mbpoll. */
+ * refused when commands are disabled. Skips without mbpoll (test_skip). */
 #include "modbus/modbus_test_util.h"
 #include "test.h"
 
@@ -95,10 +95,8 @@ static void check_floats(const poll_result *p)
 
 int main(void)
 {
-    if (!mt_have_program("mbpoll")) {
-        printf("mbpoll not found: skipped\n");
-        return 77;
-    }
+    if (!mt_have_program("mbpoll"))
+        return test_skip("modbus_mbpoll: mbpoll is not installed (Debian package mbpoll)");
     mt_service svc;
     mt_service_init(&svc);
     svc.status.first_finding_line = 3 * 65536 + 2; /* distinct words: order shows */

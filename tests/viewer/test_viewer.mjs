@@ -6,7 +6,8 @@
 // its end, then asserts from the page that the mesh shown has the triangle
 // count the daemon reports and that the picture is not blank. The canvas
 // screenshot is saved as ARTIFACT_DIR/viewer_screenshot.png (default /tmp).
-// Exit 0 pass, 1 fail, 77 skipped (no chromium or no viewer/node_modules).
+// Exit 0 pass, 1 fail, 77 skipped (no chromium or no viewer/node_modules) -
+// but 1 under CI=true, where no test may skip (tests/README.md).
 import { spawn } from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
@@ -23,7 +24,11 @@ const daemonBin = process.argv[2];
 const artifactDir = process.argv[3] || os.tmpdir();
 
 function skip(why) {
-  console.log(`skipped: ${why}`);
+  if (['true', '1'].includes((process.env.CI || '').toLowerCase())) {
+    console.error(`FAILED: ${why} (CI=true: a test may not skip; deploy/install-deps.sh test installs what tests need)`);
+    process.exit(1);
+  }
+  console.log(`SKIPPED: ${why}`);
   process.exit(77);
 }
 function ok(cond, message) {
