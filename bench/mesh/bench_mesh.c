@@ -47,8 +47,6 @@ static double cut_f(const cut *c, double x, double y, double z)
     return -(hypot(fmax(dr, 0), fmax(dz, 0)) + fmin(fmax(dr, dz), 0));
 }
 
-static void *no_worker(void *ctx) { (void)ctx; return NULL; }
-static void no_worker_free(void *ctx, void *w) { (void)ctx; (void)w; }
 static void cut_batch(void *ctx, void *w, size_t n, const double *x, const double *y,
                       const double *z, double *out)
 {
@@ -78,8 +76,8 @@ static fm_field cut_field(cut *c)
         f.lo[k] = c->ball || k == 2 ? lo - (c->ball ? c->r : 0) : c->a[k] - c->r;
         f.hi[k] = c->ball || k == 2 ? hi + (c->ball ? c->r : 0) : c->a[k] + c->r;
     }
-    f.worker_new = no_worker;
-    f.worker_free = no_worker_free;
+    f.worker_new = NULL; /* no per-thread state (frep.h) */
+    f.worker_free = NULL;
     f.batch = cut_batch;
     f.interval = cut_interval;
     return f;

@@ -317,7 +317,10 @@ fm_status fm_find_inside_bounds(fm_evaluator *ev, const fm_interval box[3], doub
 /* A 3D scalar field as lib/stock consumes it: positive inside, first-order
  * distance near the surface, and negative outside [lo, hi] by at least the
  * distance to that box. Callbacks may run on several threads at once, each
- * thread with its own worker state made by worker_new. */
+ * thread with its own worker state made by worker_new. A field without
+ * per-thread state leaves worker_new (and worker_free) NULL and its
+ * callbacks get a NULL worker; worker_new returning NULL means it could not
+ * allocate, and the consumer fails with out of memory. */
 typedef struct fm_field {
     void *ctx;
     double lo[3], hi[3];

@@ -1186,8 +1186,13 @@ fm_node fm_hf_parse_expression(fm_graph *g, const char *text, const char *const 
     /* Intern the variable names first so that the frame has their slots. */
     for (size_t i = 0; i < n_vars; i++) {
         size_t len = var_names[i] ? strlen(var_names[i]) : 0;
-        if (len == 0 || len >= FM_HF_NAME_MAX || !fm_hf_intern(&p, var_names[i], len)) {
+        if (len == 0 || len >= FM_HF_NAME_MAX) {
             fm_error_set(err, FM_ERR_INPUT, "bad variable name #%zu for the expression", i + 1);
+            fm_hf_program_free(&p);
+            return FM_NONE;
+        }
+        if (!fm_hf_intern(&p, var_names[i], len)) {
+            fm_error_set(err, FM_ERR_LIMIT, "out of memory for the expression's variable names");
             fm_hf_program_free(&p);
             return FM_NONE;
         }

@@ -38,7 +38,13 @@ public:
     void *local()
     {
         void *&w = ets_.local();
-        if (!w && f_->worker_new) w = f_->worker_new(f_->ctx);
+        if (!w && f_->worker_new) {
+            /* worker_new returns NULL only when it cannot allocate (frep.h;
+             * a stateless field has no worker_new): the callbacks need
+             * their state (tests/alloc found the crash). */
+            w = f_->worker_new(f_->ctx);
+            if (!w) throw std::bad_alloc();
+        }
         return w;
     }
 

@@ -39,8 +39,6 @@ static double sph_f(const sph *s, double x, double y, double z)
     return s->r - sqrt(pow(x - s->c[0], 2) + pow(y - s->c[1], 2) + pow(z - s->c[2], 2));
 }
 
-static void *no_worker(void *ctx) { (void)ctx; return NULL; }
-static void no_worker_free(void *ctx, void *w) { (void)ctx; (void)w; }
 
 static void cyl_batch(void *ctx, void *w, size_t n, const double *x, const double *y,
                       const double *z, double *out)
@@ -92,8 +90,8 @@ static fm_field cyl_field(cyl *c)
     f.ctx = c;
     f.lo[0] = c->cx - c->r, f.lo[1] = c->cy - c->r, f.lo[2] = c->z0;
     f.hi[0] = c->cx + c->r, f.hi[1] = c->cy + c->r, f.hi[2] = c->z1;
-    f.worker_new = no_worker;
-    f.worker_free = no_worker_free;
+    f.worker_new = NULL; /* no per-thread state (frep.h) */
+    f.worker_free = NULL;
     f.batch = cyl_batch;
     f.interval = cyl_interval;
     return f;
@@ -495,8 +493,8 @@ static void test_field_sphere(void)
         f.lo[k] = sp.c[k] - sp.r;
         f.hi[k] = sp.c[k] + sp.r;
     }
-    f.worker_new = no_worker;
-    f.worker_free = no_worker_free;
+    f.worker_new = NULL; /* no per-thread state (frep.h) */
+    f.worker_free = NULL;
     f.batch = sph_batch;
     f.interval = sph_interval;
     const double voxel = 0.1;
