@@ -1,20 +1,97 @@
 #!/bin/sh
-# test.sh: the README's test command. Installs what the tests need, builds
-# frepmill twice (optimized, and with AddressSanitizer + UBSan) and runs
-# every test: all of them in the optimized build (with valgrind runs of the
-# kernel tests), the unit tests again under the sanitizers.
+# test.sh: the README's test command (and CI's: .ci/run). Installs what the
+# tests need, then builds frepmill twice and runs every test:
+#   1. an optimized GCC build: every test (unit, integration, valgrind runs);
+#   2. one clang build with AddressSanitizer + UBSan and libFuzzer's coverage
+#      (-DFM_SANITIZE=ON -DFM_FUZZ=ON): the unit and integration tests again
+#      under the sanitizers, then each fuzz target for FM_FUZZ_SECONDS (60)
+#      from its seed corpus, two at a time.
+# With CI=true no test may skip: tests that miss a tool fail themselves, and
+# any test ctest still reports as skipped fails the run here.
+# FM_TEST_STEPS (default "release sanitize fuzz") runs a part of it.
 set -eu
 cd "$(dirname "$0")/.."
 
 deploy/install-deps.sh test
 
 jobs=$(nproc 2>/dev/null || echo 2)
+steps=${FM_TEST_STEPS:-release sanitize fuzz}
+in_ci=0
+case "${CI:-}" in
+[Tt][Rr][Uu][Ee] | 1) in_ci=1 ;;
+esac
 
-cmake -S . -B build/release -DCMAKE_BUILD_TYPE=RelWithDebInfo
-cmake --build build/release -j "$jobs"
-ctest --test-dir build/release --output-on-failure -j "$jobs"
+step_start=0
+step() {
+    step_start=$(date +%s)
+    echo "=== test.sh: $* ($(date '+%H:%M:%S'), load $(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo '?'))"
+}
+step_done() {
+    echo "=== test.sh: $1 took $(($(date +%s) - step_start)) s"
+}
 
-cmake -S . -B build/asan -DCMAKE_BUILD_TYPE=Debug -DFM_SANITIZE=ON -DFM_BENCH=OFF
-cmake --build build/asan -j "$jobs"
-ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-    ctest --test-dir build/asan --output-on-failure -j "$jobs" -L unit
+# run_ctest BUILD_DIR [CTEST_ARGS...]: ctest with its output kept, so that
+# under CI=true a skipped test fails the run even if it skipped by itself.
+run_ctest() {
+    dir=$1
+    shift
+    log="$dir/ctest.log"
+    rc=0
+    { ctest --test-dir "$dir" --output-on-failure -j "$jobs" "$@" || echo $? >"$log.rc"; } | tee "$log"
+    if [ -f "$log.rc" ]; then
+        rc=$(cat "$log.rc")
+        rm -f "$log.rc"
+    fi
+    if [ "$in_ci" = 1 ] && grep -q '\*\*\*Skipped\|Not Run' "$log"; then
+        echo "test.sh: CI=true and these tests did not run:" >&2
+        grep '\*\*\*Skipped\|Not Run' "$log" >&2
+        rc=1
+    fi
+    [ "$rc" = 0 ] || exit "$rc"
+}
+
+sanitize_env() {
+    ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:detect_stack_use_after_return=0
+    UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+    export ASAN_OPTIONS UBSAN_OPTIONS
+}
+
+for s in $steps; do
+    case "$s" in
+    release)
+        step "optimized build"
+        cmake -S . -B build/release -DCMAKE_BUILD_TYPE=RelWithDebInfo
+        cmake --build build/release -j "$jobs"
+        step_done "optimized build"
+        step "every test in the optimized build"
+        run_ctest build/release
+        step_done "optimized tests"
+        ;;
+    sanitize)
+        step "clang build with ASan + UBSan and the fuzz targets"
+        CC=clang CXX=clang++ cmake -S . -B build/sanitize -DCMAKE_BUILD_TYPE=Debug -DFM_SANITIZE=ON \
+            -DFM_FUZZ=ON -DFM_BENCH=OFF
+        cmake --build build/sanitize -j "$jobs"
+        step_done "sanitizer build"
+        step "unit and integration tests under ASan + UBSan"
+        sanitize_env
+        run_ctest build/sanitize -L 'unit|integration'
+        step_done "sanitizer tests"
+        ;;
+    fuzz)
+        step "each fuzz target from its corpus, two at a time"
+        [ -d build/sanitize ] || {
+            echo "test.sh: the fuzz step needs the sanitize step's build" >&2
+            exit 2
+        }
+        sanitize_env
+        run_ctest build/sanitize -L fuzz -j 2
+        step_done "fuzzing"
+        ;;
+    *)
+        echo "test.sh: unknown step '$s' (release, sanitize, fuzz)" >&2
+        exit 2
+        ;;
+    esac
+done
+echo "=== test.sh: all passed"
