@@ -4,8 +4,9 @@
 #   1. an optimized GCC build: every test (unit, integration, valgrind runs);
 #   2. one clang build with AddressSanitizer + UBSan and libFuzzer's coverage
 #      (-DFM_SANITIZE=ON -DFM_FUZZ=ON): the unit and integration tests again
-#      under the sanitizers, then each fuzz target for FM_FUZZ_SECONDS (60)
-#      from its seed corpus, two at a time.
+#      under the sanitizers (but those labelled timing: a wall-clock bound),
+#      then each fuzz target for FM_FUZZ_SECONDS (60) from its seed corpus,
+#      two at a time.
 # With CI=true no test may skip: tests that miss a tool fail themselves, and
 # any test ctest still reports as skipped fails the run here.
 # FM_TEST_STEPS (default "release sanitize fuzz") runs a part of it.
@@ -75,7 +76,7 @@ for s in $steps; do
         step_done "sanitizer build"
         step "unit and integration tests under ASan + UBSan"
         sanitize_env
-        run_ctest build/sanitize -L 'unit|integration'
+        run_ctest build/sanitize -L 'unit|integration' -LE timing
         step_done "sanitizer tests"
         ;;
     fuzz)
