@@ -121,7 +121,9 @@ def main():
             code, err = curl_json("-X", "PUT", d.url + "/v1/jobs")
             check(code == 405, "PUT /v1/jobs: 405")
             code, err = curl_json("-X", "POST", "--data-binary", "{}", d.url + "/v1/check")
-            check(code in (200, 400, 501), "POST /v1/check answers %d" % code)
+            check(code == 400 and err and err["error"]["code"] == "missing_key"
+                  and "stock" in err["error"]["message"],
+                  "POST /v1/check of {}: 400 missing_key naming the stock (%d %s)" % (code, err))
             code, err = curl_json(d.url + "/v1/jobs/%s/mesh?format=xyz" % job_id)
             check(code == 400, "unknown mesh format: 400")
 

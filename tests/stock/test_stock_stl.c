@@ -123,7 +123,6 @@ static void check_volume(const char *path, double want, double tol)
     CHECK_NEAR(v, want, tol * want);
     printf("%s: volume %.4f, exact %.4f (%+.4f%%)\n", strrchr(path, '/') + 1, v, want,
            100 * (v - want) / want);
-    /* a cut works on mesh stock like on any other */
     fm_stock_free(s);
 }
 
