@@ -3,10 +3,13 @@
 # tests need, then builds frepmill twice and runs every test:
 #   1. an optimized GCC build: every test (unit, integration, valgrind runs);
 #   2. one clang build with AddressSanitizer + UBSan and libFuzzer's coverage
-#      (-DFM_SANITIZE=ON -DFM_FUZZ=ON): the unit and integration tests again
-#      under the sanitizers (but those labelled timing: a wall-clock bound),
-#      then each fuzz target for FM_FUZZ_SECONDS (60) from its seed corpus,
-#      two at a time.
+#      (-DFM_SANITIZE=ON -DFM_FUZZ=ON), no third build: the integration tests
+#      and the unit tests again under the sanitizers, but for those labelled
+#      timing (a wall-clock bound) or heavy (unit tests with minutes of CPU
+#      there, whose code the integration tests run instrumented), then each
+#      fuzz target for FM_FUZZ_SECONDS (60) from its seed corpus, two at a
+#      time. This keeps CI=true .ci/run from a fresh clone within 25 minutes
+#      on a 2-core machine (tests/README.md).
 # With CI=true no test may skip: tests that miss a tool fail themselves, and
 # any test ctest still reports as skipped fails the run here.
 # FM_TEST_STEPS (default "release sanitize fuzz") runs a part of it.
@@ -76,7 +79,7 @@ for s in $steps; do
         step_done "sanitizer build"
         step "unit and integration tests under ASan + UBSan"
         sanitize_env
-        run_ctest build/sanitize -L 'unit|integration' -LE timing
+        run_ctest build/sanitize -L 'unit|integration' -LE 'timing|heavy'
         step_done "sanitizer tests"
         ;;
     fuzz)

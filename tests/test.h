@@ -10,6 +10,23 @@
 #include <string.h>
 #include <strings.h>
 
+/* FM_TEST_INSTRUMENTED: 1 in a build with AddressSanitizer (FM_SANITIZE or
+ * FM_FUZZ), where the code runs several times slower. A test whose cost is
+ * the size of its grid may use a coarser one there: it still asserts its
+ * figures, and the optimized build runs the fine grid. */
+#ifndef FM_TEST_INSTRUMENTED
+#if defined(__SANITIZE_ADDRESS__)
+#define FM_TEST_INSTRUMENTED 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define FM_TEST_INSTRUMENTED 1
+#endif
+#endif
+#endif
+#ifndef FM_TEST_INSTRUMENTED
+#define FM_TEST_INSTRUMENTED 0
+#endif
+
 static int fm_test_failures;
 static int fm_test_checks;
 
