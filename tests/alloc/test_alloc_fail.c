@@ -20,7 +20,7 @@
 #include "frep/frep.h"
 #include "hf/hf.h"
 #include "job.h"
-#include "protocols/http/http_server.h"
+#include "runner/job_doc.h"
 #include "server/config.h"
 #include "runner/findings_json.h"
 #include "stock/stock.h"
@@ -176,19 +176,19 @@ static char *job_text;
 
 static int run_job_json(double *summary, char *msg, size_t msg_size)
 {
-    fm_http_error err;
-    memset(&err, 0, sizeof err);
-    json_t *job = fm_http_job_parse(job_text, strlen(job_text), &err);
-    if (!job) {
-        snprintf(msg, msg_size, "%d %s: %s", err.status, err.code, err.message);
-        return 1;
-    }
+    fm_error err;
+    fm_job_doc_rules rules;
+    memset(&rules, 0, sizeof rules);
+    fm_job_doc *doc = NULL;
+    if (fm_job_doc_parse(job_text, strlen(job_text), &rules, &doc, &err) != FM_OK)
+        return fail_with(&err, msg, msg_size);
     /* The canonical form's size (json_dumpb allocates: not part of the
      * call, so measured with the failures paused). */
     alloc_fail_pause();
-    *summary = (double)json_dumpb(job, NULL, 0, JSON_COMPACT | JSON_SORT_KEYS) + 1000.0 * json_object_size(job);
+    *summary = (double)json_dumpb(doc->json, NULL, 0, JSON_COMPACT | JSON_SORT_KEYS) +
+               1000.0 * json_object_size(doc->json) + (double)doc->program_length;
     alloc_fail_resume();
-    json_decref(job);
+    fm_job_doc_free(doc);
     return 0;
 }
 
