@@ -541,6 +541,73 @@ static void check_arc_semantics(void)
     CHECK_STR_CONTAINS(err.message, "axis");
 }
 
+/* fm_sweep_bounds says its box is tight for lines and arcs: the swept volume
+ * touches each of the six faces. On each face the largest S (a 41 x 41 grid,
+ * then a pattern search from its best point) must reach 0: a box loose by d
+ * on a face leaves S < 0 on the whole face (below -1e-4 for d of a few
+ * micrometres and more). */
+static double face_max(const fm_sweep *s, fm_sweep_worker *w, const double lo[3], const double hi[3], int axis,
+                       int side)
+{
+    int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    double p[3], best[3], bv = -INFINITY;
+    p[axis] = side ? hi[axis] : lo[axis];
+    for (int i = 0; i <= 40; i++)
+        for (int j = 0; j <= 40; j++) {
+            p[u] = lo[u] + (hi[u] - lo[u]) * i / 40;
+            p[v] = lo[v] + (hi[v] - lo[v]) * j / 40;
+            double val = fm_sweep_eval(s, w, p);
+            if (val > bv) {
+                bv = val;
+                memcpy(best, p, sizeof best);
+            }
+        }
+    double step = (hi[u] - lo[u] + hi[v] - lo[v]) / 80;
+    while (step > 1e-7 && bv < 0) {
+        int moved = 0;
+        for (int d = 0; d < 4; d++) {
+            double q[3];
+            memcpy(q, best, sizeof q);
+            q[d < 2 ? u : v] += (d % 2 ? -step : step);
+            if (q[u] < lo[u] || q[u] > hi[u] || q[v] < lo[v] || q[v] > hi[v]) continue;
+            double val = fm_sweep_eval(s, w, q);
+            if (val > bv) {
+                bv = val;
+                memcpy(best, q, sizeof best);
+                moved = 1;
+            }
+        }
+        if (!moved) step /= 2;
+    }
+    return bv;
+}
+
+static void check_bounds_tight(const char *cutter, const fm_tool_part *part)
+{
+    static const int kinds[] = {SC_LINE, SC_ARC_G17, SC_ARC_G18, SC_ARC_G19};
+    for (size_t k = 0; k < sizeof kinds / sizeof kinds[0]; k++) {
+        fm_error err;
+        fm_motion m = sc_motion(kinds[k]);
+        fm_sweep *s;
+        if (fm_sweep_new(&m, part, NULL, &s, &err) != FM_OK) {
+            CHECK(0);
+            continue;
+        }
+        fm_sweep_worker *w = fm_sweep_worker_new(s);
+        double lo[3], hi[3];
+        fm_sweep_bounds(s, lo, hi);
+        for (int face = 0; face < 6; face++) {
+            double top = face_max(s, w, lo, hi, face / 2, face % 2);
+            if (top < -1e-4)
+                fprintf(stderr, "%s %s: the box's %s%c face is %.3g from the swept volume\n", cutter,
+                        sc_kind_names[kinds[k]], face % 2 ? "+" : "-", "xyz"[face / 2], -top);
+            CHECK(top >= -1e-4);
+        }
+        fm_sweep_worker_free(w);
+        fm_sweep_free(s);
+    }
+}
+
 int main(int argc, char **argv)
 {
     int npoints = argc > 1 ? atoi(argv[1]) : 9;
@@ -560,6 +627,7 @@ int main(int argc, char **argv)
         check_intervals_and_fields(&t.flutes, (c + 4) % SC_KINDS);
         check_field_many_batches(&t.flutes);
         check_batch_exact(&t.flutes);
+        check_bounds_tight(cut[c].name, &t.flutes);
         if (c == 1) {
             check_dag(&t.flutes);
             check_field_many(&t.flutes);
