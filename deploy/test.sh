@@ -8,8 +8,8 @@
 #      timing (a wall-clock bound) or heavy (unit tests with minutes of CPU
 #      there, whose code the integration tests run instrumented), then each
 #      fuzz target for FM_FUZZ_SECONDS (60) from its seed corpus, two at a
-#      time. This keeps CI=true .ci/run from a fresh clone within 25 minutes
-#      on a 2-core machine (tests/README.md).
+#      time. The goal: CI=true .ci/run from a fresh clone within 25 minutes on
+#      a 2-core machine (tests/README.md; not yet timed in this form).
 # With CI=true no test may skip: tests that miss a tool fail themselves, and
 # any test ctest still reports as skipped fails the run here.
 # FM_TEST_STEPS (default "release sanitize fuzz") runs a part of it.
