@@ -128,10 +128,16 @@ fm_design *fm_design_load_vdb(const fm_stock *stock, const char *path,
     if (!snap) return NULL;
     double snap_origin[3];
     fm_vdb_origin(snap->vdb, snap_origin);
-    /* a wider band than needed serves as well */
-    int same = fm_vdb_voxel(snap->vdb) == grid.voxel_mm &&
-               fm_vdb_band(snap->vdb) >= grid.band_voxels;
+    /* a wider band than needed serves as well; a narrower one (a job's own
+     * snapshot has the stock's band) is widened in place, not rebuilt
+     * through a mesh (79 s of CPU on 3D_Chips at 0.1 mm, bench/design) */
+    int same = fm_vdb_voxel(snap->vdb) == grid.voxel_mm;
     for (int k = 0; k < 3; k++) same = same && snap_origin[k] == origin[k];
+    if (same && fm_vdb_band(snap->vdb) < grid.band_voxels &&
+        fm_vdb_widen_band(snap->vdb, grid.band_voxels, grid.memory_budget, err) != FM_OK) {
+        fm_stock_free(snap);
+        return NULL;
+    }
     fm_vdb *v = NULL;
     if (same) {
         /* take the grid over as it is */

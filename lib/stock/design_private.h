@@ -15,6 +15,10 @@ extern "C" {
  * meshed and converted back). FM_ERR_LIMIT when the estimated grid is over
  * budget bytes. */
 fm_status fm_vdb_rebuild_onto(fm_vdb *target, const fm_vdb *source, size_t budget, fm_error *err);
+/* Widen a level set's band to band voxels in place (OpenVDB's fast sweeping,
+ * dilateSdf): a snapshot on the stock's own grid whose band is narrower than
+ * the design's. */
+fm_status fm_vdb_widen_band(fm_vdb *v, int band, size_t budget, fm_error *err);
 
 /* Both grids on one transform (same voxel and origin). tolerance in mm;
  * budget bounds the comparison's own tables; threads 0 = one per core. */

@@ -10,7 +10,9 @@
 #include "stock/design_private.h"
 #include "stock/vdb_bridge.hpp"
 
+#include <openvdb/tools/FastSweeping.h>
 #include <openvdb/tools/Interpolation.h>
+#include <openvdb/tools/LevelSetUtil.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
 #include <tbb/blocked_range.h>
@@ -839,6 +841,41 @@ fm_status fm_vdb_compare(const fm_vdb *stock, const fm_vdb *design,
 {
     return guarded(err, "comparing with the design", [&] {
         return compare(stock, design, *opt, out, err);
+    });
+}
+
+fm_status fm_vdb_widen_band(fm_vdb *v, int band, size_t budget, fm_error *err)
+{
+    return guarded(err, "widening the design's band", [&]() -> fm_status {
+        const int add = band - v->band;
+        if (add <= 0) return FM_OK;
+        /* the band's leaves grow about in proportion to its width; the
+         * sweep holds the old grid and the new one at once */
+        const double need = double(v->grid->memUsage()) * (1.0 + double(band) / double(v->band));
+        if (need > double(budget))
+            return fm_error_set(err, FM_ERR_LIMIT,
+                                "widening the design's band to %d voxels would need about %.0f MB; "
+                                "the memory budget is %.0f MB",
+                                band, need / 1048576.0, double(budget) / 1048576.0);
+        Grid::Ptr wide;
+        auto run = [&] {
+            wide = openvdb::tools::dilateSdf(*v->grid, add,
+                                             openvdb::tools::NN_FACE_EDGE_VERTEX);
+        };
+        if (v->arena)
+            v->arena->execute(run);
+        else
+            run();
+        if (!wide) return fm_error_set(err, FM_ERR_INPUT, "the design's level set could not be widened");
+        const float bg = float(double(band) * v->voxel);
+        openvdb::tools::changeLevelSetBackground(wide->tree(), bg);
+        wide->setTransform(v->grid->transform().copy());
+        wide->setGridClass(openvdb::GRID_LEVEL_SET);
+        v->grid = wide;
+        v->band = band;
+        v->background = bg;
+        v->leaves = wide->tree().leafCount();
+        return FM_OK;
     });
 }
 

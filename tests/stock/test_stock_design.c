@@ -169,6 +169,20 @@ static void test_excess(void)
         check_top_excess(s, d, "snapshot design");
         fm_design_free(d);
     }
+    /* the same grid with the stock's band 3, 2 voxels short of the
+     * design's: widened in place (fast sweeping), the same figures */
+    snap = box_stock(dlo, dhi, 3, H);
+    snprintf(path, sizeof path, "%s/narrow.vdb", dir);
+    CHECK(snap && fm_stock_save(snap, path, NULL, &err) == FM_OK);
+    fm_stock_free(snap);
+    d = fm_design_load_vdb(s, path, &o, &err);
+    CHECK(d != NULL);
+    if (!d) fprintf(stderr, "narrow vdb design: %s\n", err.message);
+    if (d) {
+        CHECK(fm_design_band_voxels(s, o.tolerance_mm) == 5);
+        check_top_excess(s, d, "widened snapshot design");
+        fm_design_free(d);
+    }
     fm_stock_options so;
     fm_stock_options_default(&so);
     so.voxel_mm = 0.05;
