@@ -582,6 +582,16 @@ static int simulate(int argc, char **argv, job_file *jf)
     }
     if (result.stopped_at_line)
         fprintf(stderr, "frepmill simulate: stopped after line %d\n", result.stopped_at_line);
+    if (result.has_thin && result.thin.walls) {
+        const fm_stock_thin_region *g = &result.thin.region[0]; /* walls come first */
+        fprintf(stderr,
+                "frepmill simulate: warning: %zu%s wall%s thinner than a voxel, the largest at "
+                "(%.2f, %.2f, %.2f) (%zu voxels beside it): the volume counts %s, the mesh and "
+                "pictures do not show %s; a smaller --voxel would\n",
+                result.thin.walls, result.thin.truncated ? "+" : "", result.thin.walls == 1 ? "" : "s",
+                g->position[0], g->position[1], g->position[2], g->voxels,
+                result.thin.walls == 1 ? "it" : "them", result.thin.walls == 1 ? "it" : "them");
+    }
     if (result.has_deviation) {
         const fm_deviation *dv = &result.deviation;
         fprintf(stderr,

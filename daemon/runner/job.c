@@ -976,6 +976,7 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     double area = 0;
     fm_error area_err;
     if (fm_stock_surface_area(stock, &area, &area_err) == FM_OK) result->surface_area_mm2 = area;
+    result->has_thin = fm_stock_thin_material(stock, &result->thin, &area_err) == FM_OK;
     result->motions = live ? c->progress.motions_total : sv.motions;
     result->blocks = c->blocks;
     result->program_time_s = live ? c->progress.program_time_total : sv.time_total;

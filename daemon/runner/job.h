@@ -236,6 +236,11 @@ typedef struct fm_job_result {
     double design_build_wall_s, design_build_cpu_s;
     double design_compare_wall_s, design_compare_cpu_s;
     double design_blame_wall_s, design_blame_cpu_s;
+    /* Material of the final stock thinner than a voxel: counted in the
+     * volume, absent from the mesh (fm_stock_thin_material; the thin-wall
+     * warning). has_thin is 0 when the search itself failed. */
+    int has_thin;
+    fm_stock_thin_report thin;
 } fm_job_result;
 
 /* Free what a result owns (stock, design, deviation, check); safe on a zeroed

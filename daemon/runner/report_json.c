@@ -38,6 +38,27 @@ static json_t *design_json(const fm_job_result *r)
                      "gouges", gouges, "excess", excess);
 }
 
+static json_t *xyz_json(const double p[3])
+{
+    return json_pack("[f, f, f]", p[0], p[1], p[2]);
+}
+
+/* The thin-wall warning: material the volume counts and the mesh cannot
+ * show (docs/simulate.md). */
+static json_t *thin_json(const fm_stock_thin_report *t)
+{
+    json_t *places = json_array();
+    for (size_t i = 0; i < t->count; i++) {
+        const fm_stock_thin_region *g = &t->region[i];
+        json_array_append_new(places, json_pack("{s:s, s:o, s:o, s:o, s:I}", "kind", g->wall ? "wall" : "edge",
+                                                "position", xyz_json(g->position), "lo", xyz_json(g->lo),
+                                                "hi", xyz_json(g->hi), "voxels", (json_int_t)g->voxels));
+    }
+    return json_pack("{s:I, s:I, s:I, s:b, s:o}", "walls", (json_int_t)t->walls, "voxels",
+                     (json_int_t)t->voxels, "regions", (json_int_t)t->regions, "truncated", t->truncated,
+                     "places", places);
+}
+
 json_t *fm_job_report_json(const fm_job_result *r)
 {
     json_t *tools = json_array();
@@ -75,6 +96,7 @@ json_t *fm_job_report_json(const fm_job_result *r)
         json_object_set_new(out, "findings", fm_findings_json_array(r->check));
         json_object_set_new(out, "check_time_s", json_real(r->check_time_s));
     }
+    if (out && r->has_thin) json_object_set_new(out, "thin_walls", thin_json(&r->thin));
     if (out && r->stopped_at_line)
         json_object_set_new(out, "stopped_at_line", json_integer(r->stopped_at_line));
     if (out && r->has_deviation) json_object_set_new(out, "design", design_json(r));

@@ -184,6 +184,35 @@ fm_status fm_stock_active_bounds(const fm_stock *stock, int32_t lo[3], int32_t h
  * +-band far from the surface. */
 double fm_stock_sample(const fm_stock *stock, const double p[3]);
 
+/* ------------------------------------------------------ thin material -- */
+
+/* Material thinner than a voxel, which the volume counts and the mesh cannot
+ * show: a wall, fin or needle lying between rows of voxel centres. Found as
+ * the voxel centres outside the stock with the surface within half a voxel
+ * and no inside voxel among their 26 neighbours (no marching cube touching
+ * them has an inside corner, so no face stands for that material); such
+ * voxels, 26-connected, make a region. A region is a wall when it is a
+ * sheet: its second-longest side at least 4 voxels and at least 4 voxels
+ * per voxel of its longest side. The others are the tips of sharp edges
+ * and needles, which every voxel model rounds off by under a voxel. */
+#define FM_STOCK_THIN_MAX_REGIONS 16
+#define FM_STOCK_THIN_MAX_VOXELS ((size_t)1 << 18)
+typedef struct fm_stock_thin_region {
+    double position[3];  /* the region's voxel centre nearest its centroid, mm */
+    double lo[3], hi[3]; /* bounds of its voxel centres, mm */
+    size_t voxels;
+    int wall;            /* a sheet (above), not an edge or needle */
+} fm_stock_thin_region;
+typedef struct fm_stock_thin_report {
+    size_t voxels;  /* all such voxels */
+    size_t regions; /* regions among the first FM_STOCK_THIN_MAX_VOXELS voxels found */
+    size_t walls;   /* of which walls */
+    int truncated;  /* voxels > FM_STOCK_THIN_MAX_VOXELS: regions counts only those */
+    size_t count;   /* regions listed in region[]: walls first, each kind most voxels first */
+    fm_stock_thin_region region[FM_STOCK_THIN_MAX_REGIONS];
+} fm_stock_thin_report;
+fm_status fm_stock_thin_material(const fm_stock *stock, fm_stock_thin_report *report, fm_error *err);
+
 /* ------------------------------------------------------------ queries -- */
 
 /* A region of the grid as fm_stock_visit meets it: an 8^3 leaf with its

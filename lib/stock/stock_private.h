@@ -99,6 +99,11 @@ fm_vdb *fm_vdb_read(const unsigned char *buf, size_t len, int threads, fm_error 
  * -background (a hole in the band). FM_ERR_INTERNAL names the first
  * violation. */
 fm_status fm_vdb_validate(const fm_vdb *v, fm_error *err);
+/* Index coordinates of the voxels beside material thinner than a voxel
+ * (vdb_thin.cpp): at most cap of them in *ijk (3 per voxel, malloc'd, NULL
+ * when none), *total counts all. */
+fm_status fm_vdb_thin_voxels(const fm_vdb *v, size_t cap, int32_t **ijk, size_t *count, size_t *total,
+                             fm_error *err);
 fm_status fm_stock_validate(const fm_stock *stock, fm_error *err);
 
 /* For lib/mesh's C++ bridge only: a pointer to the stock's
