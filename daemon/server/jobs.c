@@ -236,7 +236,11 @@ fm_status fm_jobs_submit_live(fm_jobs *jobs, fm_job_doc *doc, char *id, size_t i
     job *j;
     fm_status st = admit(jobs, doc, NULL, &j, err);
     if (st != FM_OK) return st;
-    fm_live_attach(jobs, j);
+    st = fm_live_attach(jobs, j, err);
+    if (st != FM_OK) {
+        fm_jobs_put(jobs, j);
+        return st;
+    }
     snprintf(id, id_size, "%s", j->id);
     st = fm_queue_run_now(jobs, j, err);
     if (st != FM_OK) fm_live_detach(jobs, j);
@@ -425,8 +429,7 @@ fm_jobs *fm_jobs_open(const fm_jobs_config *cfg, fm_error *err)
     if (live) {
         fm_error lerr;
         fm_error_clear(&lerr);
-        fm_live_attach(jobs, live);
-        if (fm_queue_run_now(jobs, live, &lerr) != FM_OK)
+        if (fm_live_attach(jobs, live, &lerr) != FM_OK || fm_queue_run_now(jobs, live, &lerr) != FM_OK)
             fm_log(FM_LOG_ERROR, "job %s: cannot resume the live job: %s", live->id, lerr.message);
     }
     if (fm_queue_start_workers(jobs, cfg->workers, err) != FM_OK) {

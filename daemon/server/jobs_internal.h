@@ -179,7 +179,7 @@ void fm_queue_finish(fm_jobs *jobs, job *j, fm_job_state state, const char *what
  * first after a restart, and opens it for the positions to come. */
 fm_status fm_live_prepare(job *j, fm_job_motion_source *src, fm_error *err);
 /* Make j the live session (it takes positions) / stop that if it is. */
-void fm_live_attach(fm_jobs *jobs, job *j);
+fm_status fm_live_attach(fm_jobs *jobs, job *j, fm_error *err);
 void fm_live_detach(fm_jobs *jobs, job *j);
 void fm_live_free(job_live *live);
 

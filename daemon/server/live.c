@@ -197,7 +197,9 @@ static int live_next(void *user, fm_motion *out, int *more)
     }
 }
 
-fm_status fm_live_prepare(job *j, fm_job_motion_source *src, fm_error *err)
+/* The live state with the journal read back and open for appending; the
+ * caller holds the job's lock. Idempotent. */
+static fm_status live_setup(job *j, fm_error *err)
 {
     if (!j->live && !(j->live = live_new()))
         return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
@@ -211,13 +213,28 @@ fm_status fm_live_prepare(job *j, fm_job_motion_source *src, fm_error *err)
                    L->replay_count);
     }
     if (st == FM_OK && L->journal_fd < 0) st = journal_open(j, err);
+    return st;
+}
+
+fm_status fm_live_prepare(job *j, fm_job_motion_source *src, fm_error *err)
+{
+    pthread_mutex_lock(&j->lock);
+    fm_status st = live_setup(j, err);
+    pthread_mutex_unlock(&j->lock);
     src->user = j;
     src->next = live_next;
     return st;
 }
 
-void fm_live_attach(fm_jobs *jobs, job *j)
+fm_status fm_live_attach(fm_jobs *jobs, job *j, fm_error *err)
 {
+    /* The live state exists before the job is the live job: a position the
+     * controller writes right after "live on" is queued and journaled, not
+     * refused because the job's thread has not started yet. */
+    pthread_mutex_lock(&j->lock);
+    fm_status st = live_setup(j, err);
+    pthread_mutex_unlock(&j->lock);
+    if (st != FM_OK) return st;
     pthread_mutex_lock(&jobs->live_lock);
     job *old = jobs->live_job;
     pthread_mutex_lock(&jobs->lock);
@@ -226,6 +243,7 @@ void fm_live_attach(fm_jobs *jobs, job *j)
     jobs->live_job = j;
     pthread_mutex_unlock(&jobs->live_lock);
     if (old) fm_jobs_put(jobs, old);
+    return FM_OK;
 }
 
 void fm_live_detach(fm_jobs *jobs, job *j)

@@ -19,7 +19,10 @@ import time
 from daemon_util import Daemon, check, curl_json
 from redis_util import RedisServer, need_redis_server
 
-VOXEL = 0.2
+# 0.1 mm: a job then cuts for over a second on an idle machine, long enough
+# to be caught running with a snapshot (at 0.2 mm the cuts took 0.3 s, under
+# the snapshot interval, and the victim was never found)
+VOXEL = 0.1
 RADIUS = 3.0      # 6 mm flat end mill
 LENGTH = 80.0     # each slot's straight length
 SLOTS = 4
@@ -48,7 +51,7 @@ def slot_job(k):
 
 def queue_args(port, consumer):
     return ("--queue", "redis://127.0.0.1:%d" % port, "--queue-consumer", consumer,
-            "--queue-claim-s", "2", "--workers", "1", "--snapshot-interval-s", "1",
+            "--queue-claim-s", "2", "--workers", "1", "--snapshot-interval-s", "0.3",
             "--publish-interval-s", "2", "--max-request-mb", "0.004")
 
 
