@@ -508,8 +508,6 @@ function showStatus(st) {
     err.textContent = `${j.error.message || j.error.code}` + (j.error.line ? ` (line ${j.error.line})` : '');
   } else err.hidden = true;
   if (S.live) {
-    if (Array.isArray(j.position)) showPosition(j.position, j.tool);
-    if (j.line) setLine(j.line);
     // Program time: the status has it, progress events have the fraction.
     const t = typeof st.program_time_s === 'number' ? st.program_time_s
       : typeof st.progress === 'number' ? st.progress * S.totalT : null;
@@ -518,26 +516,21 @@ function showStatus(st) {
       setScrub(t);
       // the table where the program has turned it by now
       const pose = poseAt(t);
-      if (pose && pose.joints) {
-        placeWorkpiece(pose.joints);
-        if (Array.isArray(j.position)) {
-          const p = new THREE.Vector3(...j.position).applyMatrix4(workpiece.matrix);
-          showPosition(j.position, j.tool, [p.x, p.y, p.z]);
-        }
-      }
+      if (pose && pose.joints) placeWorkpiece(pose.joints);
     }
+    if (Array.isArray(j.position)) showPosition(j.position, j.tool);
+    if (j.line) setLine(j.line);
   }
 }
 
-// pos: the tip in the workpiece frame (the readout); at: where to draw the
-// marker in the machine frame (default pos).
-function showPosition(pos, tool, at) {
+// pos: the tip in the workpiece frame (the readout); the marker shows the
+// tool where the machine holds it (the workpiece's placement applied).
+function showPosition(pos, tool) {
   $('pos-x').textContent = fmt(pos[0]);
   $('pos-y').textContent = fmt(pos[1]);
   $('pos-z').textContent = fmt(pos[2]);
   if (tool != null) $('tool').textContent = tool;
-  const m = at || pos;
-  marker.position.set(m[0], m[1], m[2]);
+  marker.position.set(...pos).applyMatrix4(workpiece.matrix);
   marker.visible = true;
   invalidate();
 }
@@ -557,9 +550,7 @@ function applyReplay() {
   const pose = poseAt(t);
   if (pose) {
     placeWorkpiece(pose.joints);
-    // the marker shows the tool where the machine holds it
-    const p = new THREE.Vector3(...pose.pos).applyMatrix4(workpiece.matrix);
-    showPosition(pose.pos, pose.tool, [p.x, p.y, p.z]);
+    showPosition(pose.pos, pose.tool);
     setLine(pose.line);
   }
   $('live').classList.toggle('on', S.live);

@@ -135,10 +135,9 @@ static int parse_double(const char *s, double *out)
 
 /* "machine_pose": where the rotary table axes put the workpiece at the
  * chosen time (x_machine = rotation x_workpiece + translation). */
-static json_t *pose_json(const fm_machine_pose *pose, const fm_job_result *result)
+static json_t *pose_json(const fm_machine_pose *pose, const double rot[9], const double trans[3],
+                         const fm_job_result *result)
 {
-    double rot[9], trans[3];
-    fm_machine_pose_transform(pose, rot, trans);
     json_t *o = json_object();
     double t = pose->time_s < result->program_time_s ? pose->time_s : result->program_time_s;
     json_object_set_new(o, "time_s", json_real(t));
@@ -614,7 +613,7 @@ static int simulate(int argc, char **argv, job_file *jf)
 
     if (report_path && status == 0) {
         json_t *report = fm_job_report_json(&result);
-        if (bar.pose) json_object_set_new(report, "machine_pose", pose_json(bar.pose, &result));
+        if (bar.pose) json_object_set_new(report, "machine_pose", pose_json(bar.pose, pose_rot, pose_trans, &result));
         int rc = !strcmp(report_path, "-")
                      ? json_dumpf(report, stdout, JSON_INDENT(2) | JSON_REAL_PRECISION(10))
                      : json_dump_file(report, report_path, JSON_INDENT(2) | JSON_REAL_PRECISION(10));

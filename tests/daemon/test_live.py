@@ -51,23 +51,29 @@ def gcode_of(moves):
     return "\n".join(lines + ["M2", ""])
 
 
+def simulate_moves(frepmill, tmp, tool_table, moves, stock, voxel):
+    """The moves as G-code through `frepmill simulate`: (the tool table's
+    path in tmp, for the daemon too; the removed volume)."""
+    tools = os.path.join(tmp, "tools.json")
+    with open(tools, "w") as f:
+        json.dump(tool_table, f)
+    program = os.path.join(tmp, "moves.ngc")
+    with open(program, "w") as f:
+        f.write(gcode_of(moves))
+    report = os.path.join(tmp, "report.json")
+    subprocess.run([frepmill, "simulate", program, "--stock", stock, "--tools", tools,
+                    "--voxel", str(voxel), "--report", report], check=True, timeout=300,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    with open(report) as f:
+        return tools, json.load(f)["removed_volume_mm3"]
+
+
 def main():
     frepmilld, frepmill = sys.argv[1], sys.argv[2]
     need_node_client()
     with tempfile.TemporaryDirectory(prefix="fm-live-") as tmp:
         t0 = time.time()
-        tools = os.path.join(tmp, "tools.json")
-        with open(tools, "w") as f:
-            json.dump(TOOLS, f)
-        program = os.path.join(tmp, "moves.ngc")
-        with open(program, "w") as f:
-            f.write(gcode_of(MOVES))
-        report = os.path.join(tmp, "report.json")
-        subprocess.run([frepmill, "simulate", program, "--stock", STOCK, "--tools", tools,
-                        "--voxel", str(VOXEL), "--report", report], check=True, timeout=300,
-                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        with open(report) as f:
-            cli_removed = json.load(f)["removed_volume_mm3"]
+        tools, cli_removed = simulate_moves(frepmill, tmp, TOOLS, MOVES, STOCK, VOXEL)
         # The slot by hand: two stadiums of width 2R (40 and 10 mm between
         # their cap centres), each 2R L + pi R^2, meeting at a right-angled
         # corner where they overlap in the corner disc plus the R x R square

@@ -6,16 +6,14 @@ same live job from its snapshot and journal, and the controller's next
 positions cut on into that stock. In the end the job has removed what
 `frepmill simulate` removes for all the moves written as G-code.
 Usage: test_live_restart.py FREPMILLD FREPMILL"""
-import json
 import os
 import signal
-import subprocess
 import sys
 import tempfile
 import time
 
 from daemon_util import Daemon, check, curl_json, modbus_port
-from test_live import client, gcode_of, need_node_client
+from test_live import client, need_node_client, simulate_moves
 
 STOCK = "box:0,0,-10,60,60,0"
 VOXEL = 0.25
@@ -49,18 +47,7 @@ def main():
     need_node_client()
     with tempfile.TemporaryDirectory(prefix="fm-live-restart-") as tmp:
         t0 = time.time()
-        tools = os.path.join(tmp, "tools.json")
-        with open(tools, "w") as f:
-            json.dump(TOOLS, f)
-        program = os.path.join(tmp, "moves.ngc")
-        with open(program, "w") as f:
-            f.write(gcode_of(BEFORE + AFTER))
-        report = os.path.join(tmp, "report.json")
-        subprocess.run([frepmill, "simulate", program, "--stock", STOCK, "--tools", tools,
-                        "--voxel", str(VOXEL), "--report", report], check=True, timeout=300,
-                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        with open(report) as f:
-            cli_removed = json.load(f)["removed_volume_mm3"]
+        tools, cli_removed = simulate_moves(frepmill, tmp, TOOLS, BEFORE + AFTER, STOCK, VOXEL)
 
         state = os.path.join(tmp, "state")
         args = ["--workers", "1", "--modbus-listen", "127.0.0.1:0", "--modbus-live", "yes",
