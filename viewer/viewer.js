@@ -2,7 +2,9 @@
 // opens one, shows its stock as Draco chunk meshes updated live from the
 // job's server-sent events, the toolpath (rapids dashed, feeds solid), the
 // program with the current line, the tool tip position, findings in red and
-// a timeline that replays the toolpath of a finished job.
+// a timeline that replays the toolpath of a finished job; for a finished job
+// with a design, a colour mode by the deviation from it (gouge red, excess
+// blue, green within tolerance, key in mm).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { DRACOLoader } from 'three/addons/loaders/DRACOLoader.js';
@@ -54,12 +56,16 @@ scene.add(axes);
 const stockGroup = new THREE.Group();
 const pathGroup = new THREE.Group();
 const findingGroup = new THREE.Group();
+// The finished stock in deviation colours (one mesh, GET .../deviation.drc),
+// shown instead of the chunks in the deviation colour mode.
+const deviationGroup = new THREE.Group();
+deviationGroup.visible = false;
 // The workpiece frame: on a machine whose rotary axes turn the table, the
 // stock, its toolpath and findings turn with it during replay (tablePlacement);
 // the tool marker stays in the machine frame.
 const workpiece = new THREE.Group();
 workpiece.matrixAutoUpdate = false;
-workpiece.add(stockGroup, pathGroup, findingGroup);
+workpiece.add(stockGroup, deviationGroup, pathGroup, findingGroup);
 scene.add(workpiece);
 
 const stockMaterial = new THREE.MeshStandardMaterial({
@@ -157,6 +163,10 @@ const S = {
   totalT: 0,
   errors: [],
   generation: 0,        // bumped on each open: late answers of older jobs are dropped
+  colorMode: 'tool',    // the mode chosen: tool | deviation (kept from job to job)
+  deviation: null,      // the job's deviation key (GET .../deviation), null: none
+  deviationMesh: null,  // its mesh once loaded
+  deviationLoading: null,
 };
 
 async function getJSON(url) {
@@ -476,6 +486,88 @@ function setFindings(list) {
   renderProgram(S.line);
 }
 
+// ------------------------------------------------------------- deviation --
+
+// The key and the mesh come from files the daemon writes when a job with a
+// design is done (docs/api.md): the page asks once the job has ended.
+async function loadDeviationKey(gen) {
+  if (!S.job || !S.job.design) return;
+  let key = null;
+  try {
+    const r = await fetch(`/v1/jobs/${S.jobId}/deviation`, { cache: 'no-store' });
+    if (r.ok) key = await r.json();
+  } catch (e) {
+    S.errors.push(String(e));
+  }
+  if (gen !== S.generation) return;
+  S.deviation = key;
+  $('color-mode').querySelector('option[value="deviation"]').disabled = !key;
+  applyColorMode();
+}
+
+async function loadDeviationMesh(gen) {
+  const r = await fetch(`/v1/jobs/${S.jobId}/deviation.drc`, { cache: 'no-store' });
+  if (!r.ok) throw new Error(`deviation mesh: ${r.status}`);
+  const buf = await r.arrayBuffer();
+  if (gen !== S.generation) return;
+  const geometry = await decode(buf);
+  if (gen !== S.generation) { geometry.dispose(); return; }
+  if (!geometry.getAttribute('normal')) geometry.computeVertexNormals();
+  const mesh = new THREE.Mesh(geometry, stockMaterialColored);
+  mesh.name = 'deviation';
+  deviationGroup.add(mesh);
+  S.deviationMesh = mesh;
+  invalidate();
+}
+
+function removeDeviation() {
+  for (const o of [...deviationGroup.children]) { deviationGroup.remove(o); o.geometry.dispose(); }
+  S.deviation = null;
+  S.deviationMesh = null;
+  S.deviationLoading = null;
+  $('color-mode').querySelector('option[value="deviation"]').disabled = true;
+}
+
+function showDeviationKeys(key) {
+  const title = document.createElement('span');
+  title.className = 'title';
+  title.textContent = 'deviation, mm';
+  const swatches = key.legend.map(({ label, color }) => {
+    const k = document.createElement('span');
+    k.className = 'tool-key';
+    k.style.setProperty('--swatch', color);
+    k.textContent = label;
+    return k;
+  });
+  $('deviation-keys').replaceChildren(title, ...swatches);
+  $('deviation-keys').title = `green within ±${fmt(key.tolerance_mm, 3)} mm of the design, ` +
+    `red: gouge (design material removed), blue: excess (material left); ` +
+    `max gouge ${fmt(key.max_gouge_mm, 3)} mm, max excess ${fmt(key.max_excess_mm, 3)} mm`;
+}
+
+// Show the colours of the mode chosen when the job has them, else by tool.
+function applyColorMode() {
+  const dev = S.colorMode === 'deviation' && S.deviation !== null;
+  $('color-mode').value = dev ? 'deviation' : 'tool';
+  $('tool-keys').hidden = dev;
+  $('deviation-keys').hidden = !dev;
+  if (dev) {
+    showDeviationKeys(S.deviation);
+    if (!S.deviationMesh && !S.deviationLoading) {
+      const gen = S.generation;
+      S.deviationLoading = loadDeviationMesh(gen).catch((e) => {
+        if (gen === S.generation) { S.errors.push(String(e)); S.deviationLoading = null; }
+      });
+    }
+  }
+  const shown = $('show-stock').checked;
+  stockGroup.visible = shown && !dev;
+  deviationGroup.visible = shown && dev;
+  invalidate();
+}
+
+$('color-mode').addEventListener('change', (e) => { S.colorMode = e.target.value; applyColorMode(); });
+
 // ---------------------------------------------------------------- status --
 
 // The legend's swatches: the stock's colour for each tool of the job.
@@ -588,7 +680,7 @@ $('live').addEventListener('click', () => {
   if (S.job) showStatus({ progress: S.job.progress });
   if (isEnded()) { showPathUpTo(Infinity); setScrub(S.totalT); }
 });
-$('show-stock').addEventListener('change', (e) => { stockGroup.visible = e.target.checked; invalidate(); });
+$('show-stock').addEventListener('change', () => applyColorMode());
 $('show-path').addEventListener('change', (e) => { pathGroup.visible = e.target.checked; invalidate(); });
 $('reset-view').addEventListener('click', () => {
   frame(stockGroup.children.length ? new THREE.Box3().setFromObject(stockGroup) : bounds);
@@ -602,6 +694,8 @@ function closeJob() {
   for (const o of [...pathGroup.children]) { pathGroup.remove(o); o.geometry.dispose(); }
   S.pathLines = null;
   setFindings([]);
+  removeDeviation();
+  applyColorMode();
   marker.visible = false;
   bounds = null;
   Object.assign(S, {
@@ -647,6 +741,7 @@ async function openJob(id) {
   if (isEnded()) {
     showPathUpTo(Infinity);
     setScrub(S.totalT);
+    loadDeviationKey(gen);
   }
   // Live updates: events first, so no change between the listing and the
   // stream is missed (a chunk listed twice is merely fetched twice).
@@ -683,6 +778,7 @@ function listen(id, gen) {
       S.jobState = 'deleted';
     }
     if (S.live) { showPathUpTo(Infinity); setScrub(S.totalT); }
+    loadDeviationKey(gen);
     // The last publication: compare every chunk with the daemon's list.
     syncChunks(true);
   });
@@ -706,11 +802,33 @@ function vertexColors() {
   return [...seen].sort();
 }
 
+// The deviation mesh shown: positions (mm, workpiece frame) and sRGB
+// colours (0..255), flat arrays; null until it is loaded.
+function deviationVertices() {
+  if (!S.deviationMesh) return null;
+  const g = S.deviationMesh.geometry;
+  const p = g.getAttribute('position'), a = g.getAttribute('color');
+  const c = new THREE.Color();
+  const positions = [], colors = [];
+  for (let i = 0; i < p.count; i++) {
+    positions.push(p.getX(i), p.getY(i), p.getZ(i));
+    if (a) {
+      c.setRGB(a.getX(i), a.getY(i), a.getZ(i)).getRGB(c, THREE.SRGBColorSpace);
+      colors.push(Math.round(255 * c.r), Math.round(255 * c.g), Math.round(255 * c.b));
+    }
+  }
+  return { positions, colors };
+}
+
 const api = {
   jobId: null,
   state: S,
   triangleCount,
   vertexColors,
+  deviationVertices,
+  // The colour mode: 'tool' or 'deviation' (shown once the job's deviation is there).
+  setColorMode: (mode) => { S.colorMode = mode; applyColorMode(); },
+  deviationShown: () => deviationGroup.visible && S.deviationMesh !== null,
   // The workpiece's placement on the machine now (column-major 4x4).
   workpieceMatrix: () => workpiece.matrix.toArray(),
   chunkCount: () => S.chunks.size,

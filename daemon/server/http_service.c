@@ -246,6 +246,19 @@ static fm_status svc_stock_path(void *ctx, const char *id, char *path, size_t si
     return FM_OK;
 }
 
+static fm_status svc_deviation_path(void *ctx, const char *id, int mesh, char *path, size_t size,
+                                   fm_error *err)
+{
+    job *j = fm_jobs_get(ctx, id);
+    if (!j) return not_found(id, err);
+    snprintf(path, size, "%s/%s", j->dir, mesh ? "deviation.drc" : "deviation.json");
+    fm_jobs_put(ctx, j);
+    if (access(path, R_OK) != 0)
+        return fm_error_set_reason(err, FM_ERR_INPUT, "no_deviation",
+                                   "job %s has no deviation: it has no design, or is not done", id);
+    return FM_OK;
+}
+
 static int svc_events(void *ctx, const char *id, uint64_t after, int timeout_ms,
                       fm_http_event *out, int cap, int *finished)
 {
@@ -483,4 +496,5 @@ void fm_jobs_http_service(fm_jobs *jobs, fm_http_service *out)
     out->events = svc_events;
     out->check = svc_check;
     out->toolpath = svc_toolpath;
+    out->deviation_path = svc_deviation_path;
 }

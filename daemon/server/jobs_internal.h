@@ -208,5 +208,11 @@ void fm_publish_chunks(job *j, fm_stock *stock);
  * snapshot once after a restart). */
 fm_status fm_publish_ensure_meshes(job *j, fm_error *err);
 void fm_publish_chunks_free(job *j);
+/* A finished job with a design: write deviation.drc (the stock's mesh in
+ * deviation colours) and deviation.json (its key in mm and the figures) to
+ * the job's folder, for GET /v1/jobs/{id}/deviation (the caller owns the
+ * stock exclusively). */
+fm_status fm_publish_deviation(job *j, fm_stock *stock, const fm_design *design,
+                               const fm_deviation *dev, fm_error *err);
 
 #endif

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "jobs_internal.h"
+#include "store.h"
 
 /* progress and block events at most this often (the status itself is
  * updated after every cut) */
@@ -69,6 +70,8 @@ json_t *fm_publish_status_json(job *j)
         "mesh_version", (json_int_t)j->mesh_version, "created", j->created, "name", name);
     if (out) {
         json_object_set_new(out, "tool_colors", tool_colors_json(j));
+        /* the viewer asks for GET .../deviation once such a job is done */
+        json_object_set_new(out, "design", json_boolean(j->doc->spec.design_path != NULL));
         json_object_set_new(out, "voxels_uncertain", json_integer((json_int_t)v->voxels_uncertain));
         json_object_set_new(out, "uncertain_line", v->voxels_uncertain && v->uncertain_line > 0
                                                        ? json_integer(v->uncertain_line)
@@ -293,4 +296,56 @@ fm_status fm_publish_ensure_meshes(job *j, fm_error *err)
     }
     pthread_mutex_unlock(&j->load_lock);
     return rc;
+}
+
+/* ---------------------------------------------------------- deviation -- */
+
+/* The viewer's deviation mode (docs/api.md, GET /v1/jobs/{id}/deviation):
+ * the finished stock's whole mesh coloured by its deviation from the
+ * design (lib/mesh's FM_MESH_COLOR_DEVIATION, the colours of frepmill
+ * simulate --color deviation) and its key in mm, written once beside the
+ * job's other files: the design's level set is gone after the job, and a
+ * restarted daemon serves the files as they are. */
+fm_status fm_publish_deviation(job *j, fm_stock *stock, const fm_design *design,
+                               const fm_deviation *dev, fm_error *err)
+{
+    fm_mesh_extract_options opt;
+    fm_mesh_extract_default(&opt);
+    opt.coloring = FM_MESH_COLOR_DEVIATION;
+    opt.design = design;
+    const double tol = fm_design_tolerance(design);
+    const double range = 10 * tol; /* the mesh's default span (mesh.h) */
+    fm_mesh *mesh = fm_mesh_from_stock(stock, &opt, err);
+    if (!mesh) return err->code;
+    uint8_t *drc = NULL;
+    size_t drc_size = 0;
+    fm_status st = mesh->triangle_count
+                       ? fm_mesh_encode_draco(mesh, NULL, &drc, &drc_size, err)
+                       : fm_error_set(err, FM_ERR_INPUT, "the stock has no surface to colour");
+    size_t triangles = mesh->triangle_count;
+    fm_mesh_free(mesh);
+    if (st == FM_OK) st = fm_store_write_atomic(j->dir, "deviation.drc", drc, drc_size, err);
+    free(drc);
+    if (st != FM_OK) return st;
+    fm_render_legend legend;
+    fm_mesh_deviation_legend(tol, range, &legend);
+    json_t *keys = json_array();
+    for (size_t i = 0; i < legend.count; i++) {
+        char hex[8];
+        snprintf(hex, sizeof hex, "#%02x%02x%02x", legend.colors[i][0], legend.colors[i][1],
+                 legend.colors[i][2]);
+        json_array_append_new(keys, json_pack("{s:s, s:s}", "label", legend.labels[i], "color", hex));
+    }
+    json_t *doc = json_pack("{s:s, s:s, s:f, s:f, s:o, s:I, s:f, s:f, s:I, s:I}", "id", j->id, "mesh",
+                            "deviation.drc", "tolerance_mm", tol, "range_mm", range, "legend", keys,
+                            "triangles", (json_int_t)triangles, "max_gouge_mm", dev->max_gouge_mm,
+                            "max_excess_mm", dev->max_excess_mm, "gouge_regions",
+                            (json_int_t)dev->gouge_total, "excess_regions",
+                            (json_int_t)dev->excess_total);
+    char *text = doc ? json_dumps(doc, JSON_COMPACT | JSON_REAL_PRECISION(10)) : NULL;
+    json_decref(doc);
+    if (!text) return fm_error_set(err, FM_ERR_LIMIT, "out of memory for the deviation's key");
+    st = fm_store_write_atomic(j->dir, "deviation.json", text, strlen(text), err);
+    free(text);
+    return st;
 }

@@ -218,6 +218,15 @@ static void run_job(fm_jobs *jobs, job *j)
         goto done;
     }
     fm_publish_chunks(j, result.stock);
+    if (result.design && result.has_deviation) {
+        double w0 = fm_jobs_mono_s();
+        fm_error derr;
+        if (fm_publish_deviation(j, result.stock, result.design, &result.deviation, &derr) == FM_OK)
+            fm_log(FM_LOG_INFO, "job %s: deviation mesh written in %.2f s", j->id,
+                   fm_jobs_mono_s() - w0);
+        else
+            fm_log(FM_LOG_WARN, "job %s: no deviation mesh for the viewer: %s", j->id, derr.message);
+    }
     pthread_mutex_lock(&j->lock);
     j->view.removed_mm3 = result.initial_volume_mm3 - result.final_volume_mm3;
     j->view.stock_mm3 = result.final_volume_mm3;

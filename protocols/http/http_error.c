@@ -26,7 +26,7 @@ static const struct {
     const char *reason;
     int status;
 } reason_status[] = {
-    {"not_found", 404},     {"no_snapshot", 404},    {"no_mesh", 404},
+    {"not_found", 404},     {"no_snapshot", 404},    {"no_mesh", 404},       {"no_deviation", 404},
     {"not_finished", 409},  {"bad_state", 409},      {"job_limit", 429},
     {"shutting_down", 503}, {"busy", 503},           {"out_of_memory", 503},
     {"storage", 507},       {"memory_budget", 413},  {"too_large", 413},

@@ -659,6 +659,15 @@ static enum MHD_Result route_job(fm_http_server *s, struct MHD_Connection *con, 
         st = s->svc.toolpath(s->svc.ctx, id, &blob, &err);
         return reply_blob(con, st, &blob, &err);
     }
+    if ((!strcmp(rest, "/deviation") || !strcmp(rest, "/deviation.drc")) && s->svc.deviation_path) {
+        int mesh = rest[10] != '\0';
+        char path[PATH_MAX];
+        if ((st = s->svc.deviation_path(s->svc.ctx, id, mesh, path, sizeof path, &err)) != FM_OK)
+            return respond_service_error(con, &err);
+        if (respond_file(con, path, mesh ? "application/octet-stream" : "application/json") == MHD_YES)
+            return MHD_YES;
+        return fail(con, 404, "no_deviation", "job %s has no deviation", id);
+    }
     if (!strcmp(rest, "/stock.vdb")) {
         char path[PATH_MAX];
         if ((st = s->svc.stock_path(s->svc.ctx, id, path, sizeof path, &err)) != FM_OK)

@@ -131,6 +131,11 @@ typedef struct fm_http_service {
     /* GET /v1/jobs/{id}/toolpath: the job's program and its motions as a
      * compact JSON polyline for the viewer (docs/api.md). NULL: 404. */
     fm_status (*toolpath)(void *ctx, const char *id, fm_http_blob *out, fm_error *err);
+    /* GET /v1/jobs/{id}/deviation (mesh 0: the key, JSON) and
+     * /v1/jobs/{id}/deviation.drc (mesh 1: the stock in deviation colours):
+     * the path of the file the daemon wrote. NULL: 404. */
+    fm_status (*deviation_path)(void *ctx, const char *id, int mesh, char *path, size_t size,
+                                fm_error *err);
 } fm_http_service;
 
 enum { FM_HTTP_LOG_ERROR = 0, FM_HTTP_LOG_WARN = 1, FM_HTTP_LOG_INFO = 2, FM_HTTP_LOG_DEBUG = 3 };

@@ -6,6 +6,10 @@
 // its end, then asserts from the page that the mesh shown has the triangle
 // count the daemon reports and that the picture is not blank. The canvas
 // screenshot is saved as ARTIFACT_DIR/viewer_screenshot.png (default /tmp).
+// A second job turns a rotary table; a third has a design (issue 16): its
+// deviation colours must be red in a slot cut into the design, blue on a
+// face left 1 mm outside it and green elsewhere, as this file's geometry
+// says (viewer_deviation.png).
 // Exit 0 pass, 1 fail, 77 skipped (no chromium or no viewer/node_modules) -
 // but 1 under CI=true, where no test may skip (tests/README.md).
 import { spawn } from 'node:child_process';
@@ -120,6 +124,40 @@ function plyVertexColors(buf) {
     seen.add(buf.subarray(o, o + 3).toString('hex'));
   }
   return [...seen].sort();
+}
+
+// A closed, outward-oriented binary STL of the box lo..hi (12 triangles).
+function boxStl(lo, hi) {
+  const P = (i) => [(i & 1) ? hi[0] : lo[0], (i & 2) ? hi[1] : lo[1], (i & 4) ? hi[2] : lo[2]];
+  // each face's corners counter-clockwise seen from outside, and its normal
+  const faces = [
+    [[0, 2, 3, 1], [0, 0, -1]], [[4, 5, 7, 6], [0, 0, 1]], [[0, 1, 5, 4], [0, -1, 0]],
+    [[2, 6, 7, 3], [0, 1, 0]], [[0, 4, 6, 2], [-1, 0, 0]], [[1, 3, 7, 5], [1, 0, 0]],
+  ];
+  const buf = Buffer.alloc(84 + 12 * 50);
+  buf.writeUInt32LE(12, 80);
+  let o = 84;
+  for (const [q, n] of faces) {
+    for (const tri of [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]) {
+      for (const v of [n, ...tri.map(P)]) for (const x of v) { buf.writeFloatLE(x, o); o += 4; }
+      o += 2;
+    }
+  }
+  return buf;
+}
+
+// Counts of pixels whose red, green or blue channel leads the other two by
+// more than 40 (the deviation hues; the grey background and the toolpath
+// overlay are hidden or fail it).
+function hueCounts(img) {
+  const n = { red: 0, green: 0, blue: 0 };
+  for (let i = 0; i < img.width * img.height; i++) {
+    const o = i * img.bpp, r = img.px[o], g = img.px[o + 1], b = img.px[o + 2];
+    if (r > g + 40 && r > b + 40) n.red++;
+    else if (g > r + 40 && g > b + 40) n.green++;
+    else if (b > r + 40 && b > g + 40) n.blue++;
+  }
+  return n;
 }
 
 async function startDaemon(stateDir, logPath) {
@@ -318,6 +356,107 @@ async function main() {
     console.log(`rotary table at t=${turn.t.toFixed(3)} s: C ${deg.toFixed(2)} deg, matrix ${turn.m.map((v) => v.toFixed(4)).join(' ')}`);
     ok(turn.table && turn.table.table && turn.table.table.length === 1, 'the toolpath names the table axis');
     ok(turn.t > 0.5 && turn.t < 5.5 && worst < 1e-6, `the workpiece stands at Rz(${deg.toFixed(1)}) (worst ${worst.toExponential(1)})`);
+
+    // The deviation colour mode (issue 16). The demo job has no design: no
+    // deviation, and the mode stays off.
+    const noDev = await fetch(`${url}/v1/jobs/${id}/deviation`);
+    ok(noDev.status === 404 && (await noDev.json()).error.code === 'no_deviation',
+      `a job without a design has no deviation (HTTP ${noDev.status})`);
+    // A job with a design: the stock box 0..30 x 0..20 x -10..0, the design
+    // the box 0..30 x 0..19 x -10..0 (so the face y = 20 is 1 mm of excess),
+    // and a slot 1 mm deep cut into it by the 6 mm flat end mill from (10, 10)
+    // to (20, 10) (a gouge: design material removed). Tolerance: half a voxel.
+    const DV = 0.5, TOL = DV / 2, SLOT_R = 3, SLOT_DEPTH = 1, DESIGN_Y = 19;
+    const devJob = {
+      stock: 'box:0,0,-10,30,20,0',
+      voxel: DV,
+      tools: JSON.parse(fs.readFileSync(path.join(ROOT, 'deploy/demo/tools.json'), 'utf8')),
+      program: { gcode: `G21 G90 G94\nT1 M6\nG0 Z5\nG0 X10 Y10\nG1 Z${-SLOT_DEPTH} F300\nG1 X20 F600\nG0 Z5\nM2\n` },
+      design: { stl_base64: boxStl([0, 0, -10], [30, DESIGN_Y, 0]).toString('base64') },
+      options: { name: 'viewer-deviation-test', check: false },
+    };
+    const r3 = await fetch(`${url}/v1/jobs`, {
+      method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(devJob),
+    });
+    ok(r3.status === 202, `design job accepted (HTTP ${r3.status})`);
+    const id3 = (await r3.json()).id;
+    await page.evaluate((jid) => { window.frepmillViewer.setColorMode('deviation'); window.frepmillViewer.open(jid); }, id3);
+    await page.waitForFunction(() => window.frepmillViewer.idle() && window.frepmillViewer.deviationShown(),
+      null, { timeout: 60000 });
+    const key = await (await fetch(`${url}/v1/jobs/${id3}/deviation`)).json();
+    console.log(`deviation key: ${JSON.stringify(key)}`);
+    ok(Math.abs(key.tolerance_mm - TOL) < 1e-9, `tolerance ${key.tolerance_mm} mm = half a voxel`);
+    ok(Math.abs(key.max_gouge_mm - SLOT_DEPTH) <= DV / 2, `max gouge ${key.max_gouge_mm} mm: the slot's depth ${SLOT_DEPTH} within half a voxel`);
+    ok(Math.abs(key.max_excess_mm - (20 - DESIGN_Y)) <= DV / 2, `max excess ${key.max_excess_mm} mm: ${20 - DESIGN_Y} within half a voxel`);
+
+    // Vertex colours where this geometry says: red in the slot below the
+    // tolerance (its floor and walls deeper than TOL + half a voxel; not the
+    // block's bottom under it),
+    // blue on and beside the face y = 20, green on the design's faces away
+    // from both (more than half a voxel beyond the tolerance band).
+    const dv = await page.evaluate(() => window.frepmillViewer.deviationVertices());
+    const segDist = (x, y) => {
+      const cx = Math.min(Math.max(x, 10), 20);
+      return Math.hypot(x - cx, y - 10);
+    };
+    const hue = (r, g, b) => (r > g && r > b ? 'red' : g > r && g > b ? 'green' : b > r && b > g ? 'blue' : 'none');
+    const tally = { red: [0, 0], green: [0, 0], blue: [0, 0] };
+    const wrong = [];
+    for (let i = 0; i < dv.positions.length / 3; i++) {
+      const [x, y, z] = dv.positions.slice(3 * i, 3 * i + 3);
+      const got = hue(...dv.colors.slice(3 * i, 3 * i + 3));
+      let want = null;
+      if (segDist(x, y) <= SLOT_R + DV / 2 && z < -(TOL + DV / 2) && z > -(SLOT_DEPTH + DV)) want = 'red';
+      else if (y >= DESIGN_Y + TOL + DV / 2) want = 'blue';
+      else if (y <= DESIGN_Y - DV && segDist(x, y) >= SLOT_R + DV) want = 'green';
+      if (!want) continue;
+      tally[want][0]++;
+      if (got === want) tally[want][1]++;
+      else if (wrong.length < 5) wrong.push(`(${x.toFixed(2)}, ${y.toFixed(2)}, ${z.toFixed(2)}) ${got} not ${want}`);
+    }
+    console.log(`deviation mesh: ${dv.positions.length / 3} vertices; expected/right: ${JSON.stringify(tally)}` +
+      (wrong.length ? `; e.g. ${wrong.join('; ')}` : ''));
+    for (const h of ['red', 'green', 'blue']) {
+      ok(tally[h][0] > 0 && tally[h][1] === tally[h][0],
+        `${h} at every one of the ${tally[h][0]} vertices the geometry puts in ${h}`);
+    }
+    // The legend: "mm" and the labels +-range, +-tolerance, 0 in the
+    // daemon's colours (range: 10 tolerances, docs/api.md).
+    const legend = await page.evaluate(() => ({
+      hidden: document.getElementById('deviation-keys').hidden,
+      toolHidden: document.getElementById('tool-keys').hidden,
+      text: document.querySelector('#deviation-keys .title')?.textContent,
+      keys: [...document.querySelectorAll('#deviation-keys .tool-key')]
+        .map((k) => [k.textContent, k.style.getPropertyValue('--swatch')]),
+      mode: document.getElementById('color-mode').value,
+    }));
+    console.log(`deviation legend: ${legend.text}: ${legend.keys.map((k) => k.join('=')).join(' ')}`);
+    const labels = legend.keys.map((k) => k[0]);
+    const wantLabels = [10 * TOL, TOL, 0, -TOL, -10 * TOL].map((v) => (v === 0 ? '0' : `${v > 0 ? '+' : '-'}${Math.abs(v).toFixed(2)}`));
+    ok(!legend.hidden && legend.toolHidden && legend.mode === 'deviation' && /mm/.test(legend.text),
+      'the legend shows the deviation key in mm instead of the tools');
+    ok(wantLabels.every((w) => labels.includes(w)) && labels.length === key.legend.length &&
+      legend.keys.every(([l, c], k) => key.legend[k].label === l && key.legend[k].color === c),
+      `the key's labels include ${wantLabels.join(' ')} in the daemon's colours`);
+    // The picture: red and green on screen (toolpath hidden), the view
+    // from the front right above sees the top face with the slot.
+    await page.evaluate(() => {
+      const cb = document.getElementById('show-path');
+      cb.checked = false; cb.dispatchEvent(new Event('change'));
+      document.getElementById('legend').style.visibility = 'hidden';
+      window.frepmillViewer.render();
+    });
+    const devShot = path.join(artifactDir, 'viewer_deviation.png');
+    const devImg = readPng(await page.locator('#view canvas').screenshot({ path: devShot }));
+    await page.evaluate(() => { document.getElementById('legend').style.visibility = ''; });
+    const hues = hueCounts(devImg);
+    console.log(`screenshot ${devShot}: ${JSON.stringify(hues)} pixels by hue`);
+    ok(hues.red > 200 && hues.green > 20 * 200, 'the picture shows the gouge red on green');
+    await page.screenshot({ path: path.join(artifactDir, 'viewer_deviation_page.png') });
+    // Back by tool: the chunks again.
+    const back = await page.evaluate(() => { window.frepmillViewer.setColorMode('tool');
+      return { dev: window.frepmillViewer.deviationShown(), tris: window.frepmillViewer.triangleCount() }; });
+    ok(!back.dev && back.tris > 0, 'the tool colour mode shows the chunks again');
 
     ok(problems.length === 0, `no page errors${problems.length ? ': ' + problems.join('; ') : ''}`);
     ok(foreign.length === 0, `every request went to the daemon${foreign.length ? ': ' + foreign.join(' ') : ''}`);
