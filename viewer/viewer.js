@@ -2,9 +2,10 @@
 // opens one, shows its stock as Draco chunk meshes updated live from the
 // job's server-sent events, the toolpath (rapids dashed, feeds solid), the
 // program with the current line, the tool tip position, findings in red and
-// a timeline that replays the toolpath of a finished job; for a finished job
-// with a design, a colour mode by the deviation from it (gouge red, excess
-// blue, green within tolerance, key in mm).
+// a timeline that replays the job: the toolpath, and the stock as it was at
+// that program time (the daemon's mesh history, GET .../chunks?at=T); for a
+// finished job with a design, a colour mode by the deviation from it (gouge
+// red, excess blue, green within tolerance, key in mm).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { DRACOLoader } from 'three/addons/loaders/DRACOLoader.js';
@@ -152,6 +153,8 @@ const S = {
   syncing: false,
   syncAgain: false,
   synced: false,        // the job has ended and the chunks shown match the daemon's
+  shownAt: null,        // program time of the stock shown when replaying (null: the current stock)
+  historyNote: '',      // why the stock of an earlier time cannot be shown
   events: null,         // EventSource
   toolpath: null,       // {motions, points, program, ...}
   programLines: [],
@@ -174,7 +177,10 @@ async function getJSON(url) {
   if (!r.ok) {
     let msg = `${r.status}`;
     try { msg = (await r.json()).error.message; } catch (e) { /* not JSON */ }
-    throw new Error(`${url}: ${msg}`);
+    const e = new Error(`${url}: ${msg}`);
+    e.status = r.status;
+    e.detail = msg;
+    throw e;
   }
   return r.json();
 }
@@ -235,12 +241,15 @@ function decode(buffer) {
   return new Promise((resolve, reject) => draco.parse(buffer, resolve, reject));
 }
 
-async function loadChunk(gen, info) {
+// byVersion: fetch the version the list named (a replay's earlier mesh),
+// else the chunk's current mesh.
+async function loadChunk(gen, info, byVersion) {
   if (!info.triangles) {
     removeChunk(info.id);
     return;
   }
-  const r = await fetch(`/v1/jobs/${S.jobId}/chunks/${info.id}.drc`, { cache: 'no-store' });
+  const v = byVersion ? `?v=${info.version}` : '';
+  const r = await fetch(`/v1/jobs/${S.jobId}/chunks/${info.id}.drc${v}`, { cache: 'no-store' });
   if (gen !== S.generation) return;
   if (!r.ok) throw new Error(`chunk ${info.id}: ${r.status}`);
   const buf = await r.arrayBuffer();
@@ -259,30 +268,46 @@ async function loadChunk(gen, info) {
   invalidate();
 }
 
-// Bring the chunks shown up to date: those changed since the version shown,
-// or (full) every chunk whose version differs from the one shown.
+// Bring the chunks shown up to date. Following the job (S.live): those
+// changed since the version shown, or (full) every chunk whose version
+// differs from the one shown. Replaying: the chunks as they were at program
+// time S.replayT, from the daemon's mesh history.
 async function syncChunks(full = false) {
   if (!S.jobId) return;
   if (S.syncing) { S.syncAgain = full ? 'full' : (S.syncAgain || true); return; }
   S.syncing = true;
   const gen = S.generation;
+  const at = S.live ? null : S.replayT;
+  // Coming back from an earlier time, every chunk is compared.
+  const whole = full || at !== null || S.shownAt !== null;
   try {
-    const list = await getJSON(`/v1/jobs/${S.jobId}/chunks?since=${full ? 0 : S.version}`);
+    let list;
+    try {
+      list = await getJSON(at === null ? `/v1/jobs/${S.jobId}/chunks?since=${whole ? 0 : S.version}`
+        : `/v1/jobs/${S.jobId}/chunks?at=${at}`);
+    } catch (e) {
+      if (at === null || (e.status !== 410 && e.status !== 404)) throw e;
+      // That time's meshes are gone (the daemon's history bound) or not made yet.
+      if (gen === S.generation) { S.shownAt = at; S.historyNote = e.detail || String(e); updateMeshReadout(); }
+      return;
+    }
     if (gen !== S.generation) return;
     const todo = list.chunks.filter((c) => {
       const have = S.chunks.get(c.id);
-      return !full || !have || have.version !== c.version || !c.triangles;
+      return !whole || !have || have.version !== c.version || !c.triangles;
     });
-    if (full) {
+    if (whole) {
       const listed = new Set(list.chunks.map((c) => c.id));
       for (const id of [...S.chunks.keys()]) if (!listed.has(id)) removeChunk(id);
     }
     // A few requests at a time.
     let next = 0;
-    const worker = async () => { while (next < todo.length) await loadChunk(gen, todo[next++]); };
+    const worker = async () => { while (next < todo.length) await loadChunk(gen, todo[next++], at !== null); };
     await Promise.all([worker(), worker(), worker(), worker()]);
     if (gen !== S.generation) return;
-    S.version = Math.max(S.version, list.version);
+    if (at === null) S.version = S.shownAt !== null ? list.version : Math.max(S.version, list.version);
+    S.shownAt = at;
+    S.historyNote = '';
     // Frame once on the stock and the toolpath together, when the stock first arrives.
     if (!S.framed && stockGroup.children.length) {
       const box = new THREE.Box3().setFromObject(stockGroup);
@@ -300,6 +325,8 @@ async function syncChunks(full = false) {
       const again = S.syncAgain;
       S.syncAgain = false;
       if (again) syncChunks(again === 'full');
+      else if (!S.live && S.shownAt !== S.replayT) syncChunks();
+      else if (S.live && S.shownAt !== null) syncChunks(true);
       else if (full && isEnded()) S.synced = true;
     }
   }
@@ -315,7 +342,9 @@ function triangleCount() {
 }
 
 function updateMeshReadout() {
-  $('mesh').textContent = `${triangleCount().toLocaleString('en')} triangles, ${S.chunks.size} chunks, v${S.version}`;
+  const when = S.shownAt === null ? `v${S.version}` : `at ${fmt(S.shownAt, 1)} s`;
+  $('mesh').textContent = `${triangleCount().toLocaleString('en')} triangles, ${S.chunks.size} chunks, ${when}` +
+    (S.historyNote ? ` (${S.historyNote})` : '');
 }
 
 function isEnded() {
@@ -645,6 +674,8 @@ function applyReplay() {
     showPosition(pose.pos, pose.tool);
     setLine(pose.line);
   }
+  // the stock as it was then
+  if (!S.live && S.shownAt !== S.replayT) syncChunks();
   $('live').classList.toggle('on', S.live);
   $('play').innerHTML = S.playing ? '&#10074;&#10074;' : '&#9654;';
 }
@@ -679,6 +710,7 @@ $('live').addEventListener('click', () => {
   $('live').classList.add('on');
   if (S.job) showStatus({ progress: S.job.progress });
   if (isEnded()) { showPathUpTo(Infinity); setScrub(S.totalT); }
+  syncChunks(true); // back to the current stock
 });
 $('show-stock').addEventListener('change', () => applyColorMode());
 $('show-path').addEventListener('change', (e) => { pathGroup.visible = e.target.checked; invalidate(); });
@@ -700,6 +732,7 @@ function closeJob() {
   bounds = null;
   Object.assign(S, {
     job: null, jobState: null, version: 0, syncing: false, syncAgain: false, synced: false,
+    shownAt: null, historyNote: '',
     toolpath: null, programLines: [], line: 0, live: true, playing: false, replayT: 0, totalT: 0,
     framed: false,
   });
@@ -760,7 +793,8 @@ function listen(id, gen) {
     const d = data(e);
     if (S.live && d.line) setLine(d.line);
   });
-  es.addEventListener('chunks', () => { if (gen === S.generation) syncChunks(false); });
+  // (replaying an earlier time, the stock shown stays that time's)
+  es.addEventListener('chunks', () => { if (gen === S.generation && S.live) syncChunks(false); });
   es.addEventListener('finding', (e) => {
     if (gen === S.generation) setFindings([...S.findings, data(e)]);
   });
@@ -835,6 +869,9 @@ const api = {
   open: (id) => { location.hash = `job=${id}`; },
   // Ended and the chunks shown match the daemon's list.
   idle: () => S.synced && !S.syncing,
+  // Replaying: the program time whose stock is shown, once it is the
+  // timeline's (null while it is still being fetched or when following).
+  stockShownAt: () => (!S.live && !S.syncing && S.shownAt === S.replayT ? S.shownAt : null),
   render,
   software,
 };

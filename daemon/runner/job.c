@@ -932,6 +932,7 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     c->progress.design = design;
     c->stop.line = spec->stop_at_line;
 
+    if (hooks && hooks->on_stock) hooks->on_stock(hooks->user, stock);
     if (spec->check) st = setup_check(c, &sv, err);
     if (st == FM_OK)
         st = live ? run_source(c) : run_program(spec, tools.use, cut_sink, c, cut_probe, err);

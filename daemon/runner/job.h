@@ -171,6 +171,10 @@ typedef struct fm_job_hooks {
      * check), on the job's thread, before the motion that found it is cut;
      * its depth and extent grow while later motions extend it. */
     void (*on_finding)(void *user, const fm_check *check, size_t index);
+    /* Called once, before the first cut, with the stock the job starts
+     * from (made, or the snapshot it resumes); it may be read (meshed)
+     * during the call, not kept. */
+    void (*on_stock)(void *user, fm_stock *stock);
 } fm_job_hooks;
 
 #define FM_JOB_TOP_BLOCKS 10

@@ -26,6 +26,7 @@ void fm_daemon_config_default(fm_daemon_config *cfg)
     cfg->log_level = FM_LOG_INFO;
     cfg->snapshot_interval_s = 10;
     cfg->publish_interval_s = 0.5;
+    cfg->mesh_history_mb = 64;
     cfg->max_request_mb = 64;
     cfg->max_jobs = 1000;
     cfg->job_memory_mb = 4096;
@@ -108,6 +109,7 @@ static const key_def keys[] = {
     {"log_level", K_LEVEL, offsetof(fm_daemon_config, log_level), 0, 0, 0},
     REAL("snapshot_interval_s", snapshot_interval_s, 0.1, 86400),
     REAL("publish_interval_s", publish_interval_s, 0.05, 3600),
+    REAL("mesh_history_mb", mesh_history_mb, 0, 1e6),
     REAL("max_request_mb", max_request_mb, 0.001, 4096),
     INT("max_jobs", max_jobs, 1, 1000000),
     REAL("job_memory_mb", job_memory_mb, 1, 1e7),

@@ -20,6 +20,7 @@ typedef struct fm_daemon_config {
     int log_level;             /* fm_log_level */
     double snapshot_interval_s; /* seconds of work between stock snapshots */
     double publish_interval_s;  /* seconds between mesh chunk publications */
+    double mesh_history_mb;     /* earlier chunk meshes kept per job (chunks?at=T) */
     double max_request_mb;
     int max_jobs;              /* jobs kept (all states) */
     double job_memory_mb;      /* grid budget per job */

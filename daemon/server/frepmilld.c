@@ -207,6 +207,7 @@ int main(int argc, char **argv)
                            .threads_per_job = cfg.threads_per_job,
                            .snapshot_interval_s = cfg.snapshot_interval_s,
                            .publish_interval_s = cfg.publish_interval_s,
+                           .mesh_history_bytes = (size_t)(cfg.mesh_history_mb * 1048576.0),
                            .max_jobs = cfg.max_jobs,
                            .job_memory_bytes = (size_t)(cfg.job_memory_mb * 1048576.0),
                            .live_stock = cfg.live_stock,

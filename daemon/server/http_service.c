@@ -103,12 +103,30 @@ static void chunk_name(const job_chunk *c, char *out, size_t size)
     snprintf(out, size, "%d_%d_%d", c->index[0], c->index[1], c->index[2]);
 }
 
+/* The version of c that showed it at program time at_s (the last one
+ * published at or before it), or NULL if it was first published later. */
+static const chunk_version *version_at(const job_chunk *c, double at_s)
+{
+    const chunk_version *found = NULL;
+    for (size_t v = 0; v < c->version_count && c->versions[v].time_s <= at_s + 1e-9; v++)
+        found = &c->versions[v];
+    return found;
+}
+
+static json_t *chunk_json(const job_chunk *c, const chunk_version *v)
+{
+    char name[48];
+    chunk_name(c, name, sizeof name);
+    return json_pack("{s:s, s:[i,i,i], s:I, s:f, s:I, s:I, s:[f,f,f], s:[f,f,f]}", "id", name,
+                     "index", c->index[0], c->index[1], c->index[2], "version",
+                     (json_int_t)v->version, "time_s", v->time_s, "triangles",
+                     (json_int_t)v->triangles, "bytes", (json_int_t)v->drc_size, "lo", c->lo[0],
+                     c->lo[1], c->lo[2], "hi", c->hi[0], c->hi[1], c->hi[2]);
+}
+
 static fm_status svc_chunks(void *ctx, const char *id, uint64_t since, double at_s, json_t **out,
                             fm_error *err)
 {
-    if (at_s >= 0)
-        return fm_error_set_reason(err, FM_ERR_INPUT, "bad_parameter",
-                                   "at: this daemon keeps no mesh history");
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
     fm_status rc = fm_publish_ensure_meshes(j, err);
@@ -118,30 +136,43 @@ static fm_status svc_chunks(void *ctx, const char *id, uint64_t since, double at
     }
     json_t *list = json_array();
     pthread_mutex_lock(&j->lock);
+    if (at_s >= 0 && (j->history_from_s < 0 || at_s < j->history_from_s - 1e-9)) {
+        rc = j->history_from_s < 0
+                 ? fm_error_set_reason(err, FM_ERR_INPUT, "no_mesh",
+                                       "job %s has published no mesh yet", j->id)
+                 : fm_error_set_reason(
+                       err, FM_ERR_INPUT, "history_dropped",
+                       "job %s: the meshes before program time %.3f s are no longer kept (the "
+                       "daemon keeps %.3g MB of mesh history per job, or was restarted since)",
+                       j->id, j->history_from_s,
+                       (double)j->jobs->cfg.mesh_history_bytes / 1048576.0);
+        pthread_mutex_unlock(&j->lock);
+        json_decref(list);
+        fm_jobs_put(ctx, j);
+        return rc;
+    }
+    uint64_t newest = 0;
     for (size_t i = 0; i < j->chunk_count; i++) {
         const job_chunk *c = &j->chunks[i];
-        if (c->version <= since) continue;
-        char name[48];
-        chunk_name(c, name, sizeof name);
-        json_array_append_new(
-            list, json_pack("{s:s, s:[i,i,i], s:I, s:I, s:I, s:[f,f,f], s:[f,f,f]}", "id", name,
-                            "index", c->index[0], c->index[1], c->index[2], "version",
-                            (json_int_t)c->version, "triangles",
-                            (json_int_t)(c->mesh ? c->mesh->triangle_count : 0), "bytes",
-                            (json_int_t)c->drc_size, "lo", c->lo[0], c->lo[1], c->lo[2], "hi",
-                            c->hi[0], c->hi[1], c->hi[2]));
+        const chunk_version *v = at_s >= 0 ? version_at(c, at_s) : job_chunk_current(c);
+        if (!v || (at_s < 0 && v->version <= since)) continue;
+        if (v->version > newest) newest = v->version;
+        json_array_append_new(list, chunk_json(c, v));
     }
-    *out = json_pack("{s:s, s:I, s:I, s:o}", "id", j->id, "version", (json_int_t)j->mesh_version,
-                     "since", (json_int_t)since, "chunks", list);
+    *out = json_pack("{s:s, s:I, s:f, s:f, s:I, s:I, s:o}", "id", j->id, "version",
+                     (json_int_t)(at_s >= 0 ? newest : j->mesh_version), "program_time_s",
+                     j->mesh_time_s, "history_from_s", j->history_from_s, "history_bytes",
+                     (json_int_t)j->history_bytes, "since", (json_int_t)since, "chunks", list);
+    if (*out && at_s >= 0) json_object_set_new(*out, "at", json_real(at_s));
     pthread_mutex_unlock(&j->lock);
     fm_jobs_put(ctx, j);
-    return FM_OK;
+    return *out ? FM_OK
+                : fm_error_set_reason(err, FM_ERR_LIMIT, "out_of_memory", "out of memory");
 }
 
 static fm_status svc_chunk(void *ctx, const char *id, const char *name, uint64_t version,
                            fm_http_blob *out, fm_error *err)
 {
-    (void)version;
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
     fm_status rc = fm_publish_ensure_meshes(j, err);
@@ -156,13 +187,28 @@ static fm_status svc_chunk(void *ctx, const char *id, const char *name, uint64_t
         char n[48];
         chunk_name(&j->chunks[i], n, sizeof n);
         if (strcmp(n, name) != 0) continue;
-        out->size = j->chunks[i].drc_size;
+        const job_chunk *c = &j->chunks[i];
+        const chunk_version *v = version ? NULL : job_chunk_current(c);
+        for (size_t k = 0; !v && k < c->version_count; k++)
+            if (c->versions[k].version == version) v = &c->versions[k];
+        if (!v) {
+            rc = version < c->versions[0].version
+                     ? fm_error_set_reason(err, FM_ERR_INPUT, "history_dropped",
+                                           "version %llu of chunk %s is no longer kept (mesh "
+                                           "history bound); list the chunks again",
+                                           (unsigned long long)version, n)
+                     : fm_error_set_reason(err, FM_ERR_INPUT, "not_found",
+                                           "chunk %s has no version %llu", n,
+                                           (unsigned long long)version);
+            break;
+        }
+        out->size = v->drc_size;
         out->data = malloc(out->size ? out->size : 1);
         if (!out->data) {
             rc = fm_error_set_reason(err, FM_ERR_LIMIT, "out_of_memory", "out of memory");
             break;
         }
-        if (out->size) memcpy(out->data, j->chunks[i].drc, out->size);
+        if (out->size) memcpy(out->data, v->drc, out->size);
         out->content_type = "application/octet-stream";
         rc = FM_OK;
         break;

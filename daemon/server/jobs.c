@@ -55,6 +55,7 @@ job *fm_jobs_record_new(const char *id, const char *jobs_dir, fm_job_doc *doc, d
     pthread_mutex_init(&j->load_lock, NULL);
     pthread_cond_init(&j->cond, NULL);
     j->next_event = 1;
+    j->history_from_s = -1;
     j->view.block = -1;
     snprintf(j->view.id, sizeof j->view.id, "%s", id);
     return j;

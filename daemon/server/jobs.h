@@ -21,6 +21,9 @@ typedef struct fm_jobs_config {
     int threads_per_job;
     double snapshot_interval_s;
     double publish_interval_s;
+    /* Bytes of earlier chunk meshes each job keeps for GET .../chunks?at=T
+     * (0: none); the oldest go first. */
+    size_t mesh_history_bytes;
     int max_jobs;
     size_t job_memory_bytes;
     /* Live mode: stock SPEC string and tool table file (NULL or "": the

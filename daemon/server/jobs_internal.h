@@ -26,14 +26,31 @@
 #define JOB_STATE_DIR_MAX 1100
 #define JOB_DIR_MAX 1300
 
+/* One published mesh of a chunk: the stock version it was made from and the
+ * program time from which it shows the chunk (until the next version's). */
+typedef struct chunk_version {
+    uint64_t version;
+    double time_s;
+    size_t triangles;
+    uint8_t *drc;      /* Draco encoding; NULL when it has no triangles */
+    size_t drc_size;
+} chunk_version;
+
+/* A chunk's published meshes, oldest first; the last is the current one.
+ * The versions before it are the history that GET .../chunks?at=T reads;
+ * together they stay under the job's history bound (publish.c). */
 typedef struct job_chunk {
     int32_t index[3];
-    uint64_t version;
     double lo[3], hi[3];
-    fm_mesh *mesh;     /* immutable once published */
-    uint8_t *drc;      /* Draco encoding of mesh; NULL when it has no triangles */
-    size_t drc_size;
+    fm_mesh *mesh;     /* the current version's mesh (immutable once published) */
+    chunk_version *versions;
+    size_t version_count, version_cap;
 } job_chunk;
+
+static inline const chunk_version *job_chunk_current(const job_chunk *c)
+{
+    return &c->versions[c->version_count - 1];
+}
 
 typedef struct job_event {
     uint64_t id;
@@ -74,6 +91,14 @@ typedef struct job {
     job_chunk *chunks;
     size_t chunk_count, chunk_cap;
     uint64_t mesh_version; /* stock version of the published chunks */
+    double mesh_time_s;    /* program time of the last publication */
+    /* The mesh history: bytes of the versions before each chunk's current
+     * one (Draco bytes and their records), at most history_limit (the
+     * daemon's mesh_history_mb); the oldest are dropped first, and
+     * history_from_s is the earliest program time it still answers
+     * (-1: nothing published yet). */
+    size_t history_bytes;
+    double history_from_s;
     int meshes_loaded;     /* chunks reflect the final stock (or a worker publishes) */
     job_event ring[JOB_EVENT_RING];
     uint64_t next_event;   /* id of the next event; ids start at 1 */
@@ -202,8 +227,9 @@ typedef struct publish_pace {
 } publish_pace;
 void fm_publish_progress(job *j, const fm_job_progress *p, publish_pace *pace);
 /* Remesh and publish the chunks of stock that changed (the caller owns the
- * stock exclusively). */
-void fm_publish_chunks(job *j, fm_stock *stock);
+ * stock exclusively), as the stock at program time program_time_s; the
+ * chunks' earlier meshes stay in the history within its bound. */
+void fm_publish_chunks(job *j, fm_stock *stock, double program_time_s);
 /* Make sure the chunks of a finished job are published (loads its stock
  * snapshot once after a restart). */
 fm_status fm_publish_ensure_meshes(job *j, fm_error *err);

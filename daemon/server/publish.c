@@ -177,17 +177,70 @@ void fm_publish_chunks_free(job *j)
 {
     for (size_t i = 0; i < j->chunk_count; i++) {
         fm_mesh_free(j->chunks[i].mesh);
-        free(j->chunks[i].drc);
+        for (size_t v = 0; v < j->chunks[i].version_count; v++) free(j->chunks[i].versions[v].drc);
+        free(j->chunks[i].versions);
     }
     free(j->chunks);
     j->chunks = NULL;
     j->chunk_count = j->chunk_cap = 0;
+    j->history_bytes = 0;
+}
+
+/* What a version costs the history once it is no longer current. */
+static size_t history_cost(const chunk_version *v)
+{
+    return sizeof *v + v->drc_size;
+}
+
+/* Keep the history under the job's bound (caller holds j->lock): drop the
+ * earlier version that stopped being valid first, over all chunks, so the
+ * history stays complete from as early a time as it can. history_from_s
+ * becomes the time that version stopped being valid: before it, that
+ * chunk's mesh is gone. */
+static void history_trim(job *j, size_t limit)
+{
+    while (j->history_bytes > limit) {
+        job_chunk *oldest = NULL;
+        for (size_t i = 0; i < j->chunk_count; i++) {
+            job_chunk *c = &j->chunks[i];
+            if (c->version_count < 2) continue;
+            if (!oldest || c->versions[1].time_s < oldest->versions[1].time_s) oldest = c;
+        }
+        if (!oldest) break;
+        size_t cost = history_cost(&oldest->versions[0]);
+        j->history_bytes = j->history_bytes > cost ? j->history_bytes - cost : 0;
+        if (oldest->versions[1].time_s > j->history_from_s)
+            j->history_from_s = oldest->versions[1].time_s;
+        free(oldest->versions[0].drc);
+        memmove(oldest->versions, oldest->versions + 1,
+                (oldest->version_count - 1) * sizeof *oldest->versions);
+        oldest->version_count--;
+    }
+}
+
+/* A remeshed chunk's new version appended (caller holds j->lock); its mesh
+ * becomes the current one. On failure (out of memory) nothing changes and
+ * the caller frees what it made. */
+static int chunk_add_version(job *j, job_chunk *c, const chunk_version *v, fm_mesh *mesh)
+{
+    if (c->version_count == c->version_cap) {
+        size_t ncap = c->version_cap ? c->version_cap * 2 : 4;
+        chunk_version *t = realloc(c->versions, ncap * sizeof *t);
+        if (!t) return -1;
+        c->versions = t;
+        c->version_cap = ncap;
+    }
+    if (c->version_count) j->history_bytes += history_cost(&c->versions[c->version_count - 1]);
+    c->versions[c->version_count++] = *v;
+    fm_mesh_free(c->mesh);
+    c->mesh = mesh;
+    return 0;
 }
 
 /* Remesh the chunks that changed since the last publication and swap them
  * in. Runs on the worker's thread (or a reader's, for a finished job whose
  * stock was loaded from its snapshot) with exclusive use of stock. */
-void fm_publish_chunks(job *j, fm_stock *stock)
+void fm_publish_chunks(job *j, fm_stock *stock, double program_time_s)
 {
     uint64_t version = fm_stock_version(stock);
     pthread_mutex_lock(&j->lock);
@@ -212,57 +265,74 @@ void fm_publish_chunks(job *j, fm_stock *stock)
     fm_mesh_extract_default(&opt);
     opt.coloring = j->doc->color_tool ? FM_MESH_COLOR_TOOL : FM_MESH_COLOR_NONE;
     job_chunk *fresh = calloc(n ? n : 1, sizeof *fresh);
-    if (!fresh) {
+    chunk_version *fresh_v = calloc(n ? n : 1, sizeof *fresh_v);
+    if (!fresh || !fresh_v) {
+        free(fresh);
+        free(fresh_v);
         free(changed);
         return;
     }
     for (size_t i = 0; i < n; i++) {
         job_chunk *c = &fresh[i];
+        chunk_version *v = &fresh_v[i];
         memcpy(c->index, changed[i].index, sizeof c->index);
-        c->version = version;
         memcpy(c->lo, changed[i].lo, sizeof c->lo);
         memcpy(c->hi, changed[i].hi, sizeof c->hi);
+        v->version = version;
+        v->time_s = program_time_s;
         fm_error err;
         c->mesh = fm_mesh_from_stock_chunk(stock, c->index, &opt, &err);
-        if (c->mesh && c->mesh->triangle_count > 0 &&
-            fm_mesh_encode_draco(c->mesh, NULL, &c->drc, &c->drc_size, &err) != FM_OK) {
-            c->drc = NULL;
-            c->drc_size = 0;
+        v->triangles = c->mesh ? c->mesh->triangle_count : 0;
+        if (v->triangles > 0 &&
+            fm_mesh_encode_draco(c->mesh, NULL, &v->drc, &v->drc_size, &err) != FM_OK) {
+            v->drc = NULL;
+            v->drc_size = 0;
         }
     }
     free(changed);
     json_t *ids = json_array();
     pthread_mutex_lock(&j->lock);
+    if (j->history_from_s < 0) j->history_from_s = program_time_s;
     for (size_t i = 0; i < n; i++) {
         job_chunk *c = &fresh[i];
         char name[48];
         snprintf(name, sizeof name, "%d_%d_%d", c->index[0], c->index[1], c->index[2]);
-        json_array_append_new(ids, json_string(name));
         size_t k = 0;
         while (k < j->chunk_count && memcmp(j->chunks[k].index, c->index, sizeof c->index)) k++;
-        if (k == j->chunk_count) {
-            if (j->chunk_count == j->chunk_cap) {
-                size_t ncap = j->chunk_cap ? j->chunk_cap * 2 : 64;
-                job_chunk *t = realloc(j->chunks, ncap * sizeof *t);
-                if (!t) {
-                    fm_mesh_free(c->mesh);
-                    free(c->drc);
-                    continue;
-                }
-                j->chunks = t;
-                j->chunk_cap = ncap;
+        if (k == j->chunk_count && j->chunk_count == j->chunk_cap) {
+            size_t ncap = j->chunk_cap ? j->chunk_cap * 2 : 64;
+            job_chunk *t = realloc(j->chunks, ncap * sizeof *t);
+            if (!t) {
+                fm_mesh_free(c->mesh);
+                free(fresh_v[i].drc);
+                continue;
             }
-            j->chunk_count++;
-        } else {
-            fm_mesh_free(j->chunks[k].mesh);
-            free(j->chunks[k].drc);
+            j->chunks = t;
+            j->chunk_cap = ncap;
         }
-        j->chunks[k] = *c;
+        if (k == j->chunk_count) {
+            j->chunks[k] = (job_chunk){0};
+            memcpy(j->chunks[k].index, c->index, sizeof c->index);
+            memcpy(j->chunks[k].lo, c->lo, sizeof c->lo);
+            memcpy(j->chunks[k].hi, c->hi, sizeof c->hi);
+            j->chunk_count++;
+        }
+        if (chunk_add_version(j, &j->chunks[k], &fresh_v[i], c->mesh) != 0) {
+            if (!j->chunks[k].version_count) j->chunk_count--; /* the one just added */
+            fm_mesh_free(c->mesh);
+            free(fresh_v[i].drc);
+            continue;
+        }
+        json_array_append_new(ids, json_string(name));
     }
+    history_trim(j, j->jobs->cfg.mesh_history_bytes);
     j->mesh_version = version;
-    fm_publish_event(j, "chunks", json_pack("{s:I, s:o}", "version", (json_int_t)version, "changed", ids));
+    j->mesh_time_s = program_time_s;
+    fm_publish_event(j, "chunks", json_pack("{s:I, s:f, s:o}", "version", (json_int_t)version,
+                                            "program_time_s", program_time_s, "changed", ids));
     pthread_mutex_unlock(&j->lock);
     free(fresh);
+    free(fresh_v);
 }
 
 fm_status fm_publish_ensure_meshes(job *j, fm_error *err)
@@ -287,7 +357,12 @@ fm_status fm_publish_ensure_meshes(job *j, fm_error *err)
             rc = fm_error_set_reason(err, FM_ERR_INPUT, "no_mesh",
                                      "job %s has no stored stock to mesh", j->id);
         } else {
-            fm_publish_chunks(j, stock);
+            /* the history starts here: the earlier meshes died with the
+             * daemon that made them */
+            pthread_mutex_lock(&j->lock);
+            double t = j->view.program_time_s;
+            pthread_mutex_unlock(&j->lock);
+            fm_publish_chunks(j, stock, t);
             fm_stock_free(stock);
             pthread_mutex_lock(&j->lock);
             j->meshes_loaded = 1;

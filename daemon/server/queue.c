@@ -72,10 +72,21 @@ static int on_progress(void *user, const fm_job_progress *p)
     }
     /* A live job publishes as soon as it has caught up with the machine. */
     if (p->idle || now - rc->last_publish >= rc->jobs->cfg.publish_interval_s) {
-        fm_publish_chunks(j, p->stock);
+        fm_publish_chunks(j, p->stock, p->program_time);
         rc->last_publish = fm_jobs_mono_s();
     }
     return 0;
+}
+
+/* The stock before the first cut: published as the stock at program time 0,
+ * the start of the mesh history (a resumed job's history starts at its
+ * first publication: the meshes before the restart are gone). */
+static void on_stock(void *user, fm_stock *stock)
+{
+    run_ctx *rc = user;
+    if (rc->resume_from > 0) return;
+    fm_publish_chunks(rc->j, stock, 0);
+    rc->last_publish = fm_jobs_mono_s();
 }
 
 static json_t *error_json(const fm_error *err)
@@ -157,7 +168,8 @@ static void run_job(fm_jobs *jobs, job *j)
 
     fm_job_result result;
     memset(&result, 0, sizeof result);
-    fm_job_hooks hooks = {.user = &rc, .progress = on_progress, .on_finding = on_finding};
+    fm_job_hooks hooks = {
+        .user = &rc, .progress = on_progress, .on_finding = on_finding, .on_stock = on_stock};
     if (st == FM_OK) {
         st = fm_job_run(&spec, &hooks, &result, &err);
         spec.resume_stock = NULL; /* the runner took it */
@@ -217,7 +229,10 @@ static void run_job(fm_jobs *jobs, job *j)
         fm_log(FM_LOG_INFO, "job %s: stopped (deleted)", j->id);
         goto done;
     }
-    fm_publish_chunks(j, result.stock);
+    pthread_mutex_lock(&j->lock);
+    double end_time = j->view.program_time_s;
+    pthread_mutex_unlock(&j->lock);
+    fm_publish_chunks(j, result.stock, end_time);
     if (result.design && result.has_deviation) {
         double w0 = fm_jobs_mono_s();
         fm_error derr;

@@ -30,7 +30,7 @@ static const struct {
     {"not_finished", 409},  {"bad_state", 409},      {"job_limit", 429},
     {"shutting_down", 503}, {"busy", 503},           {"out_of_memory", 503},
     {"storage", 507},       {"memory_budget", 413},  {"too_large", 413},
-    {"check_too_large", 413}, {"limit", 413},
+    {"check_too_large", 413}, {"limit", 413},   {"history_dropped", 410},
 };
 
 void fm_http_error_from(const fm_error *err, fm_http_error *out)

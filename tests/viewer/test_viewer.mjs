@@ -4,7 +4,8 @@
 // submits the demo job, opens the viewer in Debian's chromium (headless,
 // driven by playwright-core from viewer/node_modules), watches the job run to
 // its end, then asserts from the page that the mesh shown has the triangle
-// count the daemon reports and that the picture is not blank. The canvas
+// count the daemon reports and that the picture is not blank; scrubbed
+// back, the page shows the stock of that time (the daemon's mesh history). The canvas
 // screenshot is saved as ARTIFACT_DIR/viewer_screenshot.png (default /tmp).
 // A second job turns a rotary table; a third has a design (issue 16): its
 // deviation colours must be red in a slot cut into the design, blue on a
@@ -321,6 +322,63 @@ async function main() {
     });
     ok(!mid.live && mid.line > 0 && mid.line !== status.line,
       `replay at t=${mid.t.toFixed(1)} s shows line ${mid.line}, x ${mid.x}`);
+
+    {
+      // History (issue 18): scrubbed back, the page shows the stock as it was
+      // at that program time: its triangle count is the daemon's for that time
+      // (GET .../chunks?at=T), and at time 0 it is the uncut stock's, which a
+      // job on the same stock that cuts nothing gives as its final mesh.
+      const scrubTo = async (value) => {
+        await page.evaluate((v) => {
+          const s = document.getElementById('scrub');
+          s.value = v;
+          s.dispatchEvent(new Event('input'));
+        }, value);
+        await page.waitForFunction(() => window.frepmillViewer.stockShownAt() !== null, null, { timeout: 30000 });
+        return page.evaluate(() => ({ t: window.frepmillViewer.stockShownAt(),
+          tris: window.frepmillViewer.triangleCount(), chunks: window.frepmillViewer.chunkCount(),
+          readout: document.getElementById('mesh').textContent }));
+      };
+      const daemonAt = async (t) => {
+        const res = await fetch(`${url}/v1/jobs/${id}/chunks?at=${t}`);
+        ok(res.status === 200, `GET chunks?at=${t.toFixed(3)} answers 200`);
+        const l = await res.json();
+        return { tris: l.chunks.reduce((n, c) => n + c.triangles, 0), list: l };
+      };
+      const uncutJob = { ...job, program: { gcode: 'G21 G90\nM2\n' }, options: { name: 'viewer-uncut' } };
+      const rUncut = await fetch(`${url}/v1/jobs`, {
+        method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(uncutJob),
+      });
+      ok(rUncut.status === 202, `uncut reference job accepted (HTTP ${rUncut.status})`);
+      const uncutId = (await rUncut.json()).id;
+      for (let i = 0; ; i++) {
+        const st3 = await (await fetch(`${url}/v1/jobs/${uncutId}`)).json();
+        if (st3.state === 'done') break;
+        if (st3.state === 'failed' || i > 600) throw new Error(`the uncut job did not finish (${st3.state})`);
+        await sleep(100);
+      }
+      const uncut = await (await fetch(`${url}/v1/jobs/${uncutId}/chunks?since=0`)).json();
+      const uncutTris = uncut.chunks.reduce((n, c) => n + c.triangles, 0);
+
+      const back = await scrubTo(300);
+      const backDaemon = await daemonAt(back.t);
+      console.log(`scrubbed to t=${back.t.toFixed(3)} s: page ${back.tris} triangles in ${back.chunks} chunks ` +
+        `("${back.readout}"); daemon ${backDaemon.tris} (history from ${backDaemon.list.history_from_s} s, ` +
+        `${backDaemon.list.history_bytes} bytes)`);
+      ok(back.tris === backDaemon.tris, `at t=${back.t.toFixed(3)} s the page shows the daemon's triangle count for that time (${back.tris})`);
+      ok(back.chunks === backDaemon.list.chunks.filter((c) => c.triangles > 0).length,
+        `... in the daemon's non-empty chunks for that time (${back.chunks})`);
+      const start = await scrubTo(0);
+      const startDaemon = await daemonAt(0);
+      console.log(`scrubbed to t=0: page ${start.tris} triangles; daemon ${startDaemon.tris}; uncut job ${uncutTris}; final ${daemonTris}`);
+      ok(start.tris === startDaemon.tris, `at t=0 the page shows the daemon's triangle count for that time (${start.tris})`);
+      ok(startDaemon.tris === uncutTris, `... which is the uncut stock's (a job cutting nothing: ${uncutTris})`);
+      ok(start.tris !== daemonTris, `... and not the final stock's (${daemonTris})`);
+      await page.evaluate(() => document.getElementById('live').click());
+      await page.waitForFunction((n) => window.frepmillViewer.state.shownAt === null && !window.frepmillViewer.state.syncing
+        && window.frepmillViewer.triangleCount() === n, daemonTris, { timeout: 30000 });
+      ok(true, `back to live, the page shows the final stock again (${daemonTris} triangles)`);
+    }
 
     // A rotary table (issue 17): C turns the workpiece one full turn at 60
     // degrees a second before a slot is cut; scrubbed into the turn, the
