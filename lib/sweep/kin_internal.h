@@ -12,9 +12,11 @@
 typedef struct kin_step {
     double omega[3], b[3];
     double th0, dth;
+    int point; /* turns points about the line; 0: vectors only (TCP's orientation) */
 } kin_step;
 
-#define KIN_MAX_STEPS FM_MACHINE_MAX_ROTARY
+/* every axis, and with TCP the table axes once more for a frame_up */
+#define KIN_MAX_STEPS (2 * FM_MACHINE_MAX_ROTARY)
 
 typedef struct fm_kin {
     int tcp;
@@ -26,8 +28,10 @@ typedef struct fm_kin {
     /* Steps in the order they apply to a point of the tool: head steps
      * (nearest the spindle first), then, past `translate`, the translation
      * by P(u) (without TCP), then the table steps with negated angles (base
-     * axis first): the workpiece frame's view of the tool. With TCP every
-     * step turns vectors only and P(u) is added at the end. */
+     * axis first): the workpiece frame's view of the tool. With TCP those
+     * steps turn vectors only and P(u) is added after them; then, for a
+     * frame nearer the base (fm_machine.frame_up), the inner table steps
+     * with their own angles turn the point into that frame. */
     kin_step step[KIN_MAX_STEPS];
     int nsteps, translate;
     /* Sound constants over the whole motion: |dtip/du|, |daxis/du| (and

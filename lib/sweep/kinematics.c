@@ -80,6 +80,11 @@ fm_status fm_machine_validate(fm_machine *mc, fm_error *err)
             return fm_error_set(err, FM_ERR_INPUT, "rotary axis %c: limits are [lo, hi] in degrees with lo <= hi",
                                 name);
     }
+    int ntable = 0;
+    for (int i = 0; i < mc->rotary_count; i++) ntable += mc->rotary[i].carries == FM_ROTARY_TABLE;
+    if (mc->frame_up < 0 || mc->frame_up > ntable)
+        return fm_error_set(err, FM_ERR_INPUT, "the frame is %d links below the workpiece's, of %d table axes",
+                            mc->frame_up, ntable);
     return FM_OK;
 }
 
@@ -153,32 +158,61 @@ int fm_kin_init(fm_kin *k, const fm_motion *m, fm_error *err)
         fm_error_at(err, FM_ERR_INPUT, "", m->line, 0, "motion %ld: a rotary joint value is not finite", m->index);
         return 0;
     }
+    int ntable = 0;
+    for (int i = 0; i < mc->rotary_count; i++) ntable += mc->rotary[i].carries == FM_ROTARY_TABLE;
+    if (mc->frame_up < 0 || mc->frame_up > ntable) {
+        fm_error_at(err, FM_ERR_INPUT, "", m->line, 0, "motion %ld: the machine's frame_up %d is not in 0..%d",
+                    m->index, mc->frame_up, ntable);
+        return 0;
+    }
+    /* Without TCP the inner frame_up table axes are left out (the pose in
+     * the frame they ride on); with TCP every axis gives the orientation
+     * and the inner table axes turn the tip into that frame afterwards. */
+    int inverted = k->tcp ? ntable : ntable - mc->frame_up;
     /* Head axes, nearest the spindle first. */
     for (int i = mc->rotary_count - 1; i >= 0; i--) {
         const fm_rotary_axis *ax = &mc->rotary[i];
         if (ax->carries != FM_ROTARY_HEAD) continue;
         kin_step *s = &k->step[k->nsteps++];
         memcpy(s->omega, ax->around, sizeof s->omega);
+        s->point = !k->tcp;
         /* The pivot with the programmed point at 0: the tip is at
          * tip_offset, the gauge line tool_length above it. */
-        for (int j = 0; j < 3; j++) s->b[j] = m->tip_offset[j] + ax->through[j];
-        s->b[2] += m->tool_length + ax->pivot_length;
+        if (s->point) {
+            for (int j = 0; j < 3; j++) s->b[j] = m->tip_offset[j] + ax->through[j];
+            s->b[2] += m->tool_length + ax->pivot_length;
+        }
         s->th0 = m->rotary_start[ax->letter] * DEG;
         s->dth = (m->rotary_end[ax->letter] - m->rotary_start[ax->letter]) * DEG;
     }
-    k->translate = k->nsteps;
+    if (!k->tcp) k->translate = k->nsteps;
     /* Table axes inverted, the base axis first. */
-    for (int i = 0; i < mc->rotary_count; i++) {
+    for (int i = 0, t = 0; i < mc->rotary_count && t < inverted; i++) {
         const fm_rotary_axis *ax = &mc->rotary[i];
         if (ax->carries != FM_ROTARY_TABLE) continue;
+        t++;
         kin_step *s = &k->step[k->nsteps++];
         memcpy(s->omega, ax->around, sizeof s->omega);
-        memcpy(s->b, ax->through, sizeof s->b);
+        s->point = !k->tcp;
+        if (s->point) memcpy(s->b, ax->through, sizeof s->b);
         s->th0 = -m->rotary_start[ax->letter] * DEG;
         s->dth = -(m->rotary_end[ax->letter] - m->rotary_start[ax->letter]) * DEG;
     }
-    if (k->tcp)
-        for (int i = 0; i < k->nsteps; i++) k->step[i].b[0] = k->step[i].b[1] = k->step[i].b[2] = 0;
+    if (k->tcp) {
+        k->translate = k->nsteps;
+        /* x_frame = R_{j+1} ... R_n x_workpiece: the innermost axis first. */
+        for (int i = mc->rotary_count - 1, t = 0; i >= 0 && t < mc->frame_up; i--) {
+            const fm_rotary_axis *ax = &mc->rotary[i];
+            if (ax->carries != FM_ROTARY_TABLE) continue;
+            t++;
+            kin_step *s = &k->step[k->nsteps++];
+            memcpy(s->omega, ax->around, sizeof s->omega);
+            memcpy(s->b, ax->through, sizeof s->b);
+            s->point = 1;
+            s->th0 = m->rotary_start[ax->letter] * DEG;
+            s->dth = (m->rotary_end[ax->letter] - m->rotary_start[ax->letter]) * DEG;
+        }
+    }
 
     /* Constants: |daxis/du| <= the sum of the joint rates (angular
      * velocities of a serial chain add); |dtip/du| <= |P'| plus each
@@ -205,14 +239,15 @@ int fm_kin_init(fm_kin *k, const fm_motion *m, fm_error *err)
      * with d the farthest the point gets from the line (with TCP the
      * offset vector, |d| <= |o|). */
     double reach[KIN_MAX_STEPS] = {0};
-    if (k->tcp) {
-        for (int i = 0; i < k->nsteps; i++) reach[i] = norm3(k->off);
-    } else {
+    int turns_points = 0;
+    for (int i = 0; i < k->nsteps; i++) turns_points |= k->step[i].point;
+    if (turns_points)
         for (int piece = 0; piece < 32; piece++) kin_reach(k, piece / 32.0, (piece + 1) / 32.0, reach);
-    }
+    for (int i = 0; i < k->nsteps; i++)
+        if (!k->step[i].point) reach[i] = norm3(k->off);
     double sp = 0, ac = 0;
     for (int i = 0; i <= k->nsteps; i++) {
-        if (i == (k->tcp ? k->nsteps : k->translate)) sp += pspeed, ac += paccel;
+        if (i == k->translate) sp += pspeed, ac += paccel;
         if (i == k->nsteps) break;
         double w = fabs(k->step[i].dth), sp2 = sp + w * reach[i];
         ac += w * (sp + sp2);
@@ -258,7 +293,7 @@ void fm_kin_pose(const fm_kin *k, double u, double c[3], double a[3], double dc[
     memcpy(p, k->off, sizeof p);
     program_point(k, u, P, dP);
     for (int i = 0; i <= k->nsteps; i++) {
-        if (i == k->translate && !k->tcp)
+        if (i == k->translate)
             for (int j = 0; j < 3; j++) p[j] += P[j], dp[j] += dP[j];
         if (i == k->nsteps) break;
         const kin_step *s = &k->step[i];
@@ -280,8 +315,6 @@ void fm_kin_pose(const fm_kin *k, double u, double c[3], double a[3], double dc[
             for (int j = 0; j < 3; j++) dv[j] += s->dth * wq[j];
         }
     }
-    if (k->tcp)
-        for (int j = 0; j < 3; j++) p[j] += P[j], dp[j] += dP[j];
     memcpy(c, p, sizeof p);
     memcpy(a, v, sizeof v);
     if (dc) memcpy(dc, dp, sizeof dp);
@@ -352,17 +385,18 @@ static void pose_boxes(const fm_kin *k, double ua, double ub, kbox *pb, kbox *vb
     memcpy(pb->m, k->off, sizeof pb->m);
     vb->m[2] = 1;
     for (int i = 0; i <= k->nsteps; i++) {
-        if (i == k->translate && !k->tcp)
+        if (i == k->translate)
             for (int j = 0; j < 3; j++) pb->m[j] += P.m[j], pb->h[j] += P.h[j];
         if (i == k->nsteps) break;
         const kin_step *s = &k->step[i];
         double th = s->th0 + um * s->dth, delta = fabs(s->dth) * w;
-        double d = rotate_box(s, th, delta, !k->tcp, pb);
+        double d = rotate_box(s, th, delta, s->point, pb);
         if (reach && d > reach[i]) reach[i] = d;
         rotate_box(s, th, delta, 0, vb);
     }
-    if (k->tcp)
-        for (int j = 0; j < 3; j++) pb->m[j] += P.m[j], pb->h[j] += P.h[j];
+    /* rounding of the additions (a frame with no step after the
+     * translation gets no padding from rotate_box) */
+    for (int j = 0; j < 3; j++) pb->h[j] += 1e-13 * (fabs(pb->m[j]) + pb->h[j] + 1);
 }
 
 static void kin_reach(const fm_kin *k, double ua, double ub, double reach[])
@@ -379,9 +413,10 @@ void fm_kin_pose_box(const fm_kin *k, double ua, double ub, double clo[3], doubl
     for (int j = 0; j < 3; j++) {
         clo[j] = pb.m[j] - pb.h[j];
         chi[j] = pb.m[j] + pb.h[j];
-        /* The axis is a unit vector. */
-        alo[j] = fmax(-1, vb.m[j] - vb.h[j]);
-        ahi[j] = fmin(1, vb.m[j] + vb.h[j]);
+        /* The axis is a unit vector (its computed components may pass 1
+         * by a rounding). */
+        alo[j] = fmax(-1 - 1e-12, vb.m[j] - vb.h[j]);
+        ahi[j] = fmin(1 + 1e-12, vb.m[j] + vb.h[j]);
     }
 }
 
@@ -397,18 +432,17 @@ int fm_kin_fold(const fm_motion *m, fm_motion *out)
     }
     fm_kin k;
     if (!fm_kin_init(&k, m, NULL)) return 0;
-    /* tip(u) = M P(u) + t: M the table's inverse rotation without TCP, the
-     * identity with it. */
+    /* tip(u) = M P(u) + t: M the rotation of the steps after the
+     * translation (without TCP the table's inverse; with it the turn into a
+     * frame nearer the base, or the identity). */
     double M[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, t[3], axis[3];
-    if (!k.tcp) {
-        for (int i = k.translate; i < k.nsteps; i++) {
-            double R[9], r2[9];
-            rotation(k.step[i].omega, k.step[i].th0, R);
-            for (int r = 0; r < 3; r++)
-                for (int c = 0; c < 3; c++)
-                    r2[3 * r + c] = R[3 * r] * M[c] + R[3 * r + 1] * M[3 + c] + R[3 * r + 2] * M[6 + c];
-            memcpy(M, r2, sizeof M);
-        }
+    for (int i = k.translate; i < k.nsteps; i++) {
+        double R[9], r2[9];
+        rotation(k.step[i].omega, k.step[i].th0, R);
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < 3; c++)
+                r2[3 * r + c] = R[3 * r] * M[c] + R[3 * r + 1] * M[3 + c] + R[3 * r + 2] * M[6 + c];
+        memcpy(M, r2, sizeof M);
     }
     /* t: the tip with the programmed point at 0. */
     fm_kin k0 = k;
@@ -493,16 +527,14 @@ void fm_kin_build_pose(fm_graph *g, const fm_kin *k, fm_node u, fm_node c[3], fm
         v[j] = fm_const(g, j == 2 ? 1 : 0);
     }
     for (int i = 0; i <= k->nsteps; i++) {
-        if (i == k->translate && !k->tcp)
+        if (i == k->translate)
             for (int j = 0; j < 3; j++) p[j] = fm_add(g, p[j], P[j]);
         if (i == k->nsteps) break;
         const kin_step *s = &k->step[i];
         fm_node th = fm_add(g, fm_const(g, s->th0), fm_mul(g, u, fm_const(g, s->dth)));
-        build_rotate(g, s, th, !k->tcp, p);
+        build_rotate(g, s, th, s->point, p);
         build_rotate(g, s, th, 0, v);
     }
-    if (k->tcp)
-        for (int j = 0; j < 3; j++) p[j] = fm_add(g, p[j], P[j]);
     for (int j = 0; j < 3; j++) {
         c[j] = p[j];
         a[j] = v[j];

@@ -54,6 +54,13 @@ typedef struct fm_machine {
     int rotary_count;                              /* 0: a 3-axis machine */
     fm_rotary_axis rotary[FM_MACHINE_MAX_ROTARY];  /* chain order from the base */
     int tcp;  /* tool centre point control: active from the start (G43.4 on, G49 off) */
+    /* The frame the tool's pose is given in: 0, the workpiece's (every
+     * table axis inverted); k > 0, the link k table axes nearer the base
+     * (the innermost k table axes are not inverted): 1 is the cradle under
+     * an AC trunnion's C table, the number of table axes the machine table.
+     * The check sweeps the tool there against machine components on that
+     * link (lib/check). */
+    int frame_up;
 } fm_machine;
 
 /* Positions are millimetres in machine coordinates: the programmed point plus

@@ -3,7 +3,8 @@
  * table AC trunnion, a head-head BC head and a head-table B/C machine,
  * with and without TCP, at 100 points of a 5-axis move; sound pose boxes
  * and speed constants on random machines and motions; joints that stand
- * still fold to 3-axis motions; the sweep of rotary motions against a
+ * still fold to 3-axis motions; poses in the frame of a link nearer the
+ * base (frame_up); the sweep of rotary motions against a
  * brute-force maximum; the 4D DAG against the native pose. */
 #include "test.h"
 #include "sweep/kin_internal.h"
@@ -118,6 +119,75 @@ static fm_motion rotary_line(const fm_machine *mc, const double from[3], const d
     memcpy(m.rotary_end, r1, sizeof m.rotary_end);
     m.tcp = tcp;
     return m;
+}
+
+/* The tool's pose in the frame of a link nearer the base (frame_up, for
+ * the check's machine components): on the AC trunnion, the cradle A
+ * rides on (frame_up 1: x_cradle = R_C x_workpiece = R_A^-1 x_machine)
+ * and the machine table (frame_up 2: x_machine), with and without TCP, at
+ * 100 points of a move of all five axes; and a motion whose joints stand
+ * still folds to the same 3-axis motion in that frame. */
+static void check_frame_up(void)
+{
+    double from[3] = {12, -7, 20}, to[3] = {-15, 9, 4};
+    double r0[3] = {-10, 0, 15}, r1[3] = {35, 0, 120};
+    double worst = 0;
+    for (int tcp = 0; tcp <= 1; tcp++)
+        for (int up = 1; up <= 2; up++) {
+            fm_machine mc = trunnion(tcp);
+            mc.frame_up = up;
+            CHECK(fm_machine_validate(&mc, NULL) == FM_OK);
+            fm_motion m = rotary_line(&mc, from, to, r0, r1, tcp);
+            m.tip_offset[2] = -0.7;
+            for (int i = 0; i < 100; i++) {
+                double u = i / 99.0, a = (r0[0] + u * (r1[0] - r0[0])) * DEG, c = (r0[2] + u * (r1[2] - r0[2])) * DEG;
+                double X[3], tip_m[3], axis_m[3], z[3] = {0, 0, 1}, q[3];
+                for (int k = 0; k < 3; k++) X[k] = from[k] + u * (to[k] - from[k]);
+                if (tcp) {
+                    /* the tip P + W o in the workpiece frame, carried to the machine */
+                    double wtip[3], waxis[3], dummy[3];
+                    trunnion_written(a, c, X, dummy, waxis);
+                    for (int k = 0; k < 3; k++) wtip[k] = X[k] - 0.7 * waxis[k];
+                    about(Rz, TRT_C_THROUGH, c, wtip, q);
+                    about(Rx, TRT_A_THROUGH, a, q, tip_m);
+                } else {
+                    tip_m[0] = X[0], tip_m[1] = X[1], tip_m[2] = X[2] - 0.7;
+                }
+                memcpy(axis_m, z, sizeof z);
+                double want_tip[3], want_axis[3];
+                if (up == 2) {
+                    memcpy(want_tip, tip_m, sizeof want_tip);
+                    memcpy(want_axis, axis_m, sizeof want_axis);
+                } else {
+                    about(Rx, TRT_A_THROUGH, -a, tip_m, want_tip);
+                    Rx(-a, axis_m, want_axis);
+                }
+                double tip[3], axis[3];
+                fm_motion_pose_at(&m, u, tip, axis);
+                for (int k = 0; k < 3; k++) {
+                    CHECK_NEAR(tip[k], want_tip[k], 1e-9);
+                    CHECK_NEAR(axis[k], want_axis[k], 1e-12);
+                    worst = fmax(worst, fabs(tip[k] - want_tip[k]));
+                }
+            }
+            /* joints standing still: the folded 3-axis motion has the same pose */
+            fm_motion still = rotary_line(&mc, from, to, r1, r1, tcp), f;
+            still.tip_offset[2] = -0.7;
+            CHECK(fm_kin_fold(&still, &f));
+            for (int i = 0; i <= 10; i++) {
+                double u = i / 10.0, t1[3], a1[3], t2[3], a2[3];
+                fm_motion_pose_at(&still, u, t1, a1);
+                fm_motion_pose_at(&f, u, t2, a2);
+                for (int k = 0; k < 3; k++) {
+                    CHECK_NEAR(t1[k], t2[k], 1e-9);
+                    CHECK_NEAR(a1[k], a2[k], 1e-12);
+                }
+            }
+        }
+    printf("poses in the cradle's and the machine's frames: off the written-out chain by at most %.3g mm\n", worst);
+    fm_machine bad = trunnion(0);
+    bad.frame_up = 3;
+    CHECK(fm_machine_validate(&bad, NULL) != FM_OK);
 }
 
 /* ------------------------------------------- Done when: 100 points -- */
@@ -274,6 +344,11 @@ static fm_machine random_machine(void)
         ax->pivot_length = test_uniform(0, 150);
     }
     mc.tcp = test_rand01() < 0.5;
+    /* poses in the frame of any table link (lib/check's machine components) */
+    int ntable = 0;
+    for (int i = 0; i < mc.rotary_count; i++) ntable += mc.rotary[i].carries == FM_ROTARY_TABLE;
+    mc.frame_up = (int)(test_rand01() * (ntable + 1));
+    if (mc.frame_up > ntable) mc.frame_up = ntable;
     CHECK(fm_machine_validate(&mc, NULL) == FM_OK);
     return mc;
 }
@@ -631,6 +706,7 @@ int main(void)
 {
     check_machine();
     check_five_axis_move();
+    check_frame_up();
     check_random_soundness();
     check_box_tightness();
     check_fold();
