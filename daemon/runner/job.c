@@ -652,15 +652,11 @@ static fm_status setup_check(cutter *c, const survey *sv, fm_error *err)
                                           "fixture %s: give a .hf model or an .stl mesh", f);
         if (st != FM_OK) return st;
     }
-    /* the machine's components on the workpiece's link: fixtures whose
-     * contacts are machine_contact */
+    /* the machine's components: fixtures whose contacts are
+     * machine_contact, on their link */
     for (int i = 0; i < jc->options.machine.component_count; i++) {
-        const char *f = jc->options.machine.component_path[i];
-        fm_status st = fm_path_has_extension(f, ".hf")
-                           ? fm_check_add_fixture_hf(c->check, f, NULL, voxel, err)
-                           : fm_check_add_fixture_stl(c->check, f, voxel, err);
+        fm_status st = fm_check_add_component(c->check, i, voxel, err);
         if (st != FM_OK) return st;
-        fm_check_set_fixture_machine(c->check, fm_check_fixture_count(c->check) - 1);
     }
     fm_stock_options own = c->spec->stock, defaults;
     fm_stock_options_default(&defaults);

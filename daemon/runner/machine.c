@@ -115,11 +115,12 @@ static fm_status read_rotary(json_t *arr, const char *path, fm_machine *mc, fm_e
 }
 
 /* "components": [{"model": FILE.hf|FILE.stl, "link": L}]: solids of the
- * machine on the link that carries the workpiece (the last table axis of
- * the chain, or "table" when no rotary axis carries the table), which stay
- * put in the workpiece frame: the check treats them as fixtures whose
- * contacts are machine_contact. Components on other links move against
- * the workpiece and are not handled yet: refused, not ignored. */
+ * machine on a table link: "table" (the machine table, under every rotary
+ * table axis) or the letter of a table axis (the link it turns: on an AC
+ * trunnion "a" is the cradle, "c" the platter that carries the
+ * workpiece). The check sweeps the tool in that link's frame and reports
+ * contacts as machine_contact. Components on the head (a spindle housing)
+ * move with the tool and are not handled yet: refused, not ignored. */
 static fm_status read_components(json_t *val, const char *path, fm_check_machine *m, fm_error *err)
 {
     size_t n = json_is_array(val) ? json_array_size(val) : 0;
@@ -127,11 +128,13 @@ static fm_status read_components(json_t *val, const char *path, fm_check_machine
         return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
                            "components: expected an array of at most %d {\"model\": FILE, \"link\": L}",
                            FM_CHECK_MAX_COMPONENTS);
-    const char *work_link = "table";
+    /* The table links from the base: "table", then each table axis's. */
     static const char *const letters[3] = {"a", "b", "c"};
-    for (int i = 0; i < m->chain.rotary_count; i++)
+    const char *links[FM_MACHINE_MAX_ROTARY + 1] = {"table"};
+    int nlinks = 1;
+    for (int i = 0; i < m->chain.rotary_count && i < FM_MACHINE_MAX_ROTARY; i++)
         if (m->chain.rotary[i].carries == FM_ROTARY_TABLE && (unsigned)m->chain.rotary[i].letter < 3)
-            work_link = letters[m->chain.rotary[i].letter];
+            links[nlinks++] = letters[m->chain.rotary[i].letter];
     for (size_t i = 0; i < n; i++) {
         json_t *c = json_array_get(val, i);
         if (!json_is_object(c))
@@ -160,12 +163,30 @@ static fm_status read_components(json_t *val, const char *path, fm_check_machine
             return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
                                "components[%zu].model: a .hf model or an .stl mesh (path under %d bytes)", i,
                                FM_CHECK_COMPONENT_PATH);
-        if (strcmp(link, work_link))
+        int at = -1;
+        for (int k = 0; k < nlinks; k++)
+            if (!strcmp(link, links[k])) at = k;
+        if (at < 0) {
+            int head = 0;
+            for (int k = 0; k < m->chain.rotary_count && k < FM_MACHINE_MAX_ROTARY; k++)
+                if (m->chain.rotary[k].carries == FM_ROTARY_HEAD && (unsigned)m->chain.rotary[k].letter < 3 &&
+                    !strcmp(link, letters[m->chain.rotary[k].letter]))
+                    head = 1;
+            if (head || !strcmp(link, "head") || !strcmp(link, "spindle"))
+                return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                   "components[%zu].link \"%.16s\": components on the head move with the tool "
+                                   "and are not handled yet; give table links (\"table\" or a table axis)",
+                                   i, link);
+            char known[48] = "";
+            for (int k = 0; k < nlinks; k++) {
+                size_t used = strlen(known);
+                snprintf(known + used, sizeof known - used, "%s\"%s\"", k ? ", " : "", links[k]);
+            }
             return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
-                               "components[%zu].link \"%.16s\": only components on the link that carries the "
-                               "workpiece (here \"%s\") are supported; components moving against the "
-                               "workpiece are not handled yet",
-                               i, link, work_link);
+                               "components[%zu].link \"%.16s\": not a table link of this machine (%s)", i, link,
+                               known);
+        }
+        m->component_frame_up[i] = nlinks - 1 - at;
         memcpy(m->component_path[i], model, len + 1);
         m->component_count = (int)i + 1;
     }

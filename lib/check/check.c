@@ -284,7 +284,39 @@ typedef struct part_ctx {
     fm_sweep_worker *worker;
     const fm_sweep *flutes;
     fm_sweep_worker *flutes_worker;
+    /* A part swept in the frame of a link nearer the base (frame_up > 0):
+     * findings give the tool's place from `report`, its sweep in the
+     * workpiece frame, and carry the contact point back to that frame. */
+    const fm_sweep *report;
+    int frame_up;
 } part_ctx;
+
+/* A point of the link frame_up table axes nearer the base than the
+ * workpiece's, at motion m's joints at time t, in the workpiece frame:
+ * x_machine = R_link x + t_link = R_work x_work + t_work. */
+static void link_to_workpiece(const fm_motion *m, int frame_up, double t, const double p[3], double out[3])
+{
+    const fm_machine *mc = m->machine;
+    int ntable = 0;
+    for (int i = 0; i < mc->rotary_count; i++) ntable += mc->rotary[i].carries == FM_ROTARY_TABLE;
+    double joints[3], rl[9], tl[3], rw[9], tw[3], x[3];
+    fm_motion_joints_at(m, t, joints);
+    fm_machine_table_transform(mc, joints, ntable - frame_up, rl, tl);
+    fm_machine_table_transform(mc, joints, -1, rw, tw);
+    for (int r = 0; r < 3; r++) x[r] = rl[3 * r] * p[0] + rl[3 * r + 1] * p[1] + rl[3 * r + 2] * p[2] + tl[r] - tw[r];
+    for (int r = 0; r < 3; r++) out[r] = rw[r] * x[0] + rw[3 + r] * x[1] + rw[6 + r] * x[2];
+}
+
+/* Where the finding puts the tool and the contact (workpiece frame). */
+static void finding_place(const part_ctx *pc, double t, const double at[3], fm_check_finding *f)
+{
+    double axis[3];
+    fm_sweep_pose(pc->report ? pc->report : pc->sweep, t, f->position, axis);
+    if (pc->frame_up > 0)
+        link_to_workpiece(pc->m, pc->frame_up, t, at, f->contact);
+    else
+        memcpy(f->contact, at, sizeof f->contact);
+}
 
 static fm_status relate_part(fm_check *c, const part_ctx *pc, const fm_stock *grid, int is_stock,
                              int ordered, double clear, fm_check_kind kind, int fixture,
@@ -325,9 +357,7 @@ static fm_status relate_part(fm_check *c, const part_ctx *pc, const fm_stock *gr
         f.line = m->line;
         f.block = m->block;
         f.time_s = r.uncertain_t;
-        double axis[3];
-        fm_sweep_pose(pc->sweep, r.uncertain_t, f.position, axis);
-        memcpy(f.contact, r.uncertain_at, sizeof f.contact);
+        finding_place(pc, r.uncertain_t, r.uncertain_at, &f);
         f.points = r.uncertain;
         st = record(c, FM_CHECK_UNCERTAIN, pc->part, -1, &f, err);
         if (st != FM_OK) return st;
@@ -342,9 +372,7 @@ static fm_status relate_part(fm_check *c, const part_ctx *pc, const fm_stock *gr
     double t = r.need_first ? r.first_t : r.depth_t;
     const double *at = r.need_first ? r.first_at : r.depth_at;
     f.time_s = t;
-    double axis[3];
-    fm_sweep_pose(pc->sweep, t, f.position, axis);
-    memcpy(f.contact, at, sizeof f.contact);
+    finding_place(pc, t, at, &f);
     return record(c, kind, pc->part, fixture, &f, err);
 }
 
@@ -382,7 +410,9 @@ static fm_status check_start(fm_check *c, const fm_motion *first, const fm_tool 
             fm_sweep_free(s);
             return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
         }
-        part_ctx pc = {&sm, tool, (fm_check_part)p, s, w, NULL, NULL};
+        /* the machine stands with every joint at 0: every link's frame is
+         * the workpiece's */
+        part_ctx pc = {&sm, tool, (fm_check_part)p, s, w, NULL, NULL, NULL, 0};
         st = relate_part(c, &pc, stock, 1, 0, 0.0, FM_CHECK_START_IN_STOCK, -1, err);
         for (size_t fx = 0; st == FM_OK && fx < c->fixture_count; fx++)
             st = relate_part(c, &pc, c->fixtures[fx].grid, 0, 0, c->opt.clearance_mm[p],
@@ -483,6 +513,40 @@ static fm_status add_pending(fm_check *c, const fm_motion *m, const fm_tool *too
     return FM_OK;
 }
 
+/* Machine components on links nearer the base than the workpiece's: each
+ * part swept in that link's frame (the motion's chain with frame_up, where
+ * the component stands still) and related to the component there. Only
+ * motions with joint values can be placed there (not parametric ones). */
+static fm_status check_moving_components(fm_check *c, const fm_motion *m, const fm_tool *tool,
+                                         fm_sweep *const sweeps[], fm_sweep_worker *const workers[],
+                                         fm_error *err)
+{
+    if (!fm_motion_has_rotary(m)) return FM_OK;
+    fm_status st = FM_OK;
+    for (int up = 1; up <= FM_MACHINE_MAX_ROTARY && st == FM_OK; up++) {
+        int any = 0;
+        for (size_t fx = 0; fx < c->fixture_count; fx++) any |= c->fixtures[fx].grid && c->fixtures[fx].frame_up == up;
+        if (!any) continue;
+        fm_machine frame = *m->machine;
+        frame.frame_up = up;
+        fm_motion mf = *m;
+        mf.machine = &frame;
+        for (int p = 0; p < FM_CHECK_PART_COUNT && st == FM_OK; p++) {
+            if (!sweeps[p]) continue;
+            fm_sweep *s = NULL;
+            st = fm_sweep_new(&mf, tool_part(tool, (fm_check_part)p), check_sweep_options(c), &s, err);
+            if (st != FM_OK) break;
+            part_ctx pc = {&mf, tool, (fm_check_part)p, s, workers[p], NULL, NULL, sweeps[p], up};
+            for (size_t fx = 0; st == FM_OK && fx < c->fixture_count; fx++)
+                if (c->fixtures[fx].frame_up == up)
+                    st = relate_part(c, &pc, c->fixtures[fx].grid, 0, 0, c->opt.clearance_mm[p],
+                                     FM_CHECK_FIXTURE_CONTACT, (int)fx, err);
+            fm_sweep_free(s);
+        }
+    }
+    return st;
+}
+
 fm_status fm_check_motion(fm_check *c, const fm_motion *m, const fm_tool *tool,
                           const fm_stock *stock, fm_error *err)
 {
@@ -531,8 +595,8 @@ fm_status fm_check_motion(fm_check *c, const fm_motion *m, const fm_tool *tool,
     }
     for (int p = 0; p < FM_CHECK_PART_COUNT && st == FM_OK; p++) {
         if (!sweeps[p]) continue;
-        part_ctx pc = {m, tool, (fm_check_part)p, sweeps[p], workers[p],
-                       sweeps[FM_CHECK_PART_FLUTES], workers[FM_CHECK_PART_FLUTES]};
+        part_ctx pc = {m,          tool, (fm_check_part)p, sweeps[p], workers[p], sweeps[FM_CHECK_PART_FLUTES],
+                       workers[FM_CHECK_PART_FLUTES], NULL, 0};
         if (p == FM_CHECK_PART_FLUTES) {
             /* Feed motions' flutes are meant to cut; a rapid's must not, and
              * a feed's matter when the spindle is off or it plunges a tool
@@ -552,9 +616,11 @@ fm_status fm_check_motion(fm_check *c, const fm_motion *m, const fm_tool *tool,
                              -1, err);
         }
         for (size_t fx = 0; st == FM_OK && fx < c->fixture_count; fx++)
-            st = relate_part(c, &pc, c->fixtures[fx].grid, 0, 0, c->opt.clearance_mm[p],
-                             FM_CHECK_FIXTURE_CONTACT, (int)fx, err);
+            if (!c->fixtures[fx].frame_up)
+                st = relate_part(c, &pc, c->fixtures[fx].grid, 0, 0, c->opt.clearance_mm[p],
+                                 FM_CHECK_FIXTURE_CONTACT, (int)fx, err);
     }
+    if (st == FM_OK) st = check_moving_components(c, m, tool, sweeps, workers, err);
     for (int p = 0; p < FM_CHECK_PART_COUNT; p++) fm_sweep_free(sweeps[p]);
     /* What the caller cuts next: the motion as the interpreter gave it. */
     if (st == FM_OK) {

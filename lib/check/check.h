@@ -66,12 +66,17 @@ typedef struct fm_check_machine {
     double reference_points[4][3];
     int reference_point_count;
     fm_machine chain;        /* rotary axes (lib/sweep), with their travel limits; none: 3-axis */
-    /* Machine components (a .hf model or an .stl mesh, workpiece
-     * coordinates at all joints 0) on the link that carries the workpiece:
-     * they stay put in the workpiece frame and the caller adds them as
-     * fixtures marked with fm_check_set_fixture_machine. */
+    /* Machine components (a .hf model or an .stl mesh, machine
+     * coordinates with every joint at 0, where the workpiece frame is the
+     * machine frame) on a table link: the caller adds each with
+     * fm_check_add_component. component_frame_up is the link: 0 the one
+     * that carries the workpiece (the component stays put in the workpiece
+     * frame), k the link k table axes nearer the base (the cradle under an
+     * AC trunnion's C table: 1; the machine table: every table axis), where
+     * the tool is swept in that link's frame (fm_machine.frame_up). */
     int component_count;
     char component_path[FM_CHECK_MAX_COMPONENTS][FM_CHECK_COMPONENT_PATH];
+    int component_frame_up[FM_CHECK_MAX_COMPONENTS];
 } fm_check_machine;
 
 typedef struct fm_check_options {
@@ -140,11 +145,17 @@ fm_status fm_check_add_fixture_hf(fm_check *check, const char *path, const char 
 fm_status fm_check_add_fixture_stl(fm_check *check, const char *path, double voxel_mm,
                                    fm_error *err);
 size_t fm_check_fixture_count(const fm_check *check);
-/* The fixture (index in the order added) is a machine component: contacts
- * with it are FM_CHECK_MACHINE_CONTACT rather than fixture contacts. */
-void fm_check_set_fixture_machine(fm_check *check, size_t fixture);
+/* The machine's component i (options.machine.component_path[i], on the
+ * link component_frame_up[i]) as a fixture whose contacts are
+ * FM_CHECK_MACHINE_CONTACT: placed after the fixtures the caller added
+ * before it, in that order ("fixture" in findings counts both). A
+ * component on a link nearer the base than the workpiece's moves against
+ * the workpiece: it is checked against motions that carry joint values
+ * (G-code; a parametric trajectory carries none and is not checked against
+ * it), and G38 probing does not see it. */
+fm_status fm_check_add_component(fm_check *check, int i, double voxel_mm, fm_error *err);
 /* The largest signed distance (mm, positive inside) at p over the
- * fixtures: the distance to the nearest fixture's surface outside them all.
+ * fixtures that stay put in the workpiece frame: the distance to the nearest fixture's surface outside them all.
  * True within the grids' band (32 voxels), and beyond it no larger in size
  * than the truth, so a probe may step by it without crossing a surface.
  * -HUGE_VAL when no fixture lies within the tool's reach. G38 probing

@@ -28,6 +28,7 @@ typedef struct check_fixture {
     char name[256];
     fm_stock *grid; /* true distances in its band, mm */
     int machine;    /* a machine component: its contacts are machine_contact */
+    int frame_up;   /* its link, table axes nearer the base than the workpiece's */
 } check_fixture;
 
 void check_fixture_free(check_fixture *fx);

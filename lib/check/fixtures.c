@@ -30,8 +30,9 @@ double fm_check_fixture_distance(const fm_check *c, const double p[3])
 {
     double best = -HUGE_VAL;
     for (size_t i = 0; i < c->fixture_count; i++) {
-        /* a fixture out of the tool's reach has no grid */
-        if (!c->fixtures[i].grid) continue;
+        /* a fixture out of the tool's reach has no grid; a component
+         * moving against the workpiece is not where its grid says */
+        if (!c->fixtures[i].grid || c->fixtures[i].frame_up) continue;
         double v = fm_stock_sample(c->fixtures[i].grid, p);
         if (v > best) best = v;
     }
@@ -182,9 +183,76 @@ done:
     return st;
 }
 
-void fm_check_set_fixture_machine(fm_check *c, size_t fixture)
+/* Where the tool can go, seen from the link frame_up table axes nearer
+ * the base: the region's bounding ball turned about the inner table axes'
+ * lines by any angle, innermost first (x_link = R_{j+1} ... R_n
+ * x_workpiece, each line at home), lies in the ball about the centre's
+ * foot on the line grown by the centre's distance from it. */
+static void frame_region(const fm_check *c, int frame_up, double lo[3], double hi[3])
 {
-    if (fixture < c->fixture_count) c->fixtures[fixture].machine = 1;
+    const fm_machine *mc = &c->opt.machine.chain;
+    double ctr[3], rad = 0;
+    for (int a = 0; a < 3; a++) {
+        ctr[a] = 0.5 * (c->region_lo[a] + c->region_hi[a]);
+        rad += 0.25 * (c->region_hi[a] - c->region_lo[a]) * (c->region_hi[a] - c->region_lo[a]);
+    }
+    rad = sqrt(rad);
+    for (int i = mc->rotary_count - 1, t = 0; i >= 0 && t < frame_up; i--) {
+        const fm_rotary_axis *ax = &mc->rotary[i];
+        if (ax->carries != FM_ROTARY_TABLE) continue;
+        t++;
+        double along = 0, d = 0, foot[3];
+        for (int a = 0; a < 3; a++) along += (ctr[a] - ax->through[a]) * ax->around[a];
+        for (int a = 0; a < 3; a++) {
+            foot[a] = ax->through[a] + along * ax->around[a];
+            d += (ctr[a] - foot[a]) * (ctr[a] - foot[a]);
+        }
+        rad += sqrt(d);
+        memcpy(ctr, foot, sizeof ctr);
+    }
+    for (int a = 0; a < 3; a++) {
+        lo[a] = ctr[a] - rad * (1 + 1e-12) - 1e-9;
+        hi[a] = ctr[a] + rad * (1 + 1e-12) + 1e-9;
+    }
+}
+
+fm_status fm_check_add_component(fm_check *c, int i, double voxel_mm, fm_error *err)
+{
+    const fm_check_machine *mc = &c->opt.machine;
+    if (i < 0 || i >= mc->component_count || i >= FM_CHECK_MAX_COMPONENTS)
+        return fm_error_set(err, FM_ERR_INPUT, "the machine has no component %d", i);
+    const char *path = mc->component_path[i];
+    int up = mc->component_frame_up[i], ntable = 0;
+    for (int k = 0; k < mc->chain.rotary_count; k++) ntable += mc->chain.rotary[k].carries == FM_ROTARY_TABLE;
+    if (up < 0 || up > ntable)
+        return fm_error_set(err, FM_ERR_INPUT,
+                            "component %s: its link lies %d table axes below the workpiece's, of %d", path, up,
+                            ntable);
+    size_t len = strlen(path);
+    int hf = len > 3 && !strcmp(path + len - 3, ".hf");
+    /* A HyperFun component that is not bounded (a table as a half-space)
+     * is kept within where the tool can go, seen from its own link. */
+    int had_region = c->have_region;
+    double keep_lo[3], keep_hi[3];
+    memcpy(keep_lo, c->region_lo, sizeof keep_lo);
+    memcpy(keep_hi, c->region_hi, sizeof keep_hi);
+    if (up > 0 && had_region) {
+        double lo[3], hi[3];
+        frame_region(c, up, lo, hi);
+        fm_check_set_region(c, lo, hi);
+    }
+    size_t before = c->fixture_count;
+    fm_status st = hf ? fm_check_add_fixture_hf(c, path, NULL, voxel_mm, err)
+                      : fm_check_add_fixture_stl(c, path, voxel_mm, err);
+    c->have_region = had_region;
+    memcpy(c->region_lo, keep_lo, sizeof keep_lo);
+    memcpy(c->region_hi, keep_hi, sizeof keep_hi);
+    if (st != FM_OK) return st;
+    if (c->fixture_count > before) {
+        c->fixtures[before].machine = 1;
+        c->fixtures[before].frame_up = up;
+    }
+    return FM_OK;
 }
 
 fm_status fm_check_add_fixture_stl(fm_check *c, const char *path, double voxel_mm, fm_error *err)

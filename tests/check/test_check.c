@@ -470,6 +470,127 @@ static void test_machine_contact(void)
     fm_check_free(c);
 }
 
+/* Machine components on links that move against the workpiece (issue
+ * 17), each with a second move where the component, wrongly placed in the
+ * workpiece frame, would be met and is not.
+ *  - A 4-axis indexer: A turns the workpiece about X (through the origin);
+ *    the headstock housing (check/headstock.hf: x -30..-5, y -8..8,
+ *    z -60..15) stands on the machine table. No TCP: X Y Z are the
+ *    machine's. With A at 90, line 5 lowers the tip at X-15 Y0 to Z12: the
+ *    flutes' bottom goes 3 mm into the housing's top (10 mm from its x
+ *    faces, 5 from its y faces for the flutes' rim): machine_contact of
+ *    the flutes at line 5, 3 mm deep. In the workpiece frame the tool
+ *    then points along R_x(-90) z = +Y from (-15, 12, 0) (x_w = (x, z,
+ *    -y)), first touching at (-15, 15, 0) from (x, 15, -y) of a point of
+ *    the housing's top. Line 8 lowers the tip at Y30 to Z0: 19 mm off the
+ *    housing's y face, clear; in the workpiece frame the housing would
+ *    hold the tool (from (-15, 0, -30) along +Y).
+ *  - An AC trunnion with TCP: C turns the platter (and the workpiece)
+ *    about Z on A's cradle, whose side wall (check/cradle_wall.hf:
+ *    x 80..100) turns with A only. The tip stands at (0, 85, 5) in the
+ *    workpiece frame; line 4 turns C to -75, which carries that point to
+ *    R_z(C) (0, 85) = (85 sin|C|, 85 cos|C|) in the cradle's frame (A at
+ *    0): the flutes (radius 3) reach the wall's face x = 80 when
+ *    85 sin|C| + 3 = 80, at the point (80, 85 cos|C|) of the cradle's
+ *    frame, R_z(|C|) of it in the workpiece frame, and end
+ *    85 sin 75 + 3 - 80 = 5.10 mm deep, as does the shank above them
+ *    (z 25..45; the wall's top is at z 40). */
+static void test_machine_moving_link(void)
+{
+    fm_check_options opt;
+    fm_check_options_default(&opt);
+    opt.machine.start[2] = 100;
+    fm_machine *m = &opt.machine.chain;
+    m->rotary_count = 1;
+    m->rotary[0].letter = 0;
+    m->rotary[0].carries = FM_ROTARY_TABLE;
+    m->rotary[0].around[0] = 1;
+    opt.machine.component_count = 1;
+    snprintf(opt.machine.component_path[0], sizeof opt.machine.component_path[0], "check/headstock.hf");
+    opt.machine.component_frame_up[0] = 1;
+    const double lo[3] = {0, -10, -10}, hi[3] = {40, 10, 10};
+    const char *prog = "G21 G90\nG0 Z100\nG0 A90\nG0 X-15 Y0\nG0 Z12\nG0 Z100\nG0 Y30\nG0 Z0\nG0 Z100\n";
+    fm_check *c = check_program(prog, lo, hi, flat_tool(20, 40, 1), &opt, NULL);
+    if (c) {
+        dump(c);
+        CHECK(fm_check_count(c) == 1);
+        const fm_check_finding *f = fm_check_count(c) ? fm_check_get(c, 0) : NULL;
+        if (f) {
+            CHECK(f->kind == FM_CHECK_MACHINE_CONTACT);
+            CHECK(f->part == FM_CHECK_PART_FLUTES);
+            /* the flutes leave the housing during line 6 */
+            CHECK(f->line == 5 && f->last_line == 6);
+            CHECK(f->fixture == 0);
+            CHECK_NEAR(f->penetration_mm, 3.0, voxel);
+            /* where the tip first touches, in the workpiece frame */
+            CHECK_NEAR(f->position[0], -15, 1e-9);
+            CHECK_NEAR(f->position[1], 15, voxel);
+            CHECK_NEAR(f->position[2], 0, 1e-9);
+            CHECK_NEAR(f->contact[1], 15, voxel);
+            CHECK(f->contact[0] >= -18 - voxel && f->contact[0] <= -12 + voxel);
+            CHECK(fabs(f->contact[2]) <= 3 + voxel);
+        }
+        fm_check_free(c);
+    }
+
+    fm_check_options_default(&opt);
+    opt.machine.start[2] = 150;
+    m->rotary_count = 2;
+    m->tcp = 1;
+    m->rotary[0].letter = 0;
+    m->rotary[0].carries = FM_ROTARY_TABLE;
+    m->rotary[0].around[0] = 1;
+    m->rotary[1].letter = 2;
+    m->rotary[1].carries = FM_ROTARY_TABLE;
+    m->rotary[1].around[2] = 1;
+    opt.machine.component_count = 1;
+    snprintf(opt.machine.component_path[0], sizeof opt.machine.component_path[0], "check/cradle_wall.hf");
+    opt.machine.component_frame_up[0] = 1;
+    const double blo[3] = {-20, -20, -10}, bhi[3] = {20, 20, 10};
+    const char *prog2 = "G21 G90\nG0 Z150\nG0 X0 Y85 Z5\nG0 C-75\nG0 Z150\n";
+    const double deep = 85 * sin(75 * 3.14159265358979323846 / 180) + 3 - 80;
+    c = check_program(prog2, blo, bhi, flat_tool(20, 40, 1), &opt, NULL);
+    if (c) {
+        dump(c);
+        /* the flutes and the shank above them, each 5.10 mm deep, until
+         * line 5 lifts them out */
+        CHECK(fm_check_count(c) == 2);
+        const fm_check_finding *sh = fm_check_count(c) == 2 ? fm_check_get(c, 1) : NULL;
+        if (sh) {
+            CHECK(sh->kind == FM_CHECK_MACHINE_CONTACT && sh->part == FM_CHECK_PART_SHANK);
+            CHECK(sh->line == 4 && sh->last_line == 5);
+            CHECK_NEAR(sh->penetration_mm, deep, voxel);
+        }
+        const fm_check_finding *f = fm_check_count(c) ? fm_check_get(c, 0) : NULL;
+        if (f) {
+            CHECK(f->kind == FM_CHECK_MACHINE_CONTACT);
+            CHECK(f->part == FM_CHECK_PART_FLUTES);
+            CHECK(f->line == 4 && f->last_line == 5);
+            CHECK_NEAR(f->penetration_mm, deep, voxel);
+            CHECK_NEAR(f->position[0], 0, 1e-9);
+            CHECK_NEAR(f->position[1], 85, 1e-9);
+            CHECK_NEAR(f->position[2], 5, 1e-9);
+            double th = asin(77.0 / 85.0), px = 80, py = 85 * cos(th);
+            double want[2] = {px * cos(th) - py * sin(th), px * sin(th) + py * cos(th)};
+            printf("trunnion cradle: first contact (%.3f, %.3f), written out (%.3f, %.3f)\n", f->contact[0],
+                   f->contact[1], want[0], want[1]);
+            CHECK_NEAR(f->contact[0], want[0], 2 * voxel);
+            CHECK_NEAR(f->contact[1], want[1], 2 * voxel);
+            CHECK(f->contact[2] >= 5 - voxel && f->contact[2] <= 25 + voxel);
+        }
+        fm_check_free(c);
+    }
+    /* The same wall on the platter's link (it would turn with the
+     * workpiece): never met. */
+    opt.machine.component_frame_up[0] = 0;
+    c = check_program(prog2, blo, bhi, flat_tool(20, 40, 1), &opt, NULL);
+    if (c) {
+        dump(c);
+        CHECK(fm_check_count(c) == 0);
+        fm_check_free(c);
+    }
+}
+
 /* A rapid diving across the block (a line neither level nor along the
  * axis: lib/sweep's concave search) with the sweeps' searches allowed two
  * evaluations per point: they stop before their proofs close, and the
@@ -621,6 +742,7 @@ int main(int argc, char **argv)
     if (wanted(argc, argv, "spindle_plunge_travel")) test_spindle_plunge_travel();
     if (wanted(argc, argv, "rotary_travel")) test_rotary_travel();
     if (wanted(argc, argv, "machine_contact")) test_machine_contact();
+    if (wanted(argc, argv, "machine_moving_link")) test_machine_moving_link();
     if (wanted(argc, argv, "uncertain")) test_uncertain();
     if (wanted(argc, argv, "probe_fixture")) test_probe_fixture();
     fprintf(stderr, "%d checks, %d failures\n", fm_test_checks, fm_test_failures);

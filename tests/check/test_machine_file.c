@@ -48,20 +48,24 @@ static void check_trunnion(void)
     CHECK_NEAR(m.chain.rotary[1].around[1], 1, 1e-15);
     CHECK_NEAR(m.chain.rotary[1].pivot_length, 150, 0);
     CHECK(!m.chain.tcp);
-    /* components on the workpiece's link: the last table axis (C here,
-     * after A), or "table" with no table axis */
+    /* components on table links: the workpiece's (the last table axis, C
+     * here, after A: 0 links below it), A's cradle (1 below), the machine
+     * table (2 below) */
     st = load_text("{\"rotary\": [{\"axis\": \"a\", \"around\": [1, 0, 0], \"carries\": \"table\"},"
                    " {\"axis\": \"c\", \"around\": [0, 0, 1], \"carries\": \"table\"}],"
                    " \"components\": [{\"name\": \"platter\", \"model\": \"p.hf\", \"link\": \"c\"},"
-                   " {\"model\": \"base.stl\", \"link\": \"c\"}]}",
+                   " {\"model\": \"base.stl\", \"link\": \"c\"}, {\"model\": \"cradle.stl\", \"link\": \"a\"},"
+                   " {\"model\": \"bed.hf\", \"link\": \"table\"}]}",
                    &m, &err);
     CHECK(st == FM_OK);
-    CHECK(m.component_count == 2);
+    CHECK(m.component_count == 4);
     CHECK(!strcmp(m.component_path[0], "p.hf") && !strcmp(m.component_path[1], "base.stl"));
+    CHECK(m.component_frame_up[0] == 0 && m.component_frame_up[1] == 0);
+    CHECK(m.component_frame_up[2] == 1 && m.component_frame_up[3] == 2);
     st = load_text("{\"rotary\": [{\"axis\": \"b\", \"around\": [0, 1, 0], \"carries\": \"head\"}],"
                    " \"components\": [{\"model\": \"vise.stl\", \"link\": \"table\"}]}",
                    &m, &err);
-    CHECK(st == FM_OK && m.component_count == 1);
+    CHECK(st == FM_OK && m.component_count == 1 && m.component_frame_up[0] == 0);
 }
 
 static void check_errors(void)
@@ -90,8 +94,13 @@ static void check_errors(void)
         {"{\"rapid_rate\": 1, \"rapid_rate\": 2}", "duplicate"},
         {"{\"rotary\": [{\"axis\": \"a\", \"around\": [1, 0, 0], \"carries\": \"table\"},"
          " {\"axis\": \"c\", \"around\": [0, 0, 1], \"carries\": \"table\"}],"
-         " \"components\": [{\"model\": \"cradle.stl\", \"link\": \"a\"}]}",
-         "components[0].link \"a\": only components on the link that carries the workpiece (here \"c\")"},
+         " \"components\": [{\"model\": \"cradle.stl\", \"link\": \"b\"}]}",
+         "components[0].link \"b\": not a table link of this machine (\"table\", \"a\", \"c\")"},
+        {"{\"rotary\": [{\"axis\": \"b\", \"around\": [0, 1, 0], \"carries\": \"head\"}],"
+         " \"components\": [{\"model\": \"housing.stl\", \"link\": \"b\"}]}",
+         "components[0].link \"b\": components on the head move with the tool"},
+        {"{\"components\": [{\"model\": \"housing.stl\", \"link\": \"spindle\"}]}",
+         "components on the head move with the tool"},
         {"{\"components\": [{\"model\": \"t.step\", \"link\": \"table\"}]}", "components[0].model"},
         {"{\"components\": [{\"model\": \"t.hf\"}]}", "are required"},
         {"{\"components\": {}}", "components: expected an array"},
