@@ -48,9 +48,13 @@ static void check_machine(const fm_check_machine *m)
         if (!isfinite(r->pivot_length)) abort();
         if (r->has_limits && !(r->limit_lo <= r->limit_hi)) abort();
     }
-    /* components: NUL-terminated .hf / .stl paths */
+    /* components: NUL-terminated .hf / .stl paths on a table link (0 to the
+     * number of table axes below the workpiece's) */
+    int ntable = 0;
+    for (int i = 0; i < c->rotary_count; i++) ntable += c->rotary[i].carries == FM_ROTARY_TABLE;
     if (m->component_count < 0 || m->component_count > FM_CHECK_MAX_COMPONENTS) abort();
     for (int i = 0; i < m->component_count; i++) {
+        if (m->component_frame_up[i] < 0 || m->component_frame_up[i] > ntable) abort();
         const char *p = m->component_path[i];
         const char *end = memchr(p, '\0', FM_CHECK_COMPONENT_PATH);
         if (!end) abort();
