@@ -735,28 +735,15 @@ typedef struct blamer {
 } blamer;
 
 /* A box that holds the motion's swept volume (a quick test before building
- * the sweep): the path's box widened by the tool's size. */
+ * the sweep): the box of its tool tip in the workpiece frame (lib/sweep's
+ * pose bounds: lines, arcs and rotary motions, whose start and end may be
+ * joint values rather than workpiece positions) widened by the tool's size
+ * in any direction. */
 static void motion_reach(const fm_motion *m, const fm_tool *tool, double lo[3], double hi[3])
 {
     const double r = 0.5 * tool->spec.diameter + tool->spec.flute_length + tool->spec.length;
-    for (int k = 0; k < 3; k++) {
-        lo[k] = fmin(m->start[k], m->end[k]) + m->tip_offset[k];
-        hi[k] = fmax(m->start[k], m->end[k]) + m->tip_offset[k];
-    }
-    if (m->kind == FM_MOTION_ARC) {
-        double rr = 0;
-        for (int k = 0; k < 3; k++)
-            if (k != m->plane_axis) rr += (m->start[k] - m->center[k]) * (m->start[k] - m->center[k]);
-        const double ra = sqrt(rr), rb = sqrt((m->end[0] - m->center[0]) * (m->end[0] - m->center[0]) +
-                                              (m->end[1] - m->center[1]) * (m->end[1] - m->center[1]) +
-                                              (m->end[2] - m->center[2]) * (m->end[2] - m->center[2]));
-        const double rad = fmax(ra, rb);
-        for (int k = 0; k < 3; k++) {
-            if (k == m->plane_axis) continue;
-            lo[k] = fmin(lo[k], m->center[k] + m->tip_offset[k] - rad);
-            hi[k] = fmax(hi[k], m->center[k] + m->tip_offset[k] + rad);
-        }
-    }
+    double axis_lo[3], axis_hi[3];
+    fm_motion_pose_bounds(m, 0, 1, lo, hi, axis_lo, axis_hi);
     for (int k = 0; k < 3; k++) {
         lo[k] -= r;
         hi[k] += r;

@@ -23,7 +23,16 @@
  *    gouge, and the report says where it stopped; its stock saved as a .vdb
  *    and cut by the rest of the program ends as the whole program does.
  * 4. Deviation colours on the pocket's mesh: the strip's floor red, the
- *    walls left short blue, the top green; the picture carries the key. */
+ *    walls left short blue, the top green; the picture carries the key.
+ * 5. Blame on a rotary table (--rotary): an A table (around X, through the
+ *    origin, no TCP) turns a block 80..100 mm from its axis by 90 degrees;
+ *    the vertical 6 mm flat end mill then plunges 1.5 mm into the block's
+ *    face y = 100 and cuts a slot 1 mm deep along it. The design is the
+ *    block: one gouge, 1.5 mm deep (the plunge), of (10 x 6 + pi 3^2) 1 +
+ *    pi 3^2 0.5 mm3, on the face, blamed on the plunge's line. The joint
+ *    values of a table move are no workpiece positions: the machine's
+ *    Z 130..98.5 is the workpiece's y, more than the tool's reach from its
+ *    y = 0. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -47,6 +56,7 @@ static const char *tool_json =
 
 static fm_tool_table tools;
 static char dir[256];
+static const fm_machine *run_machine; /* the next run's machine (NULL: 3 axes) */
 
 /* ------------------------------------------------------ pocket design -- */
 
@@ -219,6 +229,7 @@ static int run(const char *program, const char *stock, const char *design, doubl
     spec.design_path = design;
     spec.tolerance_mm = tolerance;
     spec.stop_at_line = stop_at;
+    spec.machine = run_machine;
     fm_error err;
     if (fm_job_run(&spec, NULL, r, &err) != FM_OK) {
         char buf[700];
@@ -512,11 +523,108 @@ static void test_scallops(void)
     fm_job_result_release(&r);
 }
 
+/* ------------------------------------------------------ rotary blame -- */
+
+/* The box lo..hi as a closed, oriented STL at path. */
+static int write_box_design(const char *path, const double lo[3], const double hi[3])
+{
+    builder b = {0};
+    b.mesh = fm_mesh_new(0, 0, 0, NULL, &b.err);
+    if (!b.mesh) return 0;
+    uint32_t v[8];
+    for (int i = 0; i < 8; i++)
+        v[i] = vertex(&b, (i & 1) ? hi[0] : lo[0], (i & 2) ? hi[1] : lo[1], (i & 4) ? hi[2] : lo[2]);
+    const double nx[3] = {-1, 0, 0}, px[3] = {1, 0, 0}, ny[3] = {0, -1, 0}, py[3] = {0, 1, 0},
+                 nz[3] = {0, 0, -1}, pz[3] = {0, 0, 1};
+    quad(&b, v[0], v[2], v[6], v[4], nx);
+    quad(&b, v[1], v[3], v[7], v[5], px);
+    quad(&b, v[0], v[1], v[5], v[4], ny);
+    quad(&b, v[2], v[3], v[7], v[6], py);
+    quad(&b, v[0], v[1], v[3], v[2], nz);
+    quad(&b, v[4], v[5], v[7], v[6], pz);
+    int ok = !b.failed;
+    fm_mesh_topology topo;
+    if (ok && fm_mesh_topology_check(b.mesh, &topo, &b.err) == FM_OK) {
+        CHECK(topo.boundary_edges == 0 && topo.misoriented_edges == 0);
+        CHECK_NEAR(fm_mesh_volume(b.mesh), (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]), 1e-3);
+    } else {
+        ok = 0;
+    }
+    if (ok && fm_mesh_write_stl(b.mesh, path, &b.err) != FM_OK) ok = 0;
+    if (!ok) fprintf(stderr, "box design: %s\n", b.err.message);
+    fm_mesh_free(b.mesh);
+    return ok;
+}
+
+/* Lines: 5 plunges 1.5 mm deep, 6 rises to 1 mm, 7 cuts the slot. A turned
+ * by a puts the machine's point X at Rx(-a) X on the workpiece: at 90
+ * degrees (x, y, z) -> (x, z, -y), so Z99 is the workpiece's y = 99, and
+ * the tool's axis (machine +Z) is the workpiece's +y, normal to the face. */
+static const char *rotary_program = "G21 G90 G94\n"
+                                    "T1 M6\n"
+                                    "G0 X20 Y0 Z130\n"
+                                    "G0 A90\n"
+                                    "G1 Z98.5 F300\n"
+                                    "G1 Z99\n"
+                                    "G1 X30 F600\n"
+                                    "G0 Z130\n"
+                                    "M2\n";
+
+static void test_rotary_blame(void)
+{
+    const double lo[3] = {0, 80, -10}, hi[3] = {40, 100, 10};
+    char design[300];
+    snprintf(design, sizeof design, "%s/block.stl", dir);
+    if (!write_box_design(design, lo, hi)) {
+        CHECK(0);
+        return;
+    }
+    fm_machine mc;
+    memset(&mc, 0, sizeof mc);
+    mc.rotary_count = 1;
+    mc.rotary[0].letter = 0;
+    mc.rotary[0].carries = FM_ROTARY_TABLE;
+    mc.rotary[0].around[0] = 1;
+    const double h = 0.2;
+    fm_job_result r;
+    run_machine = &mc;
+    const int ran = run(rotary_program, "box:0,80,-10,40,100,10", design, h, 0, 0, &r);
+    run_machine = NULL;
+    CHECK(ran);
+    if (!ran) return;
+    const double disk = PI * 9;
+    const double v_expect = (10 * 6 + disk) * 1 + disk * 0.5;
+    const fm_deviation *d = &r.deviation;
+    printf("rotary blame: %zu gouges (max %.4f mm, %.3f mm3; expected 1.5 mm, %.3f mm3), "
+           "%zu excess (max %.4f mm)\n",
+           d->gouge_total, d->max_gouge_mm, d->gouge_volume_mm3, v_expect, d->excess_total,
+           d->max_excess_mm);
+    CHECK(r.has_deviation);
+    CHECK(d->gouge_total == 1);
+    CHECK(d->excess_total == 0);
+    CHECK_NEAR(d->max_gouge_mm, 1.5, h / 2);
+    CHECK_NEAR(d->gouge_volume_mm3, v_expect, 0.02 * v_expect);
+    if (d->gouge_count == 1) {
+        const fm_deviation_region *g = &d->gouges[0];
+        printf("  gouge %.4f mm %.3f mm3 at (%.2f, %.2f, %.2f), line %d tool %d\n", g->depth_mm,
+               g->volume_mm3, g->position[0], g->position[1], g->position[2], r.gouge_blame[0].line,
+               r.gouge_blame[0].tool);
+        CHECK_NEAR(g->depth_mm, 1.5, h / 2);
+        /* on the plunge's floor: y = 98.5, within its disk about (20, 0) */
+        CHECK_NEAR(g->position[1], 98.5, h);
+        CHECK(hypot(g->position[0] - 20, g->position[2]) <= 3 + h);
+        CHECK(r.gouge_blame[0].line == 5);
+        CHECK(r.gouge_blame[0].tool == 1);
+    }
+    fm_job_result_release(&r);
+}
+
 int main(int argc, char **argv)
 {
-    /* --pocket or --scallops: one case alone (profiling) */
+    /* --pocket, --scallops or --rotary: one case alone (profiling) */
     const int only_scallops = argc > 1 && !strcmp(argv[1], "--scallops");
     const int only_pocket = argc > 1 && !strcmp(argv[1], "--pocket");
+    const int only_rotary = argc > 1 && !strcmp(argv[1], "--rotary");
     fm_error err;
     if (fm_tooltable_parse_json(tool_json, strlen(tool_json), "tools.json", &tools, &err) != FM_OK) {
         fprintf(stderr, "tools: %s\n", err.message);
@@ -524,8 +632,9 @@ int main(int argc, char **argv)
     }
     snprintf(dir, sizeof dir, "/tmp/fm-design-XXXXXX");
     if (!mkdtemp(dir)) return 1;
-    if (!only_scallops) test_pocket();
-    if (!only_pocket) test_scallops();
+    if (!only_scallops && !only_rotary) test_pocket();
+    if (!only_pocket && !only_rotary) test_scallops();
+    if (!only_pocket && !only_scallops) test_rotary_blame();
     fm_tool_table_free(&tools);
     char cmd[300];
     snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
