@@ -467,7 +467,7 @@ static fm_status parse_options(fm_job_doc *doc, json_t *options, const fm_job_do
                                        "rapid_rate", "memory_budget_mb", "threads",
                                        "check",   "color",   "dialect",
                                        "subroutine_path", "calculator_input",
-                                       "tolerance", "stop_at", NULL};
+                                       "tolerance", "stop_at", "sweep_evaluations", NULL};
     st = only_keys(options, keys, "options", err);
     if (st != FM_OK) return st;
     json_t *v;
@@ -507,6 +507,13 @@ static fm_status parse_options(fm_job_doc *doc, json_t *options, const fm_job_do
     if ((v = json_object_get(options, "stop_at")) &&
         (st = integer_in(v, "options.stop_at", 1, 1e9, &spec->stop_at_line, err)))
         return st;
+    if ((v = json_object_get(options, "sweep_evaluations"))) {
+        /* the swept volumes' search budget per point (frepmill simulate
+         * --sweep-evaluations): a small one shows the budget warning */
+        int n = 0;
+        if ((st = integer_in(v, "options.sweep_evaluations", 1, 1e9, &n, err))) return st;
+        spec->sweep_evaluations = (size_t)n;
+    }
     return parse_check(doc, json_object_get(options, "check"), rules, err);
 }
 

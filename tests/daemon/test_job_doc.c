@@ -388,7 +388,7 @@ static void test_design(void)
     snprintf(text, sizeof text,
              "{\"stock\": \"box:0,0,-5,40,40,0\", \"tools\": %s, \"program\": {\"gcode\": \"G0 X1\"}, "
              "\"design\": {\"stl_base64\": \"%s\"}, \"options\": {\"tolerance\": 0.02, "
-             "\"stop_at\": 12}}",
+             "\"stop_at\": 12, \"sweep_evaluations\": 50}}",
              TOOLS, b64);
     fm_error err;
     fm_job_doc *doc = parse(text, &err);
@@ -398,12 +398,14 @@ static void test_design(void)
         CHECK(doc->spec.design_path == NULL); /* until written to a file */
         CHECK_NEAR(doc->spec.tolerance_mm, 0.02, 0);
         CHECK(doc->spec.stop_at_line == 12);
+        CHECK(doc->spec.sweep_evaluations == 50);
         CHECK(json_object_get(doc->json, "design") != NULL);
         CHECK(fm_job_doc_set_design_file(doc, "/tmp/x/design.stl", &err) == FM_OK);
         CHECK(!strcmp(doc->spec.design_path, "/tmp/x/design.stl"));
         char *again = json_dumps(doc->json, JSON_COMPACT);
         fm_job_doc *doc2 = parse(again, &err);
-        CHECK(doc2 && json_equal(doc->json, doc2->json) && doc2->design_model.size == 84);
+        CHECK(doc2 && json_equal(doc->json, doc2->json) && doc2->design_model.size == 84 &&
+              doc2->spec.sweep_evaluations == 50);
         free(again);
         fm_job_doc_free(doc2);
     }
@@ -415,7 +417,7 @@ static void test_design(void)
              TOOLS);
     doc = parse(text, &err);
     CHECK(doc && !doc->design_model.is_stl && doc->spec.tolerance_mm == 0 &&
-          doc->spec.stop_at_line == 0);
+          doc->spec.stop_at_line == 0 && doc->spec.sweep_evaluations == 0);
     fm_job_doc_free(doc);
     /* a file: the daemon's own documents (the CLI) only */
     snprintf(text, sizeof text,
@@ -444,6 +446,9 @@ static void test_design(void)
         {"\"options\": {\"tolerance\": \"0.1\"}", "bad_type"},
         {"\"options\": {\"stop_at\": 0}", "bad_value"},
         {"\"options\": {\"stop_at\": 2.5}", "bad_type"},
+        {"\"options\": {\"sweep_evaluations\": 0}", "bad_value"},
+        {"\"options\": {\"sweep_evaluations\": 2e9}", "bad_value"},
+        {"\"options\": {\"sweep_evaluations\": 10.5}", "bad_type"},
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         snprintf(text, sizeof text,
