@@ -8,9 +8,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "jobs_internal.h"
+#include "log.h"
 #include "store.h"
 
 /* progress and block events at most this often (the status itself is
@@ -173,6 +175,14 @@ void fm_publish_progress(job *j, const fm_job_progress *p, publish_pace *pace)
 
 /* ------------------------------------------------------------ meshes -- */
 
+/* CPU time of the daemon (every thread), for the publication's debug log. */
+static double process_cpu_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
 void fm_publish_chunks_free(job *j)
 {
     for (size_t i = 0; i < j->chunk_count; i++) {
@@ -272,6 +282,9 @@ void fm_publish_chunks(job *j, fm_stock *stock, double program_time_s)
         free(changed);
         return;
     }
+    const double t0 = fm_jobs_mono_s(), cpu0 = process_cpu_s();
+    double t_mesh = 0;
+    size_t triangles = 0;
     for (size_t i = 0; i < n; i++) {
         job_chunk *c = &fresh[i];
         chunk_version *v = &fresh_v[i];
@@ -281,8 +294,11 @@ void fm_publish_chunks(job *j, fm_stock *stock, double program_time_s)
         v->version = version;
         v->time_s = program_time_s;
         fm_error err;
+        const double tm = fm_jobs_mono_s();
         c->mesh = fm_mesh_from_stock_chunk(stock, c->index, &opt, &err);
+        t_mesh += fm_jobs_mono_s() - tm;
         v->triangles = c->mesh ? c->mesh->triangle_count : 0;
+        triangles += v->triangles;
         if (v->triangles > 0 &&
             fm_mesh_encode_draco(c->mesh, NULL, &v->drc, &v->drc_size, &err) != FM_OK) {
             v->drc = NULL;
@@ -290,6 +306,12 @@ void fm_publish_chunks(job *j, fm_stock *stock, double program_time_s)
         }
     }
     free(changed);
+    const double t_all = fm_jobs_mono_s() - t0;
+    fm_log(FM_LOG_DEBUG,
+           "job %s: published %zu chunks (%zu triangles) at version %llu: mesh %.1f ms, encode "
+           "%.1f ms wall, %.1f ms daemon CPU",
+           j->id, n, triangles, (unsigned long long)version, t_mesh * 1e3, (t_all - t_mesh) * 1e3,
+           (process_cpu_s() - cpu0) * 1e3);
     json_t *ids = json_array();
     pthread_mutex_lock(&j->lock);
     if (j->history_from_s < 0) j->history_from_s = program_time_s;
