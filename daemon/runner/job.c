@@ -123,6 +123,8 @@ typedef struct job_tools {
 static void free_tools(job_tools *t)
 {
     for (size_t i = 0; i < t->count; i++) {
+        if (t->built[i].tool.flutes.kind == FM_TOOL_PART_CUSTOM)
+            fm_tool_custom_release(&t->built[i].tool.flutes.custom);
         fm_tape_free(t->built[i].tape);
         fm_graph_free(t->built[i].graph);
     }
@@ -162,7 +164,10 @@ static fm_status build_custom_tool(const fm_tool_spec *spec, const char *tools_p
     fm_tool_custom custom;
     st = fm_tool_custom_from_tape(jt->tape, spec->bound_radius, spec->flute_length, &custom, err);
     if (st != FM_OK) return st;
-    return fm_tool_build_custom(spec, &custom, &jt->tool, err);
+    st = fm_tool_build_custom(spec, &custom, &jt->tool, err);
+    /* once in the tool, free_tools releases the table */
+    if (st != FM_OK && jt->tool.flutes.custom.ctx != custom.ctx) fm_tool_custom_release(&custom);
+    return st;
 }
 
 static fm_status load_tools(const fm_job_spec *spec, job_tools *t, fm_error *err)

@@ -91,11 +91,14 @@ typedef struct fm_profile_elem {
     int ccw;
 } fm_profile_elem;
 
-/* A custom cutter (HyperFun model or any other function), taken as the solid
- * of revolution of its section y = 0, x = r >= 0: the spinning tool sweeps
- * exactly that. It must lie in r <= bound_radius, 0 <= z <= bound_length.
- * eval need not be a distance; interval must be a sound enclosure over the
- * (r, z) box. Callbacks run on several threads, each with its own worker. */
+/* A custom cutter (HyperFun model or any other function) as the function
+ * of (r, z) of the solid the spinning tool sweeps: its solid of revolution
+ * (fm_tool_custom_from_tape builds that profile from a 3D model). It must
+ * lie in r <= bound_radius, 0 <= z <= bound_length. eval need not be a
+ * distance; interval must be a sound enclosure over the (r, z) box.
+ * Callbacks run on several threads, each with its own worker (worker_new
+ * may be NULL: no per-thread state). release, when set, frees ctx
+ * (fm_tool_custom_release). */
 typedef struct fm_tool_custom {
     void *ctx;
     void *(*worker_new)(void *ctx);
@@ -103,6 +106,7 @@ typedef struct fm_tool_custom {
     double (*eval)(void *ctx, void *worker, double r, double z);
     fm_interval (*interval)(void *ctx, void *worker, fm_interval r, fm_interval z);
     double bound_radius, bound_length;
+    void (*release)(void *ctx);
 } fm_tool_custom;
 
 typedef enum fm_tool_part_kind { FM_TOOL_PART_PROFILE = 0, FM_TOOL_PART_CUSTOM } fm_tool_part_kind;
@@ -139,9 +143,15 @@ fm_status fm_tool_build(const fm_tool_spec *spec, fm_tool *tool, fm_error *err);
 fm_status fm_tool_build_custom(const fm_tool_spec *spec, const fm_tool_custom *custom,
                                fm_tool *tool, fm_error *err);
 /* A custom part over a compiled tape of f(x, y, z) (t = 0): the hook for
- * lib/hf models. The tape must outlive the part. */
+ * lib/hf models. The part is the solid of revolution of the model, clipped
+ * to the bound: max over the angle t of f(r cos t, r sin t, z), tabulated
+ * once here on a 512-cell grid over the longer side of the bound (a few MB
+ * at most; docs/tools.md gives its error). The tape is not used afterwards.
+ * Free the table with fm_tool_custom_release once no part uses it. */
 fm_status fm_tool_custom_from_tape(const fm_tape *tape, double bound_radius, double bound_length,
                                    fm_tool_custom *custom, fm_error *err);
+/* Free what custom->release frees (nothing when it is NULL); ctx becomes NULL. */
+void fm_tool_custom_release(fm_tool_custom *custom);
 
 /* A part from an explicit profile chain (validated: starts and ends on the
  * axis, continuous, z non-decreasing, r >= 0, arcs consistent). */

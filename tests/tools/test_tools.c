@@ -445,7 +445,7 @@ static void check_custom(void)
     fm_tool_spec s = base_spec(FM_TOOL_HYPERFUN);
     s.bound_radius = 2;
     s.flute_length = 4;
-    fm_tool_custom c = {NULL, NULL, NULL, sphere_eval, sphere_interval, 2, 4};
+    fm_tool_custom c = {NULL, NULL, NULL, sphere_eval, sphere_interval, 2, 4, NULL};
     CHECK(fm_tool_build_custom(&s, &c, &t, &err) == FM_OK);
     double p[3] = {1, 0, 2};
     CHECK_NEAR(fm_tool_part_eval(&t.flutes, NULL, p), 1, 1e-15);
@@ -458,14 +458,39 @@ static void check_custom(void)
     if (tape) {
         fm_tool_custom tc;
         CHECK(fm_tool_custom_from_tape(tape, 2, 4, &tc, &err) == FM_OK);
+        fm_tape_free(tape); /* the part keeps its own table */
         fm_tool tt;
         CHECK(fm_tool_build_custom(&s, &tc, &tt, &err) == FM_OK);
         void *w = fm_tool_part_worker_new(&tt.flutes);
-        CHECK(w != NULL);
+        /* The table (cells of 4 / 512 mm) interpolates the sphere's distance:
+         * bilinear error at most h^2 / 4 times its second derivatives (<= 1 /
+         * distance from the centre, 1.22 here) = 2e-5 mm. */
         double q[3] = {0.5, 0.5, 1};
-        CHECK_NEAR(fm_tool_part_eval(&tt.flutes, w, q), 2 - sqrt(0.5 + 1), 1e-12);
+        CHECK_NEAR(fm_tool_part_eval(&tt.flutes, w, q), 2 - sqrt(0.5 + 1), 2e-5);
+        /* Intervals enclose the table's values over boxes of every size. */
+        const double rs[4][2] = {{0, 3}, {0.3, 0.31}, {1.9, 2.5}, {0, 0.001}};
+        const double zs[4][2] = {{-1, 5}, {1.0, 1.01}, {3.9, 4.2}, {0, 4}};
+        for (int b = 0; b < 4; b++) {
+            fm_interval ri = {rs[b][0], rs[b][1]}, zi = {zs[b][0], zs[b][1]};
+            fm_interval iv = fm_tool_profile_interval(&tt.flutes, w, ri, zi);
+            int ok = 1;
+            for (int a = 0; a <= 40; a++)
+                for (int k = 0; k <= 40; k++) {
+                    double v = fm_tool_profile_eval(&tt.flutes, w, ri.lo + (ri.hi - ri.lo) * a / 40,
+                                                    zi.lo + (zi.hi - zi.lo) * k / 40, NULL);
+                    ok &= v >= iv.lo && v <= iv.hi;
+                }
+            CHECK(ok);
+        }
+        /* Outside the bound: minus the distance to it, and a box wholly
+         * outside is bounded by minus its distance (a search below the tool
+         * must be able to finish). */
+        CHECK_NEAR(fm_tool_profile_eval(&tt.flutes, w, 5, 2, NULL), -3, 1e-12);
+        fm_interval out_r = {2.5, 3}, out_z = {1, 2}, below_r = {0, 1}, below_z = {-0.7, -0.5};
+        CHECK(fm_tool_profile_interval(&tt.flutes, w, out_r, out_z).hi <= -0.5 + 1e-9);
+        CHECK(fm_tool_profile_interval(&tt.flutes, w, below_r, below_z).hi <= -0.5 + 1e-9);
         fm_tool_part_worker_free(&tt.flutes, w);
-        fm_tape_free(tape);
+        fm_tool_custom_release(&tc);
     } else {
         printf("custom cutter from a tape: kernel cannot compile yet, skipped\n");
     }
