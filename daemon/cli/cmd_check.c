@@ -36,9 +36,10 @@ static void usage(FILE *out)
             "SPEC         box:X0,Y0,Z0,X1,Y1,Z1 | cylinder:X,Y,Z0,Z1,R | FILE.hf | FILE.stl | FILE.vdb\n"
             "TOOLS        JSON tool table or LinuxCNC .tbl file\n"
             "--fixture    clamp, vise or table: HyperFun model (.hf) or closed STL mesh (.stl)\n"
-            "--machine    travel limits, rapid rate and start position (docs/check.md)\n"
-            "--clearance  shank and holder near misses closer than this are warnings (default:\n"
-            "             shank 0, holder 1 mm)\n"
+            "--machine    travel limits, rapid rate, start position, rotary axes, head and\n"
+            "             components (docs/check.md)\n"
+            "--clearance  shank, holder and head near misses closer than this are warnings\n"
+            "             (default: shank 0, holder and the machine's head 1 mm)\n"
             "--rapid-clearance  the same for the flutes in rapids and at fixtures (default 0)\n"
             "--tolerance  contact deeper than this is an error (default 0.01 mm)\n"
             "--max-ramp   steepest descent for tools that cannot cut at the centre (default 3 deg)\n"
@@ -162,6 +163,7 @@ int fm_cmd_check(int argc, char **argv)
         } else if (!strcmp(a, "--clearance") && parse_double(v, &d) && d >= 0) {
             opt.clearance_mm[FM_CHECK_PART_SHANK] = d;
             opt.clearance_mm[FM_CHECK_PART_HOLDER] = d;
+            opt.clearance_mm[FM_CHECK_PART_HEAD] = d;
         } else if (!strcmp(a, "--rapid-clearance") && parse_double(v, &d) && d >= 0) {
             opt.clearance_mm[FM_CHECK_PART_FLUTES] = d;
         } else if (!strcmp(a, "--tolerance") && parse_double(v, &d) && d > 0) {

@@ -356,6 +356,7 @@ static fm_status parse_check(fm_job_doc *doc, json_t *check, const fm_job_doc_ru
         if (!strcmp(key, "clearance") && ok && d >= 0 && d <= 1000) {
             o->clearance_mm[FM_CHECK_PART_SHANK] = d;
             o->clearance_mm[FM_CHECK_PART_HOLDER] = d;
+            o->clearance_mm[FM_CHECK_PART_HEAD] = d;
         } else if (!strcmp(key, "rapid_clearance") && ok && d >= 0 && d <= 1000) {
             o->clearance_mm[FM_CHECK_PART_FLUTES] = d;
         } else if (!strcmp(key, "tolerance") && ok && d > 0 && d <= 100) {

@@ -193,6 +193,50 @@ static fm_status read_components(json_t *val, const char *path, fm_check_machine
     return FM_OK;
 }
 
+/* "head": [{"diameter": D, "length": L, "diameter_top": T}, ...]: the
+ * round parts of the machine's head (spindle nose, housing), solids of
+ * revolution about the spindle stacked up from the spindle's face (the
+ * top of each tool's holder), as a tool's holder segments are. */
+static fm_status read_head(json_t *val, const char *path, fm_check_machine *m, fm_error *err)
+{
+    size_t n = json_is_array(val) ? json_array_size(val) : 0;
+    if (n < 1 || n > FM_TOOL_MAX_HOLDER)
+        return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                           "head: expected 1 to %d round segments [{\"diameter\": D, \"length\": L}, ...] "
+                           "stacked up from the spindle's face",
+                           FM_TOOL_MAX_HOLDER);
+    for (size_t i = 0; i < n; i++) {
+        json_t *g = json_array_get(val, i);
+        fm_holder_segment *h = &m->head[i];
+        memset(h, 0, sizeof *h);
+        if (!json_is_object(g))
+            return fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "head[%zu]: expected an object", i);
+        const char *key;
+        json_t *v;
+        json_object_foreach(g, key, v)
+        {
+            double d;
+            if (!strcmp(key, "diameter") && number(v, &d) && d > 0 && d <= 1e4) {
+                h->diameter = d;
+            } else if (!strcmp(key, "diameter_top") && number(v, &d) && d >= 0 && d <= 1e4) {
+                h->diameter_top = d;
+            } else if (!strcmp(key, "length") && number(v, &d) && d > 0 && d <= 1e4) {
+                h->length = d;
+            } else if (strcmp(key, "name") && strcmp(key, "comment")) {
+                return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                   "head[%zu].%s: expected diameter and length (mm, above 0, at most "
+                                   "10000), diameter_top (0 or above), name, comment",
+                                   i, key);
+            }
+        }
+        if (!(h->diameter > 0) || !(h->length > 0))
+            return fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "head[%zu]: \"diameter\" and \"length\" are required",
+                               i);
+    }
+    m->head_count = (int)n;
+    return FM_OK;
+}
+
 fm_status fm_check_machine_load(const char *path, fm_check_machine *m, fm_error *err)
 {
     memset(m, 0, sizeof *m);
@@ -283,12 +327,14 @@ fm_status fm_check_machine_from_json(json_t *root, const char *path, fm_check_ma
             m->chain.tcp = json_is_true(val);
         } else if (!strcmp(key, "rotary")) {
             if ((st = read_rotary(val, path, &m->chain, err)) != FM_OK) goto done;
+        } else if (!strcmp(key, "head")) {
+            if ((st = read_head(val, path, m, err)) != FM_OK) goto done;
         } else if (!strcmp(key, "components")) {
             /* read after the loop: the chain decides which link is the workpiece's */
         } else if (strcmp(key, "units") && strcmp(key, "name") && strcmp(key, "comment")) {
             st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
                              "unknown member \"%s\" (limits, rapid_rate, start, reference_points, tcp, rotary, "
-                             "components, units, name, comment)",
+                             "head, components, units, name, comment)",
                              key);
             goto done;
         }

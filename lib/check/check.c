@@ -19,6 +19,7 @@ void fm_check_options_default(fm_check_options *opt)
     opt->clearance_mm[FM_CHECK_PART_FLUTES] = 0.0;
     opt->clearance_mm[FM_CHECK_PART_SHANK] = 0.0;
     opt->clearance_mm[FM_CHECK_PART_HOLDER] = 1.0;
+    opt->clearance_mm[FM_CHECK_PART_HEAD] = 1.0;
     opt->max_ramp_deg = 3.0;
 }
 
@@ -50,7 +51,7 @@ const char *fm_check_severity_name(fm_check_severity severity)
 
 const char *fm_check_part_name(fm_check_part part)
 {
-    static const char *const names[FM_CHECK_PART_COUNT] = {"flutes", "shank", "holder"};
+    static const char *const names[FM_CHECK_PART_COUNT] = {"flutes", "shank", "holder", "head"};
     return (unsigned)part < FM_CHECK_PART_COUNT ? names[part] : "unknown";
 }
 
@@ -232,7 +233,8 @@ static fm_status record(fm_check *c, fm_check_kind kind, fm_check_part part, int
     }
     fm_check_finding *f = &c->findings[c->finding_count];
     *f = *hit;
-    f->kind = kind == FM_CHECK_FIXTURE_CONTACT && c->fixtures[fixture].machine
+    /* a machine component, or the machine's head, meeting anything */
+    f->kind = (kind == FM_CHECK_FIXTURE_CONTACT && c->fixtures[fixture].machine) || part == FM_CHECK_PART_HEAD
                   ? FM_CHECK_MACHINE_CONTACT
                   : kind;
     f->part = part;
@@ -263,12 +265,29 @@ void fm_check_finish(fm_check *c)
 
 /* -------------------------------------------------------- relations -- */
 
-static const fm_tool_part *tool_part(const fm_tool *t, fm_check_part p)
+/* The machine's head as a part of the tool numbered `number` (built once
+ * per tool: it stands on the tool's holder); NULL when the machine has no
+ * head segments or they do not make a part. */
+static const fm_tool_part *head_part(fm_check *c, int number, const fm_tool *t)
+{
+    if (c->opt.machine.head_count <= 0) return NULL;
+    check_workers *slot = worker_slot(c, number);
+    if (!slot) return NULL;
+    if (slot->head_state == 0)
+        slot->head_state = fm_tool_build_head(&t->spec, c->opt.machine.head, c->opt.machine.head_count,
+                                              &slot->head, NULL) == FM_OK
+                               ? 1
+                               : -1;
+    return slot->head_state > 0 ? &slot->head : NULL;
+}
+
+static const fm_tool_part *tool_part(fm_check *c, int number, const fm_tool *t, fm_check_part p)
 {
     switch (p) {
     case FM_CHECK_PART_FLUTES: return &t->flutes;
     case FM_CHECK_PART_SHANK: return t->has_shank ? &t->shank : NULL;
     case FM_CHECK_PART_HOLDER: return t->has_holder ? &t->holder : NULL;
+    case FM_CHECK_PART_HEAD: return head_part(c, number, t);
     default: return NULL;
     }
 }
@@ -323,7 +342,7 @@ static fm_status relate_part(fm_check *c, const part_ctx *pc, const fm_stock *gr
                              fm_error *err)
 {
     if (!grid) return FM_OK;
-    const fm_tool_part *shape = tool_part(pc->tool, pc->part);
+    const fm_tool_part *shape = tool_part(c, pc->m->tool, pc->tool, pc->part);
     check_rel r;
     memset(&r, 0, sizeof r);
     r.check = c;
@@ -400,7 +419,7 @@ static fm_status check_start(fm_check *c, const fm_motion *first, const fm_tool 
     fm_motion sm;
     static_motion(first, c->opt.machine.start, axis, first->t0, &sm);
     for (int p = 0; p < FM_CHECK_PART_COUNT; p++) {
-        const fm_tool_part *tp = tool_part(tool, (fm_check_part)p);
+        const fm_tool_part *tp = tool_part(c, first->tool, tool, (fm_check_part)p);
         if (!tp) continue;
         fm_sweep *s = NULL;
         fm_status st = fm_sweep_new(&sm, tp, check_sweep_options(c), &s, err);
@@ -534,7 +553,7 @@ static fm_status check_moving_components(fm_check *c, const fm_motion *m, const 
         for (int p = 0; p < FM_CHECK_PART_COUNT && st == FM_OK; p++) {
             if (!sweeps[p]) continue;
             fm_sweep *s = NULL;
-            st = fm_sweep_new(&mf, tool_part(tool, (fm_check_part)p), check_sweep_options(c), &s, err);
+            st = fm_sweep_new(&mf, tool_part(c, m->tool, tool, (fm_check_part)p), check_sweep_options(c), &s, err);
             if (st != FM_OK) break;
             part_ctx pc = {&mf, tool, (fm_check_part)p, s, workers[p], NULL, NULL, sweeps[p], up};
             for (size_t fx = 0; st == FM_OK && fx < c->fixture_count; fx++)
@@ -583,10 +602,10 @@ fm_status fm_check_motion(fm_check *c, const fm_motion *m, const fm_tool *tool,
     int rapid = m->kind == FM_MOTION_RAPID;
     int spindle_off = !rapid && (m->spindle_rpm <= 0 || m->spindle_dir == 0);
     int plunge = !rapid && !tool->spec.center_cutting && check_descent_deg(m) > c->opt.max_ramp_deg;
-    fm_sweep *sweeps[FM_CHECK_PART_COUNT] = {NULL, NULL, NULL};
-    fm_sweep_worker *workers[FM_CHECK_PART_COUNT] = {NULL, NULL, NULL};
+    fm_sweep *sweeps[FM_CHECK_PART_COUNT] = {NULL};
+    fm_sweep_worker *workers[FM_CHECK_PART_COUNT] = {NULL};
     for (int p = 0; p < FM_CHECK_PART_COUNT && st == FM_OK; p++) {
-        const fm_tool_part *tp = tool_part(tool, (fm_check_part)p);
+        const fm_tool_part *tp = tool_part(c, m->tool, tool, (fm_check_part)p);
         if (!tp) continue;
         st = fm_sweep_new(m, tp, check_sweep_options(c), &sweeps[p], err);
         if (st != FM_OK) break;
@@ -610,10 +629,10 @@ fm_status fm_check_motion(fm_check *c, const fm_motion *m, const fm_tool *tool,
             if (st == FM_OK && plunge)
                 st = relate_part(c, &pc, stock, 1, 0, 0.0, FM_CHECK_NON_CENTER_PLUNGE, -1, err);
         } else {
-            st = relate_part(c, &pc, stock, 1, 1, c->opt.clearance_mm[p],
-                             p == FM_CHECK_PART_SHANK ? FM_CHECK_SHANK_CONTACT
-                                                      : FM_CHECK_HOLDER_CONTACT,
-                             -1, err);
+            fm_check_kind kind = p == FM_CHECK_PART_SHANK    ? FM_CHECK_SHANK_CONTACT
+                                 : p == FM_CHECK_PART_HOLDER ? FM_CHECK_HOLDER_CONTACT
+                                                             : FM_CHECK_MACHINE_CONTACT;
+            st = relate_part(c, &pc, stock, 1, 1, c->opt.clearance_mm[p], kind, -1, err);
         }
         for (size_t fx = 0; st == FM_OK && fx < c->fixture_count; fx++)
             if (!c->fixtures[fx].frame_up)

@@ -38,7 +38,8 @@ typedef enum fm_check_kind {
     FM_CHECK_TRAVEL_LIMIT,         /* a programmed point outside the machine's travel */
     FM_CHECK_START_IN_STOCK,       /* the tool at the start position is in the stock */
     FM_CHECK_UNCERTAIN,            /* a search stopped at its budget where it mattered */
-    FM_CHECK_MACHINE_CONTACT,      /* any part meets a machine component (a table, a rotary table) */
+    FM_CHECK_MACHINE_CONTACT,      /* any part meets a machine component (a table, a rotary table),
+                                      or the head meets anything */
     FM_CHECK_KIND_COUNT
 } fm_check_kind;
 
@@ -48,6 +49,7 @@ typedef enum fm_check_part {
     FM_CHECK_PART_FLUTES = 0,
     FM_CHECK_PART_SHANK,
     FM_CHECK_PART_HOLDER,
+    FM_CHECK_PART_HEAD, /* the machine's head: its round parts above the holder */
     FM_CHECK_PART_COUNT
 } fm_check_part;
 
@@ -77,6 +79,12 @@ typedef struct fm_check_machine {
     int component_count;
     char component_path[FM_CHECK_MAX_COMPONENTS][FM_CHECK_COMPONENT_PATH];
     int component_frame_up[FM_CHECK_MAX_COMPONENTS];
+    /* The head's round parts (a spindle nose, a housing: solids of
+     * revolution about the spindle), stacked up from the top of each tool's
+     * holder (the spindle's face): the part FM_CHECK_PART_HEAD, whose
+     * contacts with anything are machine_contact. None: not checked. */
+    int head_count;
+    fm_holder_segment head[FM_TOOL_MAX_HOLDER];
 } fm_check_machine;
 
 typedef struct fm_check_options {

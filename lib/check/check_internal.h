@@ -22,6 +22,8 @@ typedef struct check_workers {
     int tool;
     fm_sweep_worker *w[FM_CHECK_PART_COUNT];
     fm_sweep *keep[FM_CHECK_PART_COUNT];
+    int head_state; /* 0: not built yet; 1: head holds the machine's head for this tool; -1: none */
+    fm_tool_part head;
 } check_workers;
 
 typedef struct check_fixture {

@@ -363,3 +363,30 @@ fm_status fm_tool_build_custom(const fm_tool_spec *spec, const fm_tool_custom *c
     double rs = spec->diameter > 0 ? spec->diameter / 2 : custom->bound_radius;
     return build_shank_holder(spec, tool, rs, err);
 }
+
+fm_status fm_tool_build_head(const fm_tool_spec *spec, const fm_holder_segment *segments, int count,
+                             fm_tool_part *head, fm_error *err)
+{
+    if (count < 1 || count > FM_TOOL_MAX_HOLDER)
+        return fm_error_set(err, FM_ERR_INPUT, "the head has %d round segments; 1 to %d", count, FM_TOOL_MAX_HOLDER);
+    double z = spec->length;
+    for (int i = 0; i < spec->holder_count && i < FM_TOOL_MAX_HOLDER; i++) z += spec->holder[i].length;
+    if (!isfinite(z)) return fm_error_set(err, FM_ERR_INPUT, "tool %d: its length is not finite", spec->number);
+    chain c;
+    chain_start(&c, z);
+    for (int i = 0; i < count; i++) {
+        const fm_holder_segment *h = &segments[i];
+        if (!(h->diameter > 0) || !isfinite(h->diameter) || h->diameter_top < 0 || !isfinite(h->diameter_top) ||
+            !(h->length > 0) || !isfinite(h->length))
+            return fm_error_set(err, FM_ERR_INPUT,
+                                "head segment %d: diameter and length must be positive, diameter_top not "
+                                "negative",
+                                i + 1);
+        double top = h->diameter_top > 0 ? h->diameter_top : h->diameter;
+        chain_line(&c, h->diameter / 2, z);
+        z += h->length;
+        chain_line(&c, top / 2, z);
+    }
+    chain_line(&c, 0, z);
+    return chain_finish(&c, head, spec, "head", err);
+}

@@ -138,6 +138,12 @@ fm_status fm_tool_validate(const fm_tool_spec *spec, fm_error *err);
 /* Build the parts of a standard cutter (every shape but FM_TOOL_HYPERFUN;
  * for that one use fm_tool_build_custom). */
 fm_status fm_tool_build(const fm_tool_spec *spec, fm_tool *tool, fm_error *err);
+/* The round parts of the machine's head (a spindle nose, a housing: solids
+ * of revolution about the spindle) as a part of this tool: the segments
+ * stacked up from the top of its holder, where the spindle's face is (the
+ * holder face at z = length when it has no holder). For the check. */
+fm_status fm_tool_build_head(const fm_tool_spec *spec, const fm_holder_segment *segments, int count,
+                             fm_tool_part *head, fm_error *err);
 /* A custom cutting part with the shank and holder of spec (spec->shape is
  * FM_TOOL_HYPERFUN; flute_length and bound_radius bound the custom part). */
 fm_status fm_tool_build_custom(const fm_tool_spec *spec, const fm_tool_custom *custom,

@@ -48,6 +48,10 @@ static void check_machine(const fm_check_machine *m)
         if (!isfinite(r->pivot_length)) abort();
         if (r->has_limits && !(r->limit_lo <= r->limit_hi)) abort();
     }
+    /* head: 1 to 8 round segments of positive diameter and length */
+    if (m->head_count < 0 || m->head_count > FM_TOOL_MAX_HOLDER) abort();
+    for (int i = 0; i < m->head_count; i++)
+        if (!(m->head[i].diameter > 0) || !(m->head[i].length > 0) || !(m->head[i].diameter_top >= 0)) abort();
     /* components: NUL-terminated .hf / .stl paths on a table link (0 to the
      * number of table axes below the workpiece's) */
     int ntable = 0;

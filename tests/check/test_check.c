@@ -591,6 +591,51 @@ static void test_machine_moving_link(void)
     }
 }
 
+/* The machine's head (its round parts above the holder: a spindle nose
+ * 100 mm across, 50 mm tall, stacked on the holder's top 70 mm above the
+ * tip) meets the 50 x 50 x 20 block as the tool goes down beside it: the
+ * tool at X-15 Y25 (flutes and shank x -18..-12, holder -25..-5: clear of
+ * the block's face x = 0) down to Z-80. The head reaches the block's top
+ * when the tip is at Z-70 and ends with its bottom face at z = -10, where
+ * the points over x 10..35 lie 10 mm below the top and 10 above the bottom:
+ * one machine_contact of the head at line 3, 10 mm deep, first where it
+ * comes within its clearance (1 mm: the tip at Z-69, the block's top 1 mm
+ * below the head). Without the head, nothing. */
+static void test_machine_head(void)
+{
+    fm_check_options opt;
+    fm_check_options_default(&opt);
+    opt.machine.start[2] = 20;
+    opt.machine.head_count = 1;
+    opt.machine.head[0] = (fm_holder_segment){100, 0, 50};
+    const char *prog = "G21 G90\nG0 X-15 Y25 Z10\nG0 Z-80\nG0 Z10\n";
+    fm_check *c = check_program(prog, box_lo, box_hi, flat_tool(20, 40, 1), &opt, NULL);
+    if (c) {
+        dump(c);
+        CHECK(fm_check_count(c) == 1);
+        const fm_check_finding *f = fm_check_count(c) ? fm_check_get(c, 0) : NULL;
+        if (f) {
+            CHECK(f->kind == FM_CHECK_MACHINE_CONTACT);
+            CHECK(f->part == FM_CHECK_PART_HEAD);
+            CHECK(f->fixture == -1);
+            CHECK(f->line == 3 && f->last_line == 4);
+            CHECK(f->severity == FM_CHECK_ERROR);
+            CHECK_NEAR(f->penetration_mm, 10.0, voxel);
+            CHECK_NEAR(f->position[0], -15, 1e-9);
+            double clear = opt.clearance_mm[FM_CHECK_PART_HEAD];
+            CHECK_NEAR(f->position[2], -70 + clear, voxel);
+            CHECK_NEAR(f->contact[2], clear, voxel);
+        }
+        fm_check_free(c);
+    }
+    opt.machine.head_count = 0;
+    c = check_program(prog, box_lo, box_hi, flat_tool(20, 40, 1), &opt, NULL);
+    if (c) {
+        CHECK(fm_check_count(c) == 0);
+        fm_check_free(c);
+    }
+}
+
 /* A rapid diving across the block (a line neither level nor along the
  * axis: lib/sweep's concave search) with the sweeps' searches allowed two
  * evaluations per point: they stop before their proofs close, and the
@@ -743,6 +788,7 @@ int main(int argc, char **argv)
     if (wanted(argc, argv, "rotary_travel")) test_rotary_travel();
     if (wanted(argc, argv, "machine_contact")) test_machine_contact();
     if (wanted(argc, argv, "machine_moving_link")) test_machine_moving_link();
+    if (wanted(argc, argv, "machine_head")) test_machine_head();
     if (wanted(argc, argv, "uncertain")) test_uncertain();
     if (wanted(argc, argv, "probe_fixture")) test_probe_fixture();
     fprintf(stderr, "%d checks, %d failures\n", fm_test_checks, fm_test_failures);

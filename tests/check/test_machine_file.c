@@ -66,6 +66,13 @@ static void check_trunnion(void)
                    " \"components\": [{\"model\": \"vise.stl\", \"link\": \"table\"}]}",
                    &m, &err);
     CHECK(st == FM_OK && m.component_count == 1 && m.component_frame_up[0] == 0);
+    /* the head's round parts, stacked from the spindle's face */
+    st = load_text("{\"head\": [{\"name\": \"nose\", \"diameter\": 100, \"length\": 40},"
+                   " {\"diameter\": 160, \"diameter_top\": 180, \"length\": 200}]}",
+                   &m, &err);
+    CHECK(st == FM_OK && m.head_count == 2);
+    CHECK(m.head[0].diameter == 100 && m.head[0].length == 40 && m.head[0].diameter_top == 0);
+    CHECK(m.head[1].diameter == 160 && m.head[1].diameter_top == 180 && m.head[1].length == 200);
 }
 
 static void check_errors(void)
@@ -102,6 +109,9 @@ static void check_errors(void)
         {"{\"components\": [{\"model\": \"housing.stl\", \"link\": \"spindle\"}]}",
          "components on the head move with the tool"},
         {"{\"components\": [{\"model\": \"t.step\", \"link\": \"table\"}]}", "components[0].model"},
+        {"{\"head\": []}", "head: expected 1 to 8 round segments"},
+        {"{\"head\": [{\"diameter\": 100}]}", "head[0]: \"diameter\" and \"length\" are required"},
+        {"{\"head\": [{\"diameter\": -1, \"length\": 5}]}", "head[0].diameter: expected"},
         {"{\"components\": [{\"model\": \"t.hf\"}]}", "are required"},
         {"{\"components\": {}}", "components: expected an array"},
     };
