@@ -377,7 +377,9 @@ static void tp_printf(tp_buf *b, const char *fmt, ...)
     for (;;) {
         va_list ap;
         va_start(ap, fmt);
-        int n = vsnprintf(b->text + b->len, b->cap - b->len, fmt, ap);
+        /* NULL + 0 is undefined in C (clang's UBSan stops there): the
+         * first call, before any allocation, only measures. */
+        int n = vsnprintf(b->text ? b->text + b->len : NULL, b->cap - b->len, fmt, ap);
         va_end(ap);
         if (n < 0) {
             b->failed = 1;
