@@ -139,7 +139,7 @@ static void folder_of(const char *path, char *out, size_t size)
     const char *slash = path ? strrchr(path, '/') : NULL;
     size_t n = slash ? (size_t)(slash - path + 1) : 0;
     if (n >= size) n = 0;
-    memcpy(out, path, n);
+    if (n) memcpy(out, path, n); /* path may be NULL: memcpy's arguments never may */
     out[n] = '\0';
 }
 
