@@ -142,8 +142,9 @@ static fm_status svc_chunks(void *ctx, const char *id, uint64_t since, double at
                                        "job %s has published no mesh yet", j->id)
                  : fm_error_set_reason(
                        err, FM_ERR_INPUT, "history_dropped",
-                       "job %s: the meshes before program time %.3f s are no longer kept (the "
-                       "daemon keeps %.3g MB of mesh history per job, or was restarted since)",
+                       "job %s: the meshes before program time %.3f s are not kept (the daemon "
+                       "keeps %.3g MB of mesh history per job; an uncut stock of more than a million "
+                       "triangles is first published after its first cuts; or it was restarted since)",
                        j->id, j->history_from_s,
                        (double)j->jobs->cfg.mesh_history_bytes / 1048576.0);
         pthread_mutex_unlock(&j->lock);
