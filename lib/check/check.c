@@ -316,11 +316,9 @@ typedef struct part_ctx {
 static void link_to_workpiece(const fm_motion *m, int frame_up, double t, const double p[3], double out[3])
 {
     const fm_machine *mc = m->machine;
-    int ntable = 0;
-    for (int i = 0; i < mc->rotary_count; i++) ntable += mc->rotary[i].carries == FM_ROTARY_TABLE;
     double joints[3], rl[9], tl[3], rw[9], tw[3], x[3];
     fm_motion_joints_at(m, t, joints);
-    fm_machine_table_transform(mc, joints, ntable - frame_up, rl, tl);
+    fm_machine_table_transform(mc, joints, fm_machine_table_axes(mc) - frame_up, rl, tl);
     fm_machine_table_transform(mc, joints, -1, rw, tw);
     for (int r = 0; r < 3; r++) x[r] = rl[3 * r] * p[0] + rl[3 * r + 1] * p[1] + rl[3 * r + 2] * p[2] + tl[r] - tw[r];
     for (int r = 0; r < 3; r++) out[r] = rw[r] * x[0] + rw[3 + r] * x[1] + rw[6 + r] * x[2];

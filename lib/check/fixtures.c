@@ -222,8 +222,7 @@ fm_status fm_check_add_component(fm_check *c, int i, double voxel_mm, fm_error *
     if (i < 0 || i >= mc->component_count || i >= FM_CHECK_MAX_COMPONENTS)
         return fm_error_set(err, FM_ERR_INPUT, "the machine has no component %d", i);
     const char *path = mc->component_path[i];
-    int up = mc->component_frame_up[i], ntable = 0;
-    for (int k = 0; k < mc->chain.rotary_count; k++) ntable += mc->chain.rotary[k].carries == FM_ROTARY_TABLE;
+    int up = mc->component_frame_up[i], ntable = fm_machine_table_axes(&mc->chain);
     if (up < 0 || up > ntable)
         return fm_error_set(err, FM_ERR_INPUT,
                             "component %s: its link lies %d table axes below the workpiece's, of %d", path, up,

@@ -54,6 +54,14 @@ int fm_machine_axis_of(const fm_machine *mc, int letter)
     return -1;
 }
 
+int fm_machine_table_axes(const fm_machine *mc)
+{
+    int n = 0;
+    for (int i = 0; mc && i < mc->rotary_count && i < FM_MACHINE_MAX_ROTARY; i++)
+        n += mc->rotary[i].carries == FM_ROTARY_TABLE;
+    return n;
+}
+
 fm_status fm_machine_validate(fm_machine *mc, fm_error *err)
 {
     if (mc->rotary_count < 0 || mc->rotary_count > FM_MACHINE_MAX_ROTARY)
@@ -80,8 +88,7 @@ fm_status fm_machine_validate(fm_machine *mc, fm_error *err)
             return fm_error_set(err, FM_ERR_INPUT, "rotary axis %c: limits are [lo, hi] in degrees with lo <= hi",
                                 name);
     }
-    int ntable = 0;
-    for (int i = 0; i < mc->rotary_count; i++) ntable += mc->rotary[i].carries == FM_ROTARY_TABLE;
+    int ntable = fm_machine_table_axes(mc);
     if (mc->frame_up < 0 || mc->frame_up > ntable)
         return fm_error_set(err, FM_ERR_INPUT, "the frame is %d links below the workpiece's, of %d table axes",
                             mc->frame_up, ntable);
@@ -158,8 +165,7 @@ int fm_kin_init(fm_kin *k, const fm_motion *m, fm_error *err)
         fm_error_at(err, FM_ERR_INPUT, "", m->line, 0, "motion %ld: a rotary joint value is not finite", m->index);
         return 0;
     }
-    int ntable = 0;
-    for (int i = 0; i < mc->rotary_count; i++) ntable += mc->rotary[i].carries == FM_ROTARY_TABLE;
+    int ntable = fm_machine_table_axes(mc);
     if (mc->frame_up < 0 || mc->frame_up > ntable) {
         fm_error_at(err, FM_ERR_INPUT, "", m->line, 0, "motion %ld: the machine's frame_up %d is not in 0..%d",
                     m->index, mc->frame_up, ntable);

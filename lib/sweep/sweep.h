@@ -145,6 +145,8 @@ int fm_motion_pieces(const fm_motion *m, double max_angle, int param_pieces, int
 fm_status fm_machine_validate(fm_machine *machine, fm_error *err);
 /* The index in machine->rotary of the axis driven by letter (0 = A), or -1. */
 int fm_machine_axis_of(const fm_machine *machine, int letter);
+/* How many of the machine's rotary axes carry the table (0 without one). */
+int fm_machine_table_axes(const fm_machine *machine);
 /* Where the table's link `upto` (the number of table axes counted from
  * the base that move it; -1: all) puts the workpiece at the joint values
  * (degrees, A B C): x_machine = rot x_workpiece + trans (rot row-major).

@@ -418,6 +418,25 @@ static void test_rotary_travel(void)
     }
 }
 
+/* A table axis driven by letter (0 = A) about the coordinate axis dir
+ * through the origin, appended to the chain. */
+static void add_table_axis(fm_machine *m, int letter, int dir)
+{
+    fm_rotary_axis *ax = &m->rotary[m->rotary_count++];
+    ax->letter = letter;
+    ax->carries = FM_ROTARY_TABLE;
+    ax->around[dir] = 1;
+}
+
+/* The machine's only component: a model under tests/ on a link frame_up
+ * table axes below the workpiece's. */
+static void one_component(fm_check_options *opt, const char *path, int frame_up)
+{
+    opt->machine.component_count = 1;
+    snprintf(opt->machine.component_path[0], sizeof opt->machine.component_path[0], "%s", path);
+    opt->machine.component_frame_up[0] = frame_up;
+}
+
 /* Machine contact on an AC trunnion (issue 17): A carries the table about
  * X, C the platter about Z (both through the origin), TCP on. The platter
  * (check/platter.hf, a machine component on C's link) is a disc of radius
@@ -439,17 +458,10 @@ static void test_machine_contact(void)
     fm_check_options_default(&opt);
     opt.machine.start[2] = 150;
     fm_machine *m = &opt.machine.chain;
-    m->rotary_count = 2;
     m->tcp = 1;
-    m->rotary[0].letter = 0;
-    m->rotary[0].carries = FM_ROTARY_TABLE;
-    m->rotary[0].around[0] = 1;
-    m->rotary[1].letter = 2;
-    m->rotary[1].carries = FM_ROTARY_TABLE;
-    m->rotary[1].around[2] = 1;
-    opt.machine.component_count = 1;
-    snprintf(opt.machine.component_path[0], sizeof opt.machine.component_path[0],
-             "check/platter.hf");
+    add_table_axis(m, 0, 0);
+    add_table_axis(m, 2, 2);
+    one_component(&opt, "check/platter.hf", 0);
     fm_tool_spec tool = flat_tool(20, 40, 1);
     tool.holder[0] = (fm_holder_segment){40, 40, 30};
     const double lo[3] = {-20, -20, -10}, hi[3] = {20, 20, 10};
@@ -501,13 +513,8 @@ static void test_machine_moving_link(void)
     fm_check_options_default(&opt);
     opt.machine.start[2] = 100;
     fm_machine *m = &opt.machine.chain;
-    m->rotary_count = 1;
-    m->rotary[0].letter = 0;
-    m->rotary[0].carries = FM_ROTARY_TABLE;
-    m->rotary[0].around[0] = 1;
-    opt.machine.component_count = 1;
-    snprintf(opt.machine.component_path[0], sizeof opt.machine.component_path[0], "check/headstock.hf");
-    opt.machine.component_frame_up[0] = 1;
+    add_table_axis(m, 0, 0);
+    one_component(&opt, "check/headstock.hf", 1);
     const double lo[3] = {0, -10, -10}, hi[3] = {40, 10, 10};
     const char *prog = "G21 G90\nG0 Z100\nG0 A90\nG0 X-15 Y0\nG0 Z12\nG0 Z100\nG0 Y30\nG0 Z0\nG0 Z100\n";
     fm_check *c = check_program(prog, lo, hi, flat_tool(20, 40, 1), &opt, NULL);
@@ -535,17 +542,10 @@ static void test_machine_moving_link(void)
 
     fm_check_options_default(&opt);
     opt.machine.start[2] = 150;
-    m->rotary_count = 2;
     m->tcp = 1;
-    m->rotary[0].letter = 0;
-    m->rotary[0].carries = FM_ROTARY_TABLE;
-    m->rotary[0].around[0] = 1;
-    m->rotary[1].letter = 2;
-    m->rotary[1].carries = FM_ROTARY_TABLE;
-    m->rotary[1].around[2] = 1;
-    opt.machine.component_count = 1;
-    snprintf(opt.machine.component_path[0], sizeof opt.machine.component_path[0], "check/cradle_wall.hf");
-    opt.machine.component_frame_up[0] = 1;
+    add_table_axis(m, 0, 0);
+    add_table_axis(m, 2, 2);
+    one_component(&opt, "check/cradle_wall.hf", 1);
     const double blo[3] = {-20, -20, -10}, bhi[3] = {20, 20, 10};
     const char *prog2 = "G21 G90\nG0 Z150\nG0 X0 Y85 Z5\nG0 C-75\nG0 Z150\n";
     const double deep = 85 * sin(75 * 3.14159265358979323846 / 180) + 3 - 80;
