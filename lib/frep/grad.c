@@ -69,8 +69,10 @@ double fm_eval_grad(fm_evaluator *ev, const double p[4], double grad[4])
             operand(g, in, 0, a);
             o[0] = fm_apply_unary(op, a[0]);
             double s = unary_slope(op, a[0], o[0]);
+            /* A partial the operand does not depend on stays 0 even where
+             * the slope is infinite (sqrt at 0): inf * 0 would be NaN. */
             if (s != 0.0)
-                for (int j = 1; j < W; j++) o[j] = s * a[j];
+                for (int j = 1; j < W; j++) o[j] = a[j] != 0.0 ? s * a[j] : 0.0;
             break;
         }
         case 2:

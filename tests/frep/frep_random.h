@@ -43,24 +43,32 @@ static inline fm_node random_dag(fm_graph *g, size_t steps, int minmax_heavy)
     pool[n++] = fm_param(g, "p1", -1.25);
     fm_node last = pool[0];
     for (size_t s = 0; s < steps; s++) {
+        /* Every draw in its own statement: the order in which a call's
+         * arguments are evaluated is unspecified in C (GCC and clang
+         * differ), and draws inside one call made the DAGs compiler-
+         * dependent (clang's hit sqrt(0) with a constant operand, GCC's
+         * did not). */
         double u = test_rand01();
+        double pick_op = test_rand01();
+        fm_node a = pick(pool, n);
+        fm_node b = pick(pool, n);
+        fm_node c = pick(pool, n);
+        fm_node k = fm_const(g, test_uniform(-2, 2));
         fm_node r;
         if (minmax_heavy) {
             /* CSG-like: min/max/neg of linear and distance-like terms. */
-            if (u < 0.3) r = fm_min(g, pick(pool, n), pick(pool, n));
-            else if (u < 0.6) r = fm_max(g, pick(pool, n), pick(pool, n));
-            else if (u < 0.7) r = fm_neg(g, pick(pool, n));
-            else if (u < 0.8) r = fm_sub(g, pick(pool, n), fm_const(g, test_uniform(-2, 2)));
-            else if (u < 0.9) r = fm_sqrt(g, fm_add(g, fm_square(g, pick(pool, n)),
-                                                    fm_square(g, pick(pool, n))));
-            else r = fm_mul(g, pick(pool, n), fm_const(g, test_uniform(-2, 2)));
+            if (u < 0.3) r = fm_min(g, a, b);
+            else if (u < 0.6) r = fm_max(g, a, b);
+            else if (u < 0.7) r = fm_neg(g, a);
+            else if (u < 0.8) r = fm_sub(g, a, k);
+            else if (u < 0.9) r = fm_sqrt(g, fm_add(g, fm_square(g, a), fm_square(g, b)));
+            else r = fm_mul(g, a, k);
         } else if (u < 0.4) {
-            r = fm_unary(g, unary_ops[(size_t)(test_rand01() * NUNARY)], pick(pool, n));
+            r = fm_unary(g, unary_ops[(size_t)(pick_op * NUNARY)], a);
         } else if (u < 0.93) {
-            r = fm_binary(g, binary_ops[(size_t)(test_rand01() * NBINARY)], pick(pool, n),
-                          pick(pool, n));
+            r = fm_binary(g, binary_ops[(size_t)(pick_op * NBINARY)], a, b);
         } else {
-            r = fm_select(g, pick(pool, n), pick(pool, n), pick(pool, n));
+            r = fm_select(g, a, b, c);
         }
         if (r != FM_NONE) {
             pool[n++] = r;

@@ -75,6 +75,27 @@ static void check_smooth_ops(void)
     fm_graph_free(g);
 }
 
+/* sqrt at 0 has an infinite slope; where its operand does not depend on a
+ * coordinate (max(x, 0) for x < 0 is the constant 0) that partial is 0, not
+ * inf * 0 = NaN. Found by clang's build, whose random DAGs reached it. */
+static void check_infinite_slope_constant_operand(void)
+{
+    fm_graph *g = fm_graph_new(0);
+    fm_node x = fm_var(g, FM_X), y = fm_var(g, FM_Y);
+    fm_node root = fm_add(g, fm_sqrt(g, fm_max(g, x, fm_const(g, 0.0))), y);
+    fm_error err;
+    fm_tape *tp = fm_tape_compile(g, root, &err);
+    fm_evaluator *ev = fm_evaluator_new(tp, &err);
+    double p[4] = {-1.5, 0.25, 0.0, 0.0}, grad[4];
+    CHECK_NEAR(fm_eval_grad(ev, p, grad), 0.25, 0.0);
+    CHECK_NEAR(grad[0], 0.0, 0.0);
+    CHECK_NEAR(grad[1], 1.0, 0.0);
+    check_grad_at(ev, p);
+    fm_evaluator_free(ev);
+    fm_tape_free(tp);
+    fm_graph_free(g);
+}
+
 static void check_random_csg(void)
 {
     for (int trial = 0; trial < 100; trial++) {
@@ -97,6 +118,7 @@ static void check_random_csg(void)
 int main(void)
 {
     check_smooth_ops();
+    check_infinite_slope_constant_operand();
     check_random_csg();
     printf("gradient components checked %d, skipped near kinks %d\n", checked, skipped);
     CHECK(checked > 10 * skipped);
