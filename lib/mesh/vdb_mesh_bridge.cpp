@@ -9,7 +9,6 @@
 #include "stock/stock_private.h"
 
 #include <openvdb/openvdb.h>
-#include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
 #include <algorithm>
@@ -58,6 +57,28 @@ bool less(const openvdb::Vec3s &a, const openvdb::Vec3s &b)
         if (a[k] != b[k])
             return a[k] < b[k];
     return false;
+}
+
+// Trilinear interpolation of the 3^3 voxel values v at r (index space,
+// relative to v's first voxel) moved by d along axis k; every coordinate of
+// the moved point lies in [0, 2].
+double trilinear_offset(const float (&v)[3][3][3], const double r[3], int k, double d)
+{
+    int c[3];
+    double t[3];
+    for (int a = 0; a < 3; a++) {
+        const double x = a == k ? r[a] + d : r[a];
+        c[a] = std::min(1, std::max(0, int(std::floor(x))));
+        t[a] = x - c[a];
+    }
+    double yz[2];
+    for (int a = 0; a < 2; a++) {
+        const float *row0 = v[c[0] + a][c[1]] + c[2], *row1 = v[c[0] + a][c[1] + 1] + c[2];
+        const double z0 = row0[0] + t[2] * (double(row0[1]) - row0[0]);
+        const double z1 = row1[0] + t[2] * (double(row1[1]) - row1[0]);
+        yz[a] = z0 + t[1] * (z1 - z0);
+    }
+    return yz[0] + t[0] * (yz[1] - yz[0]);
 }
 
 // Turn OpenVDB's output into an fm_mesh: quads split along their shorter
@@ -112,21 +133,38 @@ fm_mesh *to_mesh(const fm_stock *stock, const Grid &grid, const Polygons &pg,
     if (o.normals) {
         // Central differences of the trilinear phi half a voxel either side:
         // depends only on the vertex position and the grid, so a vertex
-        // shared by two chunks gets one normal.
-        // The sampler keeps a reference: the accessor must outlive it.
+        // shared by two chunks gets one normal. The six samples lie in the
+        // 3^3 voxels from floor(q - 0.5) (q: the vertex in index space),
+        // read once per vertex.
         Grid::ConstAccessor acc = grid.getConstAccessor();
-        openvdb::tools::GridSampler<Grid::ConstAccessor, openvdb::tools::BoxSampler> sampler(
-            acc, grid.transform());
-        double h = 0.5 * grid.voxelSize()[0];
+        const openvdb::math::Transform &xf = grid.transform();
         for (size_t i = 0; i < m->vertex_count; i++) {
             const float *p = m->positions + 3 * i;
-            double g[3];
-            for (int k = 0; k < 3; k++) {
-                openvdb::Vec3d a(p[0], p[1], p[2]), b(p[0], p[1], p[2]);
-                a[k] += h;
-                b[k] -= h;
-                g[k] = double(sampler.wsSample(a)) - double(sampler.wsSample(b));
+            const openvdb::Vec3d q = xf.worldToIndex(openvdb::Vec3d(p[0], p[1], p[2]));
+            const Coord base(int(std::floor(q[0] - 0.5)), int(std::floor(q[1] - 0.5)),
+                             int(std::floor(q[2] - 0.5)));
+            const double r[3] = {q[0] - base[0], q[1] - base[1], q[2] - base[2]};
+            float v[3][3][3];
+            const Leaf *leaf = acc.probeConstLeaf(base);
+            const int lx = base[0] & int(Leaf::DIM - 1), ly = base[1] & int(Leaf::DIM - 1),
+                      lz = base[2] & int(Leaf::DIM - 1);
+            if (leaf && lx + 2 < int(Leaf::DIM) && ly + 2 < int(Leaf::DIM) &&
+                lz + 2 < int(Leaf::DIM)) {
+                // all 27 in one leaf (most vertices): read its buffer
+                const float *buf = leaf->buffer().data();
+                for (int a = 0; a < 3; a++)
+                    for (int b = 0; b < 3; b++)
+                        for (int c = 0; c < 3; c++)
+                            v[a][b][c] = buf[Leaf::coordToOffset(base.offsetBy(a, b, c))];
+            } else {
+                for (int a = 0; a < 3; a++)
+                    for (int b = 0; b < 3; b++)
+                        for (int c = 0; c < 3; c++)
+                            v[a][b][c] = acc.getValue(base.offsetBy(a, b, c));
             }
+            double g[3];
+            for (int k = 0; k < 3; k++)
+                g[k] = trilinear_offset(v, r, k, 0.5) - trilinear_offset(v, r, k, -0.5);
             double len = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
             for (int k = 0; k < 3; k++)
                 m->normals[3 * i + k] = len > 0 ? float(g[k] / len) : 0.0f;
