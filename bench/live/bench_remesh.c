@@ -187,6 +187,9 @@ int main(int argc, char **argv)
                 return 1;
             }
             tris_total += cm->triangle_count;
+            if (getenv("BENCH_REMESH_LIST"))
+                printf("move %d chunk %d %d %d: %zu triangles\n", m, changed[i].index[0],
+                       changed[i].index[1], changed[i].index[2], cm->triangle_count);
             uint8_t *d = NULL;
             size_t ds = 0;
             t0 = wall_s();
