@@ -10,9 +10,12 @@ import sys
 import tempfile
 import time
 
-from daemon_util import Daemon, check, cli_reference, curl_json, demo_job, submit, wait_state
+from daemon_util import INSTRUMENTED, Daemon, check, cli_reference, curl_json, demo_job, submit, wait_state
 
-VOXEL = 0.25
+# Instrumented (sanitizer build): a coarser grid and longer waits (bounds
+# only: the same checks), for a daemon several times slower.
+VOXEL = 0.4 if INSTRUMENTED else 0.25
+WAIT_S = 600 if INSTRUMENTED else 300
 
 
 def main():
@@ -24,7 +27,7 @@ def main():
         try:
             job_id = submit(d.url, demo_job(VOXEL), tmp)
             snap = os.path.join(state, "jobs", job_id, "stock.vdb")
-            deadline = time.time() + 120
+            deadline = time.time() + (300 if INSTRUMENTED else 120)
             progress = 0
             while time.time() < deadline:
                 code, status = curl_json(d.url + "/v1/jobs/" + job_id)
@@ -43,7 +46,7 @@ def main():
 
         d = Daemon(frepmilld, state, "--workers", "1", "--snapshot-interval-s", "0.5")
         try:
-            status = wait_state(d.url, job_id, ("done", "failed"), 300)
+            status = wait_state(d.url, job_id, ("done", "failed"), WAIT_S)
             log = d.read_log()
             m = re.search(r"job %s: resuming from its snapshot at motion (\d+)" % job_id, log)
             check(m and int(m.group(1)) > 0, "resumed at motion %s, not from the start" %
@@ -56,7 +59,7 @@ def main():
             check(abs(removed - ref["removed_volume_mm3"]) <= tol,
                   "removed %.2f mm3 vs uninterrupted %.2f mm3 (tolerance %.2f)" %
                   (removed, ref["removed_volume_mm3"], tol))
-            s2 = wait_state(d.url, second, ("done", "failed"), 300)
+            s2 = wait_state(d.url, second, ("done", "failed"), WAIT_S)
             check(s2["state"] == "done", "the job acknowledged before the kill ran after restart")
         finally:
             d.stop()

@@ -16,17 +16,20 @@ import sys
 import tempfile
 import time
 
-from daemon_util import Daemon, check, curl_json
+from daemon_util import INSTRUMENTED, Daemon, check, curl_json
 from redis_util import RedisServer, need_redis_server
 
 # 0.1 mm: a job then cuts for over a second on an idle machine, long enough
 # to be caught running with a snapshot (at 0.2 mm the cuts took 0.3 s, under
-# the snapshot interval, and the victim was never found)
-VOXEL = 0.1
+# the snapshot interval, and the victim was never found). Instrumented
+# (sanitizer build, several times slower): 0.2 mm and 4 jobs, which still
+# run long enough; longer waits (bounds only), the same checks.
+VOXEL = 0.2 if INSTRUMENTED else 0.1
 RADIUS = 3.0      # 6 mm flat end mill
 LENGTH = 80.0     # each slot's straight length
 SLOTS = 4
-JOBS = 8
+JOBS = 4 if INSTRUMENTED else 8
+WAIT_S = 600 if INSTRUMENTED else 300
 TOOLS = {"units": "mm", "tools": [{"number": 1, "shape": "flat", "diameter": 2 * RADIUS,
                                     "flute_length": 20, "length": 40}]}
 
@@ -82,7 +85,7 @@ def main():
 
             # Kill daemon a while it runs a job, once that job has a snapshot.
             victim = None
-            deadline = time.time() + 240
+            deadline = time.time() + WAIT_S * 4 / 5
             while time.time() < deadline and not victim:
                 code, body = curl_json(a.url + "/v1/jobs")
                 for st in body["jobs"] if code == 200 else []:
@@ -108,7 +111,7 @@ def main():
             redis.start()
 
             r = redis.client()
-            deadline = time.time() + 300
+            deadline = time.time() + WAIT_S
             while time.time() < deadline and r("XLEN", "frepmill:done") < JOBS + 2:
                 time.sleep(0.2)
             done = r("XRANGE", "frepmill:done", "-", "+")
