@@ -154,9 +154,13 @@ static inline fm_motion sc_motion(int kind)
     return sc_line(0, 0, 0, 1, 0, 0);
 }
 
-/* Brute-force S: 100,000 samples of u, then golden-section refinement
- * around every sampled local maximum within 1e-2 of the best (the spacing
- * error L * du / 2 is below 1e-3 for every motion here). */
+/* Brute-force S: n + 1 samples of u, then golden-section refinement
+ * around every sampled local maximum within `margin` of the best. With
+ * a Lipschitz constant L of u -> F(u) the best sample is within L / (2 n)
+ * of the true maximum, and so is the sample nearest the maximum: a margin
+ * of that (twice it here) refines the sampled maximum next to it; that
+ * golden section then finds it assumes F has one maximum between the two
+ * samples either side, at both densities. */
 static inline double sc_golden(const fm_sweep *s, fm_sweep_worker *w, const double p[3], double a, double b)
 {
     const double g = 0.6180339887498949;
@@ -180,9 +184,8 @@ static inline double sc_golden(const fm_sweep *s, fm_sweep_worker *w, const doub
 #define SC_SAMPLES 100000
 __attribute__((unused)) static double sc_vals[SC_SAMPLES + 1];
 
-static inline double sc_brute(const fm_sweep *s, fm_sweep_worker *w, const double p[3])
+static inline double sc_brute_n(const fm_sweep *s, fm_sweep_worker *w, const double p[3], int n, double margin)
 {
-    int n = SC_SAMPLES;
     double best = -DBL_MAX;
     for (int k = 0; k <= n; k++) {
         sc_vals[k] = fm_sweep_tool_at_u(s, w, p, (double)k / n);
@@ -190,13 +193,75 @@ static inline double sc_brute(const fm_sweep *s, fm_sweep_worker *w, const doubl
     }
     double out = best;
     for (int k = 0; k <= n; k++) {
-        if (sc_vals[k] < best - 1e-2) continue;
+        if (sc_vals[k] < best - margin) continue;
         if ((k > 0 && sc_vals[k - 1] > sc_vals[k]) || (k < n && sc_vals[k + 1] > sc_vals[k])) continue;
         double a = k > 0 ? (double)(k - 1) / n : 0, b = k < n ? (double)(k + 1) / n : 1;
         double v = sc_golden(s, w, p, a, b);
         if (v > out) out = v;
     }
     return out;
+}
+
+/* The dense reference: 100,000 samples (spacing error L / 2e5 below 1e-3
+ * for every motion here), margin 1e-2. */
+static inline double sc_brute(const fm_sweep *s, fm_sweep_worker *w, const double p[3])
+{
+    return sc_brute_n(s, w, p, SC_SAMPLES, 1e-2);
+}
+
+/* How fast a motion moves, for the sparse brute force: the largest tip
+ * speed |c'(u)| and axis speed |a'(u)| over u (differences of 20,000
+ * poses, times 1.25 for what lies between them) and the box of the tip's
+ * path. F(u) = part(R(u)^T (p - c(u))) with a 1-Lipschitz part has
+ * |F'| <= |c'| + |a'| |p - c|. */
+typedef struct sc_speed {
+    double tip, axis, lo[3], hi[3];
+} sc_speed;
+
+static inline sc_speed sc_motion_speed(const fm_motion *m)
+{
+    enum { N = 20000 };
+    sc_speed v = {0, 0, {DBL_MAX, DBL_MAX, DBL_MAX}, {-DBL_MAX, -DBL_MAX, -DBL_MAX}};
+    double c0[3], a0[3];
+    fm_motion_pose_at(m, 0, c0, a0);
+    for (int k = 0; k <= N; k++) {
+        double c[3], a[3], dc = 0, da = 0;
+        fm_motion_pose_at(m, (double)k / N, c, a);
+        for (int i = 0; i < 3; i++) {
+            dc += (c[i] - c0[i]) * (c[i] - c0[i]);
+            da += (a[i] - a0[i]) * (a[i] - a0[i]);
+            v.lo[i] = fmin(v.lo[i], c[i]);
+            v.hi[i] = fmax(v.hi[i], c[i]);
+        }
+        v.tip = fmax(v.tip, 1.25 * sqrt(dc) * N);
+        v.axis = fmax(v.axis, 1.25 * sqrt(da) * N);
+        memcpy(c0, c, sizeof c0);
+        memcpy(a0, a, sizeof a0);
+    }
+    for (int i = 0; i < 3; i++) {
+        v.lo[i] -= v.tip / N;
+        v.hi[i] += v.tip / N;
+    }
+    return v;
+}
+
+/* The sparse brute force: as many samples as make the spacing error
+ * L / (2 n) at most SC_SPARSE_SPACING (0.05 mm), refined as above round
+ * every sampled local maximum within twice that of the best; its answers
+ * are held to the dense one's on a few points of every case
+ * (tests/sweep/test_sweep.c). */
+#define SC_SPARSE_SPACING 0.05
+static inline double sc_brute_sparse(const fm_sweep *s, fm_sweep_worker *w, const sc_speed *v, const double p[3])
+{
+    double far2 = 0;
+    for (int i = 0; i < 3; i++) {
+        double d = fmax(fabs(p[i] - v->lo[i]), fabs(p[i] - v->hi[i]));
+        far2 += d * d;
+    }
+    double L = v->tip + v->axis * sqrt(far2);
+    double n = ceil(L / (2 * SC_SPARSE_SPACING));
+    n = n < 64 ? 64 : n > SC_SAMPLES ? SC_SAMPLES : n;
+    return sc_brute_n(s, w, p, (int)n, 2 * SC_SPARSE_SPACING);
 }
 
 #endif
