@@ -44,8 +44,9 @@ static void integrate(const fm_sweep *s, fm_sweep_worker *w, const double c[3], 
     }
     if (iv.hi < 0) return;
     if (depth == 0) {
-        double q[3] = {test_uniform(box[0].lo, box[0].hi), test_uniform(box[1].lo, box[1].hi),
-                       test_uniform(box[2].lo, box[2].hi)};
+        /* one draw per statement: an initializer list's order is unspecified */
+        double q[3];
+        for (int i = 0; i < 3; i++) q[i] = test_uniform(box[i].lo, box[i].hi);
         if (fm_sweep_eval(s, w, q) >= 0) a->vol += cell;
         a->err += cell;
         a->uncertain++;
