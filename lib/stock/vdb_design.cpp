@@ -10,9 +10,11 @@
 #include "stock/design_private.h"
 #include "stock/vdb_bridge.hpp"
 
-#include <openvdb/tools/FastSweeping.h>
+#include <openvdb/tools/Prune.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/LevelSetUtil.h>
+#include <openvdb/tools/Morphology.h>
+#include <openvdb/tree/LeafManager.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
 #include <tbb/blocked_range.h>
@@ -832,6 +834,72 @@ fm_status compare(const fm_vdb *sv, const fm_vdb *dv, const fm_vdb_compare_optio
     return FM_OK;
 }
 
+/* One layer of a level set's band widening, in place: the voxels next to
+ * the known ones (26 neighbours) become active and get the distance that the
+ * first-order upwind (Godunov) update of the Eikonal equation gives from
+ * their known face neighbours - the update a fast-sweeping or fast-marching
+ * step makes, exact for planes - or a known neighbour's distance plus the
+ * step to it where that is less (a bound by the triangle inequality, for
+ * voxels with no known face neighbour). Not yet known: +-infinity, which the
+ * caller gives every voxel beyond the old band (inactive voxels, tiles and
+ * the background). The layer reads a copy of the grid before it, so the
+ * result does not depend on the order of the leaves. */
+void widen_layer(Grid &grid, double h)
+{
+    const Grid::ConstPtr before = grid.deepCopy();
+    openvdb::tools::dilateActiveValues(grid.tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                       openvdb::tools::IGNORE_TILES);
+    openvdb::tree::LeafManager<Tree> leaves(grid.tree());
+    const double inf = std::numeric_limits<double>::infinity();
+    leaves.foreach([&](Leaf &leaf, size_t) {
+        CAcc acc(before->constTree());
+        float *vals = leaf.buffer().data();
+        for (auto it = leaf.beginValueOn(); it; ++it) {
+            const float v0 = vals[it.pos()];
+            if (!std::isinf(v0)) continue;
+            const Coord c = it.getCoord();
+            const bool inside = v0 < 0;
+            /* distances in voxels */
+            double a[3], bound = inf;
+            for (int k = 0; k < 3; k++) {
+                a[k] = inf;
+                for (int d = -1; d <= 1; d += 2) {
+                    Coord n = c;
+                    n[k] += d;
+                    const float u = acc.getValue(n);
+                    if (std::isinf(u) || (u < 0) != inside) continue;
+                    a[k] = std::min(a[k], double(std::fabs(u)) / h);
+                }
+            }
+            for (int dx = -1; dx <= 1; dx++)
+                for (int dy = -1; dy <= 1; dy++)
+                    for (int dz = -1; dz <= 1; dz++) {
+                        const int m = dx * dx + dy * dy + dz * dz;
+                        if (m < 2) continue; /* faces: in the upwind update */
+                        const float u = acc.getValue(c.offsetBy(dx, dy, dz));
+                        if (std::isinf(u) || (u < 0) != inside) continue;
+                        bound = std::min(bound, double(std::fabs(u)) / h + std::sqrt(double(m)));
+                    }
+            std::sort(a, a + 3);
+            double d = inf;
+            if (a[0] < inf) {
+                d = a[0] + 1;
+                if (d > a[1]) {
+                    const double s = a[0] + a[1], q = a[0] - a[1];
+                    d = 0.5 * (s + std::sqrt(2 - q * q));
+                    if (d > a[2]) {
+                        const double s3 = s + a[2];
+                        const double sq = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+                        d = (s3 + std::sqrt(std::max(0.0, s3 * s3 - 3 * (sq - 1)))) / 3;
+                    }
+                }
+            }
+            d = std::min(d, bound);
+            if (d < inf) vals[it.pos()] = float(inside ? -d * h : d * h);
+        }
+    });
+}
+
 } // namespace
 
 extern "C" {
@@ -849,28 +917,40 @@ fm_status fm_vdb_widen_band(fm_vdb *v, int band, size_t budget, fm_error *err)
     return guarded(err, "widening the design's band", [&]() -> fm_status {
         const int add = band - v->band;
         if (add <= 0) return FM_OK;
-        /* the band's leaves grow about in proportion to its width; the
-         * sweep holds the old grid and the new one at once */
-        const double need = double(v->grid->memUsage()) * (1.0 + double(band) / double(v->band));
+        /* the band's leaves grow about in proportion to its width; a layer
+         * holds the old grid, the new one and the new one's copy at once */
+        const double need =
+            double(v->grid->memUsage()) * (1.0 + 2.0 * double(band) / double(v->band));
         if (need > double(budget))
             return fm_error_set(err, FM_ERR_LIMIT,
                                 "widening the design's band to %d voxels would need about %.0f MB; "
                                 "the memory budget is %.0f MB",
                                 band, need / 1048576.0, double(budget) / 1048576.0);
-        Grid::Ptr wide;
+        /* layer by layer (fast sweeping, OpenVDB's dilateSdf, took ~20 s of
+         * CPU for 3D_Chips' 0.1 mm result: bench/design) */
+        Grid::Ptr wide = v->grid->deepCopy();
+        openvdb::tools::changeLevelSetBackground(wide->tree(),
+                                                 std::numeric_limits<float>::infinity());
         auto run = [&] {
-            wide = openvdb::tools::dilateSdf(*v->grid, add,
-                                             openvdb::tools::NN_FACE_EDGE_VERTEX);
+            for (int k = 0; k < add; k++) widen_layer(*wide, v->voxel);
         };
         if (v->arena)
             v->arena->execute(run);
         else
             run();
-        if (!wide) return fm_error_set(err, FM_ERR_INPUT, "the design's level set could not be widened");
         const float bg = float(double(band) * v->voxel);
+        /* what no layer reached lies beyond the new band */
+        for (auto it = wide->tree().beginLeaf(); it; ++it) {
+            float *vals = it->buffer().data();
+            for (int i = 0; i < LEAF_SIZE; i++) {
+                if (std::fabs(vals[i]) >= bg) { /* infinity too */
+                    vals[i] = vals[i] < 0 ? -bg : bg;
+                    it->setValueOff(i);
+                }
+            }
+        }
         openvdb::tools::changeLevelSetBackground(wide->tree(), bg);
-        wide->setTransform(v->grid->transform().copy());
-        wide->setGridClass(openvdb::GRID_LEVEL_SET);
+        openvdb::tools::pruneLevelSet(wide->tree());
         v->grid = wide;
         v->band = band;
         v->background = bg;

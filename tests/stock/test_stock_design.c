@@ -170,7 +170,7 @@ static void test_excess(void)
         fm_design_free(d);
     }
     /* the same grid with the stock's band 3, 2 voxels short of the
-     * design's: widened in place (fast sweeping), the same figures */
+     * design's: widened in place (layer by layer), the same figures */
     snap = box_stock(dlo, dhi, 3, H);
     snprintf(path, sizeof path, "%s/narrow.vdb", dir);
     CHECK(snap && fm_stock_save(snap, path, NULL, &err) == FM_OK);
@@ -180,6 +180,20 @@ static void test_excess(void)
     if (!d) fprintf(stderr, "narrow vdb design: %s\n", err.message);
     if (d) {
         CHECK(fm_design_band_voxels(s, o.tolerance_mm) == 5);
+        /* the added layers (0.3 .. 0.5 mm from the surface) hold distances
+         * to the design box: 0.4 mm above its top face, 0.4 mm below it
+         * (where the band-3 grid had inside tiles), 0.4 mm beyond its x = 20
+         * face, and off its top x = 20 edge by 0.3 mm in x and z:
+         * sqrt(0.18) = 0.424 mm */
+        const double above[3] = {10, 10, 0}, below[3] = {10, 10, -0.8};
+        const double side[3] = {20.4, 10, -5}, edge[3] = {20.3, 10, -0.1};
+        printf("widened samples: above %.4f below %.4f side %.4f edge %.4f\n",
+               fm_design_sample(d, above), fm_design_sample(d, below), fm_design_sample(d, side),
+               fm_design_sample(d, edge));
+        CHECK_NEAR(fm_design_sample(d, above), -0.4, 1e-3);
+        CHECK_NEAR(fm_design_sample(d, below), 0.4, 1e-3);
+        CHECK_NEAR(fm_design_sample(d, side), -0.4, 1e-3);
+        CHECK_NEAR(fm_design_sample(d, edge), -sqrt(0.18), H / 2);
         check_top_excess(s, d, "widened snapshot design");
         fm_design_free(d);
     }
