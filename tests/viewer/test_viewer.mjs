@@ -24,7 +24,12 @@ import zlib from 'node:zlib';
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
 const VIEWER = path.join(ROOT, 'viewer');
 const CHROMIUM = process.env.FM_CHROMIUM || '/usr/bin/chromium';
-const VOXEL = Number(process.env.FM_VIEWER_VOXEL || 0.3);
+// Set by ctest in sanitizer builds: the daemon is instrumented, several times
+// slower. The demo job then takes a coarser grid and every wait is doubled
+// (bounds only: the same checks).
+const INSTRUMENTED = process.env.FM_TEST_INSTRUMENTED === '1';
+const VOXEL = Number(process.env.FM_VIEWER_VOXEL || (INSTRUMENTED ? 0.5 : 0.3));
+const WAIT = INSTRUMENTED ? 2 : 1;
 const daemonBin = process.argv[2];
 const artifactDir = process.argv[3] || os.tmpdir();
 
@@ -219,7 +224,7 @@ async function main() {
 
     // The page first, then the job: the viewer sees it from the start.
     await page.goto(`${url}/`);
-    await page.waitForFunction(() => window.frepmillViewer !== undefined, null, { timeout: 15000 });
+    await page.waitForFunction(() => window.frepmillViewer !== undefined, null, { timeout: 15000 * WAIT });
     const r = await fetch(`${url}/v1/jobs`, {
       method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(job),
     });
@@ -229,7 +234,7 @@ async function main() {
 
     // Watch it run: sample what the page shows while the job is running.
     let sawRunning = false, liveTriangles = 0, liveVersions = new Set();
-    const deadline = Date.now() + 90000;
+    const deadline = Date.now() + 90000 * WAIT;
     for (;;) {
       const s = await page.evaluate(() => ({
         state: window.frepmillViewer.state.jobState,
@@ -245,7 +250,7 @@ async function main() {
       }
       if (s.idle) break;
       if (s.state === 'failed' || s.state === 'cancelled') throw new Error(`the job ${s.state}`);
-      if (Date.now() > deadline) throw new Error(`the page did not see the job end within 90 s (${JSON.stringify(s)}; ${problems.join('; ')})`);
+      if (Date.now() > deadline) throw new Error(`the page did not see the job end within ${90 * WAIT} s (${JSON.stringify(s)}; ${problems.join('; ')})`);
       await sleep(100);
     }
     console.log(`job ran and the page caught up in ${((Date.now() - t0) / 1000).toFixed(1)} s`);
@@ -334,7 +339,7 @@ async function main() {
           s.value = v;
           s.dispatchEvent(new Event('input'));
         }, value);
-        await page.waitForFunction(() => window.frepmillViewer.stockShownAt() !== null, null, { timeout: 30000 });
+        await page.waitForFunction(() => window.frepmillViewer.stockShownAt() !== null, null, { timeout: 30000 * WAIT });
         return page.evaluate(() => ({ t: window.frepmillViewer.stockShownAt(),
           tris: window.frepmillViewer.triangleCount(), chunks: window.frepmillViewer.chunkCount(),
           readout: document.getElementById('mesh').textContent }));
@@ -376,7 +381,7 @@ async function main() {
       ok(start.tris !== daemonTris, `... and not the final stock's (${daemonTris})`);
       await page.evaluate(() => document.getElementById('live').click());
       await page.waitForFunction((n) => window.frepmillViewer.state.shownAt === null && !window.frepmillViewer.state.syncing
-        && window.frepmillViewer.triangleCount() === n, daemonTris, { timeout: 30000 });
+        && window.frepmillViewer.triangleCount() === n, daemonTris, { timeout: 30000 * WAIT });
       ok(true, `back to live, the page shows the final stock again (${daemonTris} triangles)`);
     }
 
@@ -399,7 +404,7 @@ async function main() {
     const id2 = (await r2.json()).id;
     await page.evaluate((jid) => window.frepmillViewer.open(jid), id2);
     await page.waitForFunction(() => window.frepmillViewer.idle() && window.frepmillViewer.state.toolpath
-      && window.frepmillViewer.state.jobState === 'done', null, { timeout: 60000 });
+      && window.frepmillViewer.state.jobState === 'done', null, { timeout: 60000 * WAIT });
     const turn = await page.evaluate(() => {
       const s = document.getElementById('scrub');
       s.value = 150;
@@ -440,7 +445,7 @@ async function main() {
     const id3 = (await r3.json()).id;
     await page.evaluate((jid) => { window.frepmillViewer.setColorMode('deviation'); window.frepmillViewer.open(jid); }, id3);
     await page.waitForFunction(() => window.frepmillViewer.idle() && window.frepmillViewer.deviationShown(),
-      null, { timeout: 60000 });
+      null, { timeout: 60000 * WAIT });
     const key = await (await fetch(`${url}/v1/jobs/${id3}/deviation`)).json();
     console.log(`deviation key: ${JSON.stringify(key)}`);
     ok(Math.abs(key.tolerance_mm - TOL) < 1e-9, `tolerance ${key.tolerance_mm} mm = half a voxel`);
