@@ -17,22 +17,7 @@
 #include "check/check.h"
 #include "check_pass.h"
 #include "job.h"
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* user + system time of the process (every thread) */
-static double cpu_s(void)
-{
-    struct rusage ru;
-    getrusage(RUSAGE_SELF, &ru);
-    return (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
-           (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
-}
+#include "bench_clock.h"
 
 static double load1(void)
 {
@@ -62,10 +47,10 @@ static int run_check(const char *program, const char *tools, const char *stock, 
     fm_error_clear(&err);
     fm_check *check = NULL;
     fm_job_result res;
-    double w0 = now_s(), c0 = cpu_s();
+    double w0 = bench_wall_s(), c0 = bench_cpu_s();
     fm_status st = fm_check_pass_run(&in, &check, &res, &err);
-    t->wall = now_s() - w0;
-    t->cpu = cpu_s() - c0;
+    t->wall = bench_wall_s() - w0;
+    t->cpu = bench_cpu_s() - c0;
     if (st != FM_OK) {
         fprintf(stderr, "bench_check: check: %s\n", err.message);
         return 0;
@@ -89,10 +74,10 @@ static int run_simulation(const char *program, const char *tools, const char *st
     fm_error err;
     fm_error_clear(&err);
     fm_job_result res;
-    double w0 = now_s(), c0 = cpu_s();
+    double w0 = bench_wall_s(), c0 = bench_cpu_s();
     fm_status st = fm_job_run(&spec, NULL, &res, &err);
-    t->wall = now_s() - w0;
-    t->cpu = cpu_s() - c0;
+    t->wall = bench_wall_s() - w0;
+    t->cpu = bench_cpu_s() - c0;
     if (st != FM_OK) {
         fprintf(stderr, "bench_check: simulation: %s\n", err.message);
         return 0;

@@ -25,24 +25,9 @@
 
 #include "job.h"
 #include "outputs.h"
+#include "bench_clock.h"
 
 #define GOAL 0.20
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* user + system time of the process (every thread) */
-static double cpu_s(void)
-{
-    struct rusage ru;
-    getrusage(RUSAGE_SELF, &ru);
-    return (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
-           (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
-}
 
 static double load1(void)
 {
@@ -72,10 +57,10 @@ static int run_plain(const job_case *jc, const char *out, double *wall, double *
     fm_error err;
     fm_error_clear(&err);
     fm_job_result res;
-    const double w0 = now_s(), c0 = cpu_s();
+    const double w0 = bench_wall_s(), c0 = bench_cpu_s();
     fm_status st = fm_job_run(&spec, NULL, &res, &err);
-    *wall = now_s() - w0;
-    *cpu = cpu_s() - c0;
+    *wall = bench_wall_s() - w0;
+    *cpu = bench_cpu_s() - c0;
     if (st != FM_OK) {
         fprintf(stderr, "bench_design: %s: %s\n", jc->name, err.message);
         return 0;
@@ -112,9 +97,9 @@ static int run_design(const job_case *jc, const char *design, const char *label,
     fm_error err;
     fm_error_clear(&err);
     fm_job_result r;
-    const double w0 = now_s(), c0 = cpu_s();
+    const double w0 = bench_wall_s(), c0 = bench_cpu_s();
     fm_status st = fm_job_run(&spec, NULL, &r, &err);
-    const double wall = now_s() - w0, cpu = cpu_s() - c0;
+    const double wall = bench_wall_s() - w0, cpu = bench_cpu_s() - c0;
     if (st != FM_OK) {
         fprintf(stderr, "bench_design: %s with %s: %s\n", jc->name, design, err.message);
         return 0;

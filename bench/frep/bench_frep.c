@@ -11,12 +11,7 @@
 #include <stdlib.h>
 #include <time.h>
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
+#include "bench_clock.h"
 
 /* The model, once as a DAG and once as plain C. Half-width box:
  * min over axes of (h - |p - c|). */
@@ -146,12 +141,12 @@ int main(void)
                         }
 
     const int reps = 5;
-    double t0 = now();
+    double t0 = bench_wall_s();
     for (int r = 0; r < reps; r++) fm_eval_batch(ev, n, x, y, z, NULL, out);
-    double t_full = (now() - t0) / reps;
-    t0 = now();
+    double t_full = (bench_wall_s() - t0) / reps;
+    t0 = bench_wall_s();
     for (int r = 0; r < reps; r++) c_batch(n, x, y, z, ref);
-    double t_c = (now() - t0) / reps;
+    double t_c = (bench_wall_s() - t0) / reps;
     double maxdiff = 0;
     for (size_t i = 0; i < n; i++) maxdiff = fmax(maxdiff, fabs(out[i] - ref[i]));
 
@@ -159,7 +154,7 @@ int main(void)
     size_t per_box = (size_t)P * P * P, total_len = 0, shortened = 0;
     double t_short = 0;
     for (int r = 0; r < reps; r++) {
-        t0 = now();
+        t0 = bench_wall_s();
         size_t b = 0;
         for (int bz = 0; bz < B; bz++)
             for (int by = 0; by < B; by++)
@@ -182,7 +177,7 @@ int main(void)
                         fm_tape_free(s);
                     }
                 }
-        t_short += now() - t0;
+        t_short += bench_wall_s() - t0;
     }
     t_short /= reps;
     double maxdiff_short = 0;
@@ -198,13 +193,13 @@ int main(void)
            B * B * B, (double)total_len / (B * B * B), fm_tape_length(tape), maxdiff_short);
 
     /* Point evaluator for comparison. */
-    t0 = now();
+    t0 = bench_wall_s();
     double sink = 0;
     for (size_t i = 0; i < n; i++) {
         double p[4] = {x[i], y[i], z[i], 0};
         sink += fm_eval_point(ev, p);
     }
-    double t_point = now() - t0;
+    double t_point = bench_wall_s() - t0;
     printf("point evaluator:      %.3g points/s (checksum %.6g)\n", n / t_point, sink);
 
     free(x);

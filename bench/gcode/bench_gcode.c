@@ -11,20 +11,7 @@
 #include <time.h>
 
 #include "toolpaths/gcode/gcode.h"
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
-
-static double cpu_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
+#include "bench_clock.h"
 
 static int count(void *user, const fm_motion *m)
 {
@@ -58,7 +45,7 @@ int main(int argc, char **argv)
     len += (size_t)snprintf(text + len, cap - len, "M2\n");
 
     /* floor: split into lines and strtod every number */
-    double t0 = now(), sink = 0;
+    double t0 = bench_wall_s(), sink = 0;
     long nlines = 0;
     for (size_t i = 0; i < len;) {
         size_t e = i;
@@ -74,15 +61,15 @@ int main(int argc, char **argv)
         nlines++;
         i = e + 1;
     }
-    double floor_s = now() - t0;
+    double floor_s = bench_wall_s() - t0;
 
     long motions = 0;
     fm_error err;
     fm_gcode_summary sum;
-    t0 = now();
-    double c0 = cpu_now();
+    t0 = bench_wall_s();
+    double c0 = bench_cpu_s();
     fm_status st = fm_gcode_run_string(text, len, "bench", NULL, count, &motions, &sum, &err);
-    double run_s = now() - t0, run_cpu = cpu_now() - c0;
+    double run_s = bench_wall_s() - t0, run_cpu = bench_cpu_s() - c0;
     if (st) {
         char buf[600];
         fprintf(stderr, "%s\n", fm_error_format(&err, buf, sizeof buf));
@@ -104,10 +91,10 @@ int main(int argc, char **argv)
     fopt.dialect = FM_GCODE_FANUC;
     long fmotions = 0;
     fm_gcode_summary fsum;
-    t0 = now();
-    c0 = cpu_now();
+    t0 = bench_wall_s();
+    c0 = bench_cpu_s();
     st = fm_gcode_run_string(text, len, "bench", &fopt, count, &fmotions, &fsum, &err);
-    double fan_s = now() - t0, fan_cpu = cpu_now() - c0;
+    double fan_s = bench_wall_s() - t0, fan_cpu = bench_cpu_s() - c0;
     if (st) {
         char buf[600];
         fprintf(stderr, "fanuc: %s\n", fm_error_format(&err, buf, sizeof buf));

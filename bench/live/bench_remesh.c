@@ -18,19 +18,7 @@
 #include <string.h>
 #include <time.h>
 
-static double wall_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static double cpu_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "bench_clock.h"
 
 /* A flat end mill of radius r, bottom at z0, moved from a to b in XY: the
  * slab z0..z1 over the points within r of the segment. Exact signed
@@ -161,26 +149,26 @@ int main(int argc, char **argv)
         uint64_t since = fm_stock_version(s);
         slot mv = {{10 + m, 30}, {11 + m, 30}, 3, -1, 20};
         fm_field f = slot_field(&mv);
-        const double c0 = cpu_s();
-        double t0 = wall_s();
+        const double c0 = bench_cpu_s();
+        double t0 = bench_wall_s();
         if (fm_stock_subtract(s, &f, &cut, NULL, &err) != FM_OK) {
             fprintf(stderr, "bench_remesh: %s\n", err.message);
             return 1;
         }
-        t_cut[m] = wall_s() - t0;
+        t_cut[m] = bench_wall_s() - t0;
         size_t n = fm_stock_changed_chunks(s, since, changed, 64);
         if (n > 64) n = 64;
         chunks_total += n;
         for (size_t i = 0; i < n; i++) {
-            t0 = wall_s();
+            t0 = bench_wall_s();
             fm_mesh *cm = fm_mesh_from_stock_chunk(s, changed[i].index, &eo, &err);
-            t_mesh[m] += wall_s() - t0;
-            t0 = wall_s();
+            t_mesh[m] += bench_wall_s() - t0;
+            t0 = bench_wall_s();
             fm_mesh *bm = fm_mesh_from_stock_chunk(s, changed[i].index, &bare, &err);
-            t_bare[m] += wall_s() - t0;
-            t0 = wall_s();
+            t_bare[m] += bench_wall_s() - t0;
+            t0 = bench_wall_s();
             fm_mesh *nm = fm_mesh_from_stock_chunk(s, changed[i].index, &normals_only, &err);
-            t_norm[m] += wall_s() - t0;
+            t_norm[m] += bench_wall_s() - t0;
             fm_mesh_free(nm);
             if (!cm || !bm) {
                 fprintf(stderr, "bench_remesh: %s\n", err.message);
@@ -192,21 +180,21 @@ int main(int argc, char **argv)
                        changed[i].index[1], changed[i].index[2], cm->triangle_count);
             uint8_t *d = NULL;
             size_t ds = 0;
-            t0 = wall_s();
+            t0 = bench_wall_s();
             if (cm->triangle_count && fm_mesh_encode_draco(cm, &d5, &d, &ds, &err) == FM_OK)
                 bytes5 += ds;
-            t_enc5[m] += wall_s() - t0;
+            t_enc5[m] += bench_wall_s() - t0;
             free(d);
             d = NULL;
-            t0 = wall_s();
+            t0 = bench_wall_s();
             if (cm->triangle_count && fm_mesh_encode_draco(cm, &dfast, &d, &ds, &err) == FM_OK)
                 bytesf += ds;
-            t_encf[m] += wall_s() - t0;
+            t_encf[m] += bench_wall_s() - t0;
             free(d);
             fm_mesh_free(cm);
             fm_mesh_free(bm);
         }
-        c_all[m] = cpu_s() - c0;
+        c_all[m] = bench_cpu_s() - c0;
     }
     printf("bench_remesh: %d moves of 1 mm at 1 mm deep, voxel %g mm, 6 mm flat; %.2f chunks and "
            "%.0f triangles per move\n",

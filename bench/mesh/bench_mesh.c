@@ -16,12 +16,7 @@
 #include <string.h>
 #include <time.h>
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
+#include "bench_clock.h"
 
 /* ---- cutters: exact signed distances, positive inside ---- */
 
@@ -162,7 +157,7 @@ int main(int argc, char **argv)
     fm_stock_options so;
     fm_stock_options_default(&so);
     so.voxel_mm = voxel;
-    double t0 = now();
+    double t0 = bench_wall_s();
     fm_stock *s = fm_stock_new_box(lo, hi, &so, &err);
     if (!s) {
         fprintf(stderr, "stock: %s\n", err.message);
@@ -191,14 +186,14 @@ int main(int argc, char **argv)
         }
     }
     printf("stock: %.0f x %.0f x %.0f mm, voxel %.3f mm, %d cuts, built in %.2f s\n", hi[0],
-           hi[1], hi[2], voxel, nc, now() - t0);
+           hi[1], hi[2], voxel, nc, bench_wall_s() - t0);
 
     fm_mesh_extract_options eo;
     fm_mesh_extract_default(&eo);
     eo.normals = 0;
-    t0 = now();
+    t0 = bench_wall_s();
     fm_mesh *m = fm_mesh_from_stock(s, &eo, &err);
-    double t_whole = now() - t0;
+    double t_whole = bench_wall_s() - t0;
     if (!m) {
         fprintf(stderr, "mesh: %s\n", err.message);
         return 1;
@@ -232,15 +227,15 @@ int main(int argc, char **argv)
             o.speed = speeds[si];
             uint8_t *d = NULL;
             size_t dsize = 0;
-            double te = now();
+            double te = bench_wall_s();
             if (fm_mesh_encode_draco(m, &o, &d, &dsize, &err) != FM_OK) {
                 fprintf(stderr, "draco: %s\n", err.message);
                 return 1;
             }
-            te = now() - te;
-            double td = now();
+            te = bench_wall_s() - te;
+            double td = bench_wall_s();
             fm_mesh *back = fm_mesh_decode_draco(d, dsize, NULL, &err);
-            td = now() - td;
+            td = bench_wall_s() - td;
             double e = back ? max_error(&gi, m, back) : NAN;
             printf("%4d %5d %12zu %7.1f %12.3f %12.3f %9.3f %9.3f\n", o.position_bits, o.speed,
                    dsize, (double)stl_size / dsize, 1000 * e,
@@ -269,12 +264,12 @@ int main(int argc, char **argv)
     fm_mesh_extract_options en = ec, et = ec;
     en.coloring = FM_MESH_COLOR_NONE;
     et.coloring = FM_MESH_COLOR_TOOL;
-    t0 = now();
+    t0 = bench_wall_s();
     fm_mesh *mn = fm_mesh_from_stock(s, &en, &err);
-    const double t_plain = now() - t0;
-    t0 = now();
+    const double t_plain = bench_wall_s() - t0;
+    t0 = bench_wall_s();
     fm_mesh *mt = fm_mesh_from_stock(s, &et, &err);
-    const double t_tool = now() - t0;
+    const double t_tool = bench_wall_s() - t0;
     if (mn && mt) {
         uint8_t *d = NULL;
         size_t dsize = 0;
@@ -293,7 +288,7 @@ int main(int argc, char **argv)
     fm_field f = cut_field(&extra);
     fm_stock_subtract(s, &f, NULL, NULL, &err);
     fm_stock_chunk chunks[512];
-    t0 = now();
+    t0 = bench_wall_s();
     size_t n = fm_stock_changed_chunks(s, v, chunks, 512);
     size_t bytes = 0, tris = 0;
     for (size_t i = 0; i < n && i < 512; i++) {
@@ -310,16 +305,16 @@ int main(int argc, char **argv)
         free(d);
         fm_mesh_free(cm);
     }
-    double t_chunks = now() - t0;
+    double t_chunks = bench_wall_s() - t0;
     size_t all = fm_stock_changed_chunks(s, 0, chunks, 0);
-    t0 = now();
+    t0 = bench_wall_s();
     fm_mesh *m2 = fm_mesh_from_stock(s, &ec, &err);
-    double t_whole2 = now() - t0;
-    t0 = now();
+    double t_whole2 = bench_wall_s() - t0;
+    t0 = bench_wall_s();
     uint8_t *d2 = NULL;
     size_t d2size = 0;
     fm_mesh_encode_draco(m2, NULL, &d2, &d2size, NULL);
-    double t_enc2 = now() - t0;
+    double t_enc2 = bench_wall_s() - t0;
     printf("\none motion: %zu of %zu chunks dirty, remesh + Draco of them %.3f s (%zu triangles, "
            "%zu bytes)\n",
            n, all, t_chunks, tris, bytes);
@@ -342,10 +337,10 @@ int main(int argc, char **argv)
         fm_render_polyline pl[2] = {{path_pts, 2, 0}, {rapid_pts, 3, 1}};
         ro.paths = pl;
         ro.path_count = 2;
-        t0 = now();
+        t0 = bench_wall_s();
         fm_render_png(m2, &ro, path, NULL);
         printf("render %dx%d (antialias %d): %.3f s -> %s\n", ro.width, ro.height, ro.antialias,
-               now() - t0, path);
+               bench_wall_s() - t0, path);
     }
     free(d2);
     fm_mesh_free(m2);

@@ -38,6 +38,7 @@
 #include "mesh/mesh.h"
 #include "stock/stock.h"
 #include "sweep/sweep.h"
+#include "bench_clock.h"
 
 #define CHIPS_PATH "/usr/share/linuxcnc/ncfiles/3D_Chips.ngc"
 #ifndef FM_SOURCE_DIR
@@ -45,20 +46,6 @@
 #endif
 #define DEMO_PATH FM_SOURCE_DIR "/deploy/demo/pocket.ngc"
 #define DEMO_TOOLS FM_SOURCE_DIR "/deploy/demo/tools.json"
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-static double cpu_now(void)
-{
-    struct rusage ru;
-    getrusage(RUSAGE_SELF, &ru);
-    return ru.ru_utime.tv_sec + 1e-6 * ru.ru_utime.tv_usec + ru.ru_stime.tv_sec + 1e-6 * ru.ru_stime.tv_usec;
-}
 
 /* ------------------------------------------------- generated pocket -- */
 
@@ -166,23 +153,23 @@ static int count_sink(void *user, const fm_motion *m)
 static void mesh_figures(const char *name, fm_stock *stock)
 {
     fm_error err;
-    double t0 = now();
+    double t0 = bench_wall_s();
     fm_mesh *mesh = fm_mesh_from_stock(stock, NULL, &err);
     if (!mesh) {
         fprintf(stderr, "bench_simulate %s: meshing: %s\n", name, err.message);
         return;
     }
-    double t_mesh = now() - t0;
+    double t_mesh = bench_wall_s() - t0;
     uint8_t *stl = NULL, *drc = NULL;
     size_t stl_size = 0, drc_size = 0;
     fm_mesh_draco_options opt;
     fm_mesh_draco_default(&opt);
-    t0 = now();
+    t0 = bench_wall_s();
     fm_status st = fm_mesh_encode_stl(mesh, &stl, &stl_size, &err);
-    double t_stl = now() - t0;
-    t0 = now();
+    double t_stl = bench_wall_s() - t0;
+    t0 = bench_wall_s();
     if (st == FM_OK) st = fm_mesh_encode_draco(mesh, &opt, &drc, &drc_size, &err);
-    double t_drc = now() - t0;
+    double t_drc = bench_wall_s() - t0;
     fm_mesh *back = st == FM_OK ? fm_mesh_decode_draco(drc, drc_size, NULL, &err) : NULL;
     if (!back) {
         fprintf(stderr, "bench_simulate %s: encoding: %s\n", name, err.message);
@@ -235,9 +222,9 @@ static void run_case(const bench_case *bc, const bench_opts *o)
     fm_error err;
     double load0[3], load1[3];
     load_average(load0);
-    double i0 = instructions_now(), c0 = cpu_now(), w0 = now();
+    double i0 = instructions_now(), c0 = bench_cpu_s(), w0 = bench_wall_s();
     fm_status st = fm_job_run(&spec, NULL, &r, &err);
-    double cpu = cpu_now() - c0, wall = now() - w0, instr = instructions_now() - i0;
+    double cpu = bench_cpu_s() - c0, wall = bench_wall_s() - w0, instr = instructions_now() - i0;
     load_average(load1);
     if (st != FM_OK) {
         fprintf(stderr, "bench_simulate %s: %s\n", bc->name, err.message);
@@ -264,22 +251,22 @@ static void run_case(const bench_case *bc, const bench_opts *o)
 
     /* Where the time goes: the parts the job's statistics time, and the
      * set-up and final measures timed here again on their own. */
-    double t = now();
+    double t = bench_wall_s();
     long nmot = 0;
     fm_gcode_options gopt;
     fm_gcode_options_default(&gopt);
     fm_status gst = bc->path ? fm_gcode_run_file(bc->path, &gopt, count_sink, &nmot, NULL, &err)
                              : fm_gcode_run_string(bc->text, bc->len, bc->name, &gopt, count_sink, &nmot, NULL, &err);
-    double t_gcode = gst == FM_OK ? now() - t : -1;
-    t = now();
+    double t_gcode = gst == FM_OK ? bench_wall_s() - t : -1;
+    t = bench_wall_s();
     fm_stock *fresh = fm_job_make_stock(bc->stock_spec, &spec.stock, &err);
-    double t_stock = now() - t;
+    double t_stock = bench_wall_s() - t;
     fm_stock_free(fresh);
-    t = now();
+    t = bench_wall_s();
     double area = 0;
     (void)fm_stock_volume(r.stock);
     (void)fm_stock_surface_area(r.stock, &area, &err);
-    double t_measure = now() - t;
+    double t_measure = bench_wall_s() - t;
     double t_cut = cs->time_classify_s + cs->time_voxels_s + cs->time_apply_s;
     printf("  where the wall time goes: interpreting the program %.2f s (x2: survey and cut), making the stock "
            "%.2f s, final volume and area %.2f s; cuts %.2f s = interval pass (serial) %.2f s + voxel pass "

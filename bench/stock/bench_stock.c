@@ -15,13 +15,7 @@
 
 #include "stock/stock.h"
 #include "sweep/sweep.h"
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
+#include "bench_clock.h"
 
 static fm_motion line(double x0, double y0, double z, double x1, double y1)
 {
@@ -52,12 +46,12 @@ static double cut_lines(fm_stock *s, const fm_tool_part *part, double x0, double
             exit(1);
         }
         fm_stock_cut_stats st;
-        double t0 = now();
+        double t0 = bench_wall_s();
         if (fm_stock_subtract(s, &f, NULL, &st, &err) != FM_OK) {
             fprintf(stderr, "bench_stock: %s\n", err.message);
             exit(1);
         }
-        t += now() - t0;
+        t += bench_wall_s() - t0;
         f.release(f.ctx);
         sum->voxels_evaluated += st.voxels_evaluated;
         sum->leaves_evaluated += st.leaves_evaluated;

@@ -9,13 +9,7 @@
 #include <time.h>
 
 #include "sweep/sweep_cases.h"
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
+#include "bench_clock.h"
 
 static unsigned long long rng = 88172645463325252ULL;
 static double urand(double lo, double hi)
@@ -67,26 +61,26 @@ static void bench(const char *cutter, const char *kind, const fm_motion *m, cons
     double *x = malloc(sizeof(double) * n * 4), *y = x + n, *z = y + n, *out = z + n;
     n = band_points(s, m, part, n, x, y, z);
     /* Batch. */
-    double t0 = now();
+    double t0 = bench_wall_s();
     fm_sweep_eval_batch(s, w, n, x, y, z, out);
-    double tb = now() - t0;
+    double tb = bench_wall_s() - t0;
     /* Interval over 0.8 mm boxes centred on the same points. */
-    t0 = now();
+    t0 = bench_wall_s();
     double sink = 0;
     for (int i = 0; i < n; i++) {
         fm_interval box[3] = {{x[i] - 0.4, x[i] + 0.4}, {y[i] - 0.4, y[i] + 0.4}, {z[i] - 0.4, z[i] + 0.4}};
         sink += fm_sweep_interval(s, w, box).hi;
     }
-    double ti = now() - t0;
+    double ti = bench_wall_s() - t0;
     /* The floor: the static tool at its start pose, at the same points. */
     double c[3], a[3];
     fm_sweep_pose(s, m->t0, c, a);
-    t0 = now();
+    t0 = bench_wall_s();
     for (int i = 0; i < n; i++) {
         double p[3] = {x[i] - c[0], y[i] - c[1], z[i] - c[2]};
         out[i] = fm_tool_part_eval(part, NULL, p);
     }
-    double tf = now() - t0;
+    double tf = bench_wall_s() - t0;
     /* Part evaluations per point in the search. */
     size_t evals = 0;
     for (int i = 0; i < n && i < 2000; i++) {
