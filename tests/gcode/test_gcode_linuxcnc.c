@@ -91,6 +91,9 @@ static void test_comp_errors(void)
     expect_error_opt(COMP("G41.1 D4 L3\n"), &o, 4, 10, "needs the G18 plane");
     expect_error_opt(COMP("G41 D1.5\n"), &o, 4, 5, "expected a whole tool number");
     expect_error_opt(COMP("G41 D7\n"), &o, 4, 5, "tool 7 is not in the tool table");
+    /* a tool number beyond int (found by fuzz_gcode: the conversion was
+     * undefined, clang's UBSan stopped there) */
+    expect_error_opt(COMP("G41 D111111111111111111111\n"), &o, 4, 5, "expected a tool number up to 1000000000");
     /* a concave corner the tool cannot reach: the 2 mm step back is shorter
      * than the radius */
     expect_error_opt(COMP("G41 G1 X10 Y0\nG1 X20\nG1 Y2\nG1 X10\n"), &o, 7, 1,

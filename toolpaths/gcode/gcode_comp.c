@@ -247,6 +247,11 @@ fm_status gc_comp_on(gc_interp *g, const gc_block *b, int code, int col)
             if (r < 0)
                 return gc_fail(g, FM_ERR_INPUT, COL(b, 'd'),
                                "%s D%g: expected a tool number >= 0", name, d);
+            /* the bound of every whole word (gc_int_word): beyond it the
+             * conversion to int would be undefined */
+            if (r > 1e9)
+                return gc_fail(g, FM_ERR_INPUT, COL(b, 'd'),
+                               "%s D%g: expected a tool number up to 1000000000", name, d);
             tool = (int)r;
             fm_status st = gc_check_tool(g, tool, COL(b, 'd'), "D");
             if (st) return st;
