@@ -5,6 +5,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "sweep/sweep.h"
@@ -262,6 +263,18 @@ static inline double sc_brute_sparse(const fm_sweep *s, fm_sweep_worker *w, cons
     double n = ceil(L / (2 * SC_SPARSE_SPACING));
     n = n < 64 ? 64 : n > SC_SAMPLES ? SC_SAMPLES : n;
     return sc_brute_n(s, w, p, (int)n, 2 * SC_SPARSE_SPACING);
+}
+
+/* The sparse brute force's answer at p held to the dense one's (1e-9);
+ * prints where they differ (what, the case's name) and returns 0 then. */
+static inline int sc_sparse_equals_dense(const char *what, const fm_sweep *s, fm_sweep_worker *w, const double p[3],
+                                         double sparse)
+{
+    double dense = sc_brute(s, w, p);
+    if (fabs(sparse - dense) <= 1e-9) return 1;
+    fprintf(stderr, "%s at (%.6g, %.6g, %.6g): sparse brute force %.12g, dense %.12g\n", what, p[0], p[1], p[2], sparse,
+            dense);
+    return 0;
 }
 
 #endif

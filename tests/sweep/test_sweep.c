@@ -61,11 +61,9 @@ static int dense_points = 4;
 static void check_sparse_brute(const char *cutter, const char *kind, const fm_sweep *s, fm_sweep_worker *w,
                                const double p[3], double sparse)
 {
-    double dense = sc_brute(s, w, p);
-    if (fabs(sparse - dense) > 1e-9 && failures_shown++ < 10)
-        fprintf(stderr, "%s %s at (%.6g, %.6g, %.6g): sparse brute force %.12g, dense %.12g\n", cutter, kind, p[0],
-                p[1], p[2], sparse, dense);
-    CHECK(fabs(sparse - dense) <= 1e-9);
+    char what[96];
+    snprintf(what, sizeof what, "%s %s", cutter, kind);
+    CHECK(sc_sparse_equals_dense(what, s, w, p, sparse));
 }
 
 static void check_against_brute(const char *cutter, int kind, const fm_tool_part *part, int npoints)
