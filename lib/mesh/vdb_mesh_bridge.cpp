@@ -177,16 +177,23 @@ fm_mesh *to_mesh(const fm_stock *stock, const Grid &grid, const Polygons &pg,
                             (o.coloring == FM_MESH_COLOR_DEPTH && o.uncut_grey);
     const double tol = o.design ? fm_design_tolerance(o.design) : 0;
     const double range = o.deviation_range > 0 ? o.deviation_range : 10 * tol;
-    for (size_t i = 0; o.coloring != FM_MESH_COLOR_NONE && i < m->vertex_count; i++) {
+    if (o.coloring == FM_MESH_COLOR_DEVIATION) {
+        // the design's distance at each point of the stock's surface: inside
+        // the design a gouge (negative deviation), outside excess; all at
+        // once, so that the design's surface points beyond its band are
+        // read once
+        std::vector<double> dist(m->vertex_count);
+        if (fm_design_sample_points(o.design, m->positions, m->vertex_count, dist.data(), err) !=
+            FM_OK)
+            return nullptr;
+        for (size_t i = 0; i < m->vertex_count; i++)
+            fm_mesh_deviation_color(-dist[i], tol, range, m->colors + 3 * i);
+    }
+    for (size_t i = 0; o.coloring != FM_MESH_COLOR_NONE && o.coloring != FM_MESH_COLOR_DEVIATION &&
+                       i < m->vertex_count;
+         i++) {
         const float *pf = m->positions + 3 * i;
         const double p[3] = {pf[0], pf[1], pf[2]};
-        if (o.coloring == FM_MESH_COLOR_DEVIATION) {
-            // the design's distance at this point of the stock's surface:
-            // inside the design a gouge (negative deviation), outside excess
-            fm_mesh_deviation_color(-fm_design_sample(o.design, p), tol, range,
-                                    m->colors + 3 * i);
-            continue;
-        }
         int tool = -1;
         const int cut = need_marks ? fm_stock_point_tool(stock, p, &tool) : 0;
         if (o.coloring == FM_MESH_COLOR_TOOL)

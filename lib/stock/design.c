@@ -63,9 +63,12 @@ int fm_design_band_voxels(const fm_stock *stock, double tolerance_mm)
 {
     const double h = fm_vdb_voxel(stock->vdb);
     if (tolerance_mm == 0) tolerance_mm = 0.5 * h;
-    /* two voxels of margin: the trilinear sample at a surface point reads
-     * the 8 corners of its cell, up to sqrt(3) voxels away */
-    int band = fm_vdb_band(stock->vdb) + 2;
+    /* the stock's band, or wider when the tolerance needs it: a deviation
+     * of the tolerance must read unclamped samples, and the trilinear
+     * sample at a surface point reads the 8 corners of its cell, up to
+     * sqrt(3) voxels away. Deeper deviations are measured from the design's
+     * surface points (the comparison's depths, fm_design_sample) */
+    int band = fm_vdb_band(stock->vdb);
     const double need = ceil(tolerance_mm / h) + 2;
     if (need > band) band = need < 64 ? (int)need : 64;
     return band;
@@ -169,7 +172,23 @@ double fm_design_tolerance(const fm_design *d) { return d->tolerance; }
 
 size_t fm_design_memory_bytes(const fm_design *d) { return fm_vdb_memory(d->vdb); }
 
-double fm_design_sample(const fm_design *d, const double p[3]) { return -fm_vdb_sample(d->vdb, p); }
+double fm_design_sample(const fm_design *d, const double p[3])
+{
+    double v;
+    fm_error err;
+    if (fm_vdb_design_distance(d->vdb, p, &v, d->budget, &err) != FM_OK)
+        v = fm_vdb_sample(d->vdb, p); /* the clamped sample: a lower bound */
+    return -v;
+}
+
+fm_status fm_design_sample_points(const fm_design *d, const float *xyz, size_t n, double *out,
+                                  fm_error *err)
+{
+    const fm_status st = fm_vdb_design_distances(d->vdb, xyz, n, out, d->budget, err);
+    if (st != FM_OK) return st;
+    for (size_t i = 0; i < n; i++) out[i] = -out[i];
+    return FM_OK;
+}
 
 fm_status fm_stock_compare_design(const fm_stock *stock, const fm_design *design,
                                   size_t max_regions, fm_deviation *out, fm_error *err)

@@ -20,6 +20,14 @@ fm_status fm_vdb_rebuild_onto(fm_vdb *target, const fm_vdb *source, size_t budge
  * the design's. */
 fm_status fm_vdb_widen_band(fm_vdb *v, int band, size_t budget, fm_error *err);
 
+/* The design's signed distance (OpenVDB sign) at n points (3 floats each)
+ * or one point, exact beyond its band too (from its surface points: docs/
+ * stock.md, "Deviation colours"); budget bounds the surface points. */
+fm_status fm_vdb_design_distances(const fm_vdb *design, const float *xyz, size_t n, double *out,
+                                  size_t budget, fm_error *err);
+fm_status fm_vdb_design_distance(const fm_vdb *design, const double p[3], double *out,
+                                 size_t budget, fm_error *err);
+
 /* Both grids on one transform (same voxel and origin). tolerance in mm;
  * budget bounds the comparison's own tables; threads 0 = one per core. */
 typedef struct fm_vdb_compare_options {

@@ -277,16 +277,24 @@ fm_design *fm_design_load_vdb(const fm_stock *stock, const char *path,
                               const fm_design_options *opt, fm_error *err);
 void fm_design_free(fm_design *design);
 /* The band half-width (voxels) a design for this stock and tolerance gets:
- * the stock's band + 2, or more when the tolerance needs it (0: half a
- * voxel). A field given to fm_design_from_field only needs to tell the
+ * the stock's band, or ceil(tolerance / voxel) + 2 when that is more (0:
+ * half a voxel). A field given to fm_design_from_field only needs to tell the
  * voxels within it from the rest. */
 int fm_design_band_voxels(const fm_stock *stock, double tolerance_mm);
 double fm_design_tolerance(const fm_design *design);
 size_t fm_design_memory_bytes(const fm_design *design);
-/* Signed distance to the design's surface at a world point (mm), trilinear,
- * positive inside the design, clamped to its band. At a point of the
- * stock's surface: > 0 is a gouge that deep, < 0 excess that thick. */
+/* Signed distance to the design's surface at a world point (mm), positive
+ * inside the design: trilinear within the design's band, beyond it from the
+ * design's surface points (exact for a plane face; within the crossings'
+ * spacing elsewhere). At a point of the stock's surface: > 0 is a gouge that
+ * deep, < 0 excess that thick. fm_design_sample_points does it for n points
+ * (xyz: 3 floats each, a mesh's positions) at once, reading the surface
+ * points around those that need them once; FM_ERR_LIMIT when they exceed
+ * the design's memory budget (fm_design_sample then returns the sample
+ * clamped to the band). */
 double fm_design_sample(const fm_design *design, const double p[3]);
+fm_status fm_design_sample_points(const fm_design *design, const float *xyz, size_t n,
+                                  double *out, fm_error *err);
 
 /* A connected region (26-neighbours) of voxels where the stock deviates
  * from the design by more than the tolerance. */

@@ -490,6 +490,101 @@ private:
     Coord lo_, hi_;
 };
 
+/* The design's distance at points (OpenVDB sign) beyond its band too: the
+ * trilinear sample where it is exact (all of its cell's corners within the
+ * band), else from the design's surface points around the points that need
+ * them (a box about them widened by reach voxels, doubled until every point's
+ * nearest crossing lies inside it: one nearer would have to be outside, and
+ * the box's edge is no nearer than it). The nearest crossing c bounds the
+ * distance by |p - c|; the tangent plane at c (the design's gradient there)
+ * gives a second bound, |(p - c).n| + |phi(f)| at p's projection f onto the
+ * plane, exact for a plane face: the smaller one is taken. A point with no
+ * surface anywhere keeps the clamped sample. */
+template <class T>
+fm_status design_distances(const fm_vdb &v, const T *xyz, size_t n, double *out, size_t budget,
+                           fm_error *err)
+{
+    Setup s{};
+    s.stock = s.design = v.grid.get();
+    s.h = v.voxel;
+    s.inv = 1.0 / s.h;
+    for (int k = 0; k < 3; k++) s.origin[k] = v.origin[k];
+    s.bgs = s.bgd = v.grid->background();
+    s.clamp = double(s.bgd) - std::sqrt(3.0) * s.h;
+    CAcc acc(v.grid->constTree());
+    Sampler sampler(acc, v.grid->transform());
+    std::vector<size_t> far;
+    for (size_t i = 0; i < n; i++) {
+        const T *p = xyz + 3 * i;
+        out[i] = sampler.wsSample(openvdb::Vec3d(p[0], p[1], p[2]));
+        if (std::fabs(out[i]) >= s.clamp) far.push_back(i);
+    }
+    if (far.empty()) return FM_OK;
+    CoordBBox all;
+    v.grid->constTree().evalLeafBoundingBox(all);
+    int reach = 2 * v.band + 2;
+    while (!far.empty()) {
+        CoordBBox roi;
+        for (size_t i : far) {
+            const T *p = xyz + 3 * i;
+            Coord c;
+            for (int k = 0; k < 3; k++)
+                c[k] = int(std::floor((double(p[k]) - s.origin[k]) * s.inv));
+            roi.expand(c);
+            roi.expand(c.offsetBy(1));
+        }
+        roi.expand(reach);
+        const bool whole = all.empty() || (roi.isInside(all));
+        SurfacePoints surface(s, roi);
+        if (surface.bytes() > budget)
+            return fm_error_set(err, FM_ERR_LIMIT,
+                                "the design's distances beyond its band: its surface points "
+                                "(%.0f MB) exceed the memory budget",
+                                double(surface.bytes()) / 1048576.0);
+        std::vector<size_t> next;
+        for (size_t i : far) {
+            const T *pt = xyz + 3 * i;
+            const double p[3] = {double(pt[0]), double(pt[1]), double(pt[2])};
+            openvdb::Vec3d at(0.0);
+            const double d = surface.nearest(p, &at);
+            /* how far p is from the box's edge (the box holds voxel
+             * centres roi.min()..roi.max()) */
+            double room = std::numeric_limits<double>::infinity();
+            for (int k = 0; k < 3; k++) {
+                room = std::min(room, p[k] - (s.origin[k] + s.h * (roi.min()[k] - 0.5)));
+                room = std::min(room, s.origin[k] + s.h * (roi.max()[k] + 0.5) - p[k]);
+            }
+            if (!whole && !(d <= room)) {
+                next.push_back(i);
+                continue;
+            }
+            if (!std::isfinite(d)) continue; /* no surface at all */
+            double g[3], g2 = 0;
+            for (int k = 0; k < 3; k++) {
+                openvdb::Vec3d a = at, b = at;
+                a[k] += 0.5 * s.h;
+                b[k] -= 0.5 * s.h;
+                g[k] = sampler.wsSample(a) - sampler.wsSample(b);
+                g2 += g[k] * g[k];
+            }
+            double best = d;
+            if (g2 > 0) {
+                const double inv = 1.0 / std::sqrt(g2);
+                double along = 0;
+                for (int k = 0; k < 3; k++) along += (p[k] - at[k]) * g[k] * inv;
+                openvdb::Vec3d f;
+                for (int k = 0; k < 3; k++) f[k] = p[k] - along * g[k] * inv;
+                const double pf = sampler.wsSample(f);
+                if (std::fabs(pf) < s.clamp) best = std::min(best, std::fabs(along) + std::fabs(pf));
+            }
+            out[i] = out[i] < 0 ? -best : best;
+        }
+        far.swap(next);
+        reach *= 2;
+    }
+    return FM_OK;
+}
+
 struct Region {
     Kind kind = NONE;
     double volume = 0; /* voxels */
@@ -909,6 +1004,22 @@ fm_status fm_vdb_compare(const fm_vdb *stock, const fm_vdb *design,
 {
     return guarded(err, "comparing with the design", [&] {
         return compare(stock, design, *opt, out, err);
+    });
+}
+
+fm_status fm_vdb_design_distances(const fm_vdb *design, const float *xyz, size_t n, double *out,
+                                  size_t budget, fm_error *err)
+{
+    return guarded(err, "the design's distances", [&] {
+        return design_distances(*design, xyz, n, out, budget, err);
+    });
+}
+
+fm_status fm_vdb_design_distance(const fm_vdb *design, const double p[3], double *out,
+                                 size_t budget, fm_error *err)
+{
+    return guarded(err, "the design's distance", [&] {
+        return design_distances(*design, p, 1, out, budget, err);
     });
 }
 

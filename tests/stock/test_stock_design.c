@@ -96,9 +96,10 @@ static int compare(const fm_stock *s, const fm_design *d, fm_deviation *dev)
 }
 
 /* The stock's top 0.4 mm is not in the design: one excess region 0.4 deep
- * (beyond the clamp of a 5-voxel design band, so found by the surface
+ * (beyond the clamp of the design band, so found by the surface
  * search) of 20 x 20 x 0.4 mm. */
-static void check_top_excess(const fm_stock *s, const fm_design *d, const char *what)
+static void check_top_excess(const fm_stock *s, const fm_design *d, const char *what,
+                             double region_mm3)
 {
     fm_deviation dev;
     CHECK(compare(s, d, &dev));
@@ -113,8 +114,10 @@ static void check_top_excess(const fm_stock *s, const fm_design *d, const char *
     CHECK(dev.gouge_volume_mm3 < 0.01 * 160);
     if (dev.excess_count == 1) {
         const fm_deviation_region *r = &dev.excess[0];
+        printf("  region %.4f mm, %.3f mm3 (expected %.3f)\n", r->depth_mm, r->volume_mm3,
+               region_mm3);
         CHECK_NEAR(r->depth_mm, 0.4, H / 2);
-        CHECK_NEAR(r->volume_mm3, 160, 0.02 * 160);
+        CHECK_NEAR(r->volume_mm3, region_mm3, 0.02 * 160);
         CHECK_NEAR(r->position[2], 0, H / 2); /* on the stock's surface */
         CHECK(r->position[0] > -H && r->position[0] < 20 + H);
         CHECK(r->lo[2] > -0.4 - 2 * H && r->hi[2] < 4 * H);
@@ -136,7 +139,7 @@ static void test_excess(void)
         /* on the design's top face: 0 inside the stock's top 0.4 mm over it */
         const double p[3] = {10, 10, 0};
         CHECK_NEAR(fm_design_sample(d, p), -0.4, 1e-3);
-        check_top_excess(s, d, "field design");
+        check_top_excess(s, d, "field design", 160);
         fm_design_free(d);
     }
 
@@ -152,7 +155,7 @@ static void test_excess(void)
     CHECK(d != NULL);
     if (!d) fprintf(stderr, "STL design: %s\n", err.message);
     if (d) {
-        check_top_excess(s, d, "STL design");
+        check_top_excess(s, d, "STL design", 160);
         fm_design_free(d);
     }
 
@@ -166,11 +169,12 @@ static void test_excess(void)
     CHECK(d != NULL);
     if (!d) fprintf(stderr, "vdb design: %s\n", err.message);
     if (d) {
-        check_top_excess(s, d, "snapshot design");
+        check_top_excess(s, d, "snapshot design", 160);
         fm_design_free(d);
     }
-    /* the same grid with the stock's band 3, 2 voxels short of the
-     * design's: widened in place (layer by layer), the same figures */
+    /* the same grid with the stock's band 3: at the default tolerance the
+     * design's band is the stock's, and the snapshot is taken as it is;
+     * samples beyond its band (0.3 mm) come from its surface points */
     snap = box_stock(dlo, dhi, 3, H);
     snprintf(path, sizeof path, "%s/narrow.vdb", dir);
     CHECK(snap && fm_stock_save(snap, path, NULL, &err) == FM_OK);
@@ -179,22 +183,52 @@ static void test_excess(void)
     CHECK(d != NULL);
     if (!d) fprintf(stderr, "narrow vdb design: %s\n", err.message);
     if (d) {
-        CHECK(fm_design_band_voxels(s, o.tolerance_mm) == 5);
-        /* the added layers (0.3 .. 0.5 mm from the surface) hold distances
-         * to the design box: 0.4 mm above its top face, 0.4 mm below it
-         * (where the band-3 grid had inside tiles), 0.4 mm beyond its x = 20
-         * face, and off its top x = 20 edge by 0.3 mm in x and z:
-         * sqrt(0.18) = 0.424 mm */
+        CHECK(fm_design_band_voxels(s, o.tolerance_mm) == 3);
+        /* 0.4 mm above the design's top face, 0.4 below it (inside tiles),
+         * 0.4 beyond its x = 20 face, and off its top x = 20 edge by 0.3 mm
+         * in x and z: sqrt(0.18) = 0.424 mm */
         const double above[3] = {10, 10, 0}, below[3] = {10, 10, -0.8};
         const double side[3] = {20.4, 10, -5}, edge[3] = {20.3, 10, -0.1};
-        printf("widened samples: above %.4f below %.4f side %.4f edge %.4f\n",
+        printf("beyond the band: above %.4f below %.4f side %.4f edge %.4f\n",
                fm_design_sample(d, above), fm_design_sample(d, below), fm_design_sample(d, side),
                fm_design_sample(d, edge));
         CHECK_NEAR(fm_design_sample(d, above), -0.4, 1e-3);
         CHECK_NEAR(fm_design_sample(d, below), 0.4, 1e-3);
         CHECK_NEAR(fm_design_sample(d, side), -0.4, 1e-3);
         CHECK_NEAR(fm_design_sample(d, edge), -sqrt(0.18), H / 2);
-        check_top_excess(s, d, "widened snapshot design");
+        check_top_excess(s, d, "band-3 snapshot design", 160);
+        fm_design_free(d);
+    }
+    /* a tolerance of 0.25 mm needs a band of ceil(2.5) + 2 = 5 voxels, 2
+     * more than the snapshot's: widened in place (layer by layer) */
+    fm_design_options wide = o;
+    wide.tolerance_mm = 0.25;
+    d = fm_design_load_vdb(s, path, &wide, &err);
+    CHECK(d != NULL);
+    if (!d) fprintf(stderr, "widened vdb design: %s\n", err.message);
+    if (d) {
+        CHECK(fm_design_band_voxels(s, wide.tolerance_mm) == 5);
+        /* the added layers (0.3 .. 0.5 mm from the surface) hold distances
+         * to the design box; samples whose cell reaches into them but not
+         * beyond the band (read from the grid): 0.3 mm above its top face,
+         * 0.3 mm below it (where the band-3 grid had inside tiles), 0.3 mm
+         * beyond its x = 20 face, and off its top x = 20 edge by 0.2 mm in
+         * x and z: sqrt(0.08) = 0.283 mm */
+        const double above[3] = {10, 10, -0.1}, below[3] = {10, 10, -0.7};
+        const double side[3] = {20.3, 10, -5}, edge[3] = {20.2, 10, -0.2};
+        printf("widened samples: above %.4f below %.4f side %.4f edge %.4f\n",
+               fm_design_sample(d, above), fm_design_sample(d, below), fm_design_sample(d, side),
+               fm_design_sample(d, edge));
+        CHECK_NEAR(fm_design_sample(d, above), -0.3, 1e-3);
+        CHECK_NEAR(fm_design_sample(d, below), 0.3, 1e-3);
+        CHECK_NEAR(fm_design_sample(d, side), -0.3, 1e-3);
+        CHECK_NEAR(fm_design_sample(d, edge), -sqrt(0.08), H / 2);
+        /* the region is the excess deeper than the tolerance: the slab less,
+         * along its 80 mm of side faces, the stock whose nearest surface is
+         * a side face (depth t below the top, at most t from the side) at a
+         * height where that face is within the tolerance of the design's
+         * top edge (t >= 0.4 - tol): 80 * (0.4^2 - 0.15^2) / 2 = 5.5 mm3 */
+        check_top_excess(s, d, "widened snapshot design", 160 - 80 * (0.16 - 0.15 * 0.15) / 2);
         fm_design_free(d);
     }
     fm_stock_options so;
@@ -210,7 +244,7 @@ static void test_excess(void)
     CHECK(d != NULL);
     if (!d) fprintf(stderr, "rebuilt vdb design: %s\n", err.message);
     if (d) {
-        check_top_excess(s, d, "rebuilt snapshot design");
+        check_top_excess(s, d, "rebuilt snapshot design", 160);
         fm_design_free(d);
     }
     fm_stock_free(s);
