@@ -132,6 +132,8 @@ int main(int argc, char **argv)
     normals_only.normals = 1;
     fm_mesh_draco_options d5, dfast;
     fm_mesh_draco_default(&d5);
+    fm_mesh_draco_options d7 = d5;
+    d7.speed = 7; /* the daemon's live chunks (publish.c) */
     dfast = d5;
     dfast.speed = speed;
 
@@ -142,7 +144,29 @@ int main(int argc, char **argv)
     double *t_enc5 = calloc((size_t)moves, sizeof(double));
     double *t_encf = calloc((size_t)moves, sizeof(double));
     double *c_all = calloc((size_t)moves, sizeof(double));
-    if (!t_cut || !t_mesh || !t_bare || !t_enc5 || !t_encf || !c_all) return 1;
+    double *t_cached = calloc((size_t)moves, sizeof(double));
+    double *c_whole = calloc((size_t)moves, sizeof(double));
+    double *c_cached = calloc((size_t)moves, sizeof(double));
+    /* one cache per chunk, as the daemon keeps them (filled by a first
+     * meshing of every chunk with surface) */
+    enum { MAX_CACHES = 1024 };
+    int32_t cache_index[MAX_CACHES][3];
+    fm_mesh_chunk_cache *caches[MAX_CACHES];
+    size_t ncaches = 0, leaves_total = 0, cached_differ = 0;
+    if (!t_cut || !t_mesh || !t_bare || !t_enc5 || !t_encf || !c_all || !t_cached || !c_whole ||
+        !c_cached)
+        return 1;
+    {
+        fm_stock_chunk *all = malloc(4096 * sizeof *all);
+        size_t n = all ? fm_stock_changed_chunks(s, 0, all, 4096) : 0;
+        for (size_t i = 0; i < n && i < 4096 && ncaches < MAX_CACHES; i++) {
+            memcpy(cache_index[ncaches], all[i].index, sizeof all[i].index);
+            caches[ncaches] = fm_mesh_chunk_cache_new();
+            fm_mesh_free(fm_mesh_from_stock_chunk_cached(s, all[i].index, &eo, caches[ncaches], &err));
+            ncaches++;
+        }
+        free(all);
+    }
     size_t chunks_total = 0, tris_total = 0, bytes5 = 0, bytesf = 0;
     fm_stock_chunk changed[64];
     for (int m = 0; m < moves; m++) {
@@ -175,6 +199,34 @@ int main(int argc, char **argv)
                 return 1;
             }
             tris_total += cm->triangle_count;
+            /* the publication as the daemon makes it: whole, then with the cache */
+            size_t k = 0;
+            while (k < ncaches && memcmp(cache_index[k], changed[i].index, sizeof cache_index[k]))
+                k++;
+            if (k == ncaches && ncaches < MAX_CACHES) {
+                memcpy(cache_index[k], changed[i].index, sizeof cache_index[k]);
+                caches[ncaches++] = fm_mesh_chunk_cache_new();
+            }
+            fm_mesh_chunk_cache *cache = k < ncaches ? caches[k] : NULL;
+            uint8_t *dd = NULL;
+            size_t dds = 0;
+            double cw = bench_cpu_s();
+            fm_mesh *wm = fm_mesh_from_stock_chunk(s, changed[i].index, &eo, &err);
+            if (wm && wm->triangle_count) fm_mesh_encode_draco(wm, &d7, &dd, &dds, &err);
+            c_whole[m] += bench_cpu_s() - cw;
+            free(dd);
+            dd = NULL;
+            cw = bench_cpu_s();
+            t0 = bench_wall_s();
+            fm_mesh *km = fm_mesh_from_stock_chunk_cached(s, changed[i].index, &eo, cache, &err);
+            t_cached[m] += bench_wall_s() - t0;
+            if (km && km->triangle_count) fm_mesh_encode_draco(km, &d7, &dd, &dds, &err);
+            c_cached[m] += bench_cpu_s() - cw;
+            free(dd);
+            leaves_total += fm_mesh_chunk_cache_last_leaves(cache);
+            if (!km || !wm || km->triangle_count != wm->triangle_count) cached_differ++;
+            fm_mesh_free(km);
+            fm_mesh_free(wm);
             if (getenv("BENCH_REMESH_LIST"))
                 printf("move %d chunk %d %d %d: %zu triangles\n", m, changed[i].index[0],
                        changed[i].index[1], changed[i].index[2], cm->triangle_count);
@@ -207,6 +259,16 @@ int main(int argc, char **argv)
            1e3 * median(t_encf, moves), (double)bytesf / moves);
     printf("  CPU per move (all of the above, extraction twice, both encodings): median %.2f ms\n",
            1e3 * median(c_all, moves));
+    printf("  with fm_mesh_chunk_cache: %.0f of 512 leaves remeshed per chunk, cached meshing %.2f "
+           "ms wall per move (median), %zu chunk meshes with another triangle count than the "
+           "whole chunk's\n",
+           chunks_total ? (double)leaves_total / chunks_total : 0, 1e3 * median(t_cached, moves),
+           cached_differ);
+    const double cw = median(c_whole, moves), cc = median(c_cached, moves);
+    printf("  publication CPU per move (mesh + Draco speed 7), median: whole chunks %.2f ms, "
+           "cached %.2f ms (ratio %.2f)\n",
+           1e3 * cw, 1e3 * cc, cw > 0 ? cc / cw : 0);
+    for (size_t k = 0; k < ncaches; k++) fm_mesh_chunk_cache_free(caches[k]);
     fm_stock_free(s);
     return 0;
 }

@@ -43,6 +43,8 @@ typedef struct job_chunk {
     int32_t index[3];
     double lo[3], hi[3];
     fm_mesh *mesh;     /* the current version's mesh (immutable once published) */
+    fm_mesh_chunk_cache *cache; /* its faces per leaf, for the next remeshing
+                                   (publishing thread only; NULL once the job ended) */
     chunk_version *versions;
     size_t version_count, version_cap;
 } job_chunk;
@@ -234,6 +236,8 @@ void fm_publish_chunks(job *j, fm_stock *stock, double program_time_s);
  * snapshot once after a restart). */
 fm_status fm_publish_ensure_meshes(job *j, fm_error *err);
 void fm_publish_chunks_free(job *j);
+/* Free the chunks' remeshing caches (the job's stock will not change again). */
+void fm_publish_chunks_drop_caches(job *j);
 /* A finished job with a design: write deviation.drc (the stock's mesh in
  * deviation colours) and deviation.json (its key in mm and the figures) to
  * the job's folder, for GET /v1/jobs/{id}/deviation (the caller owns the

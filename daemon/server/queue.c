@@ -248,6 +248,7 @@ static void run_job(fm_jobs *jobs, job *j)
     double end_time = j->view.program_time_s;
     pthread_mutex_unlock(&j->lock);
     fm_publish_chunks(j, result.stock, end_time);
+    fm_publish_chunks_drop_caches(j);
     if (result.design && result.has_deviation) {
         double w0 = fm_jobs_mono_s();
         fm_error derr;

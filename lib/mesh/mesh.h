@@ -253,6 +253,23 @@ fm_mesh *fm_mesh_from_stock(struct fm_stock *stock, const fm_mesh_extract_option
 fm_mesh *fm_mesh_from_stock_chunk(struct fm_stock *stock, const int32_t chunk[3],
                                   const fm_mesh_extract_options *opt, fm_error *err);
 
+/* What fm_mesh_from_stock_chunk_cached keeps of one chunk between calls:
+ * its faces per 8^3 leaf and a hash of each leaf's values. Owned by the
+ * caller; one chunk per cache (another chunk index or other options mesh
+ * the chunk whole and cache it anew). */
+typedef struct fm_mesh_chunk_cache fm_mesh_chunk_cache;
+fm_mesh_chunk_cache *fm_mesh_chunk_cache_new(void); /* NULL: out of memory */
+void fm_mesh_chunk_cache_free(fm_mesh_chunk_cache *cache);
+/* The same mesh as fm_mesh_from_stock_chunk (the same triangles, vertices
+ * shared between triangles welded; their order differs), remeshing only
+ * the leaves whose values changed since the cache's last call and their
+ * neighbours; the rest comes from the cache. cache NULL: no cache. */
+fm_mesh *fm_mesh_from_stock_chunk_cached(struct fm_stock *stock, const int32_t chunk[3],
+                                         const fm_mesh_extract_options *opt,
+                                         fm_mesh_chunk_cache *cache, fm_error *err);
+/* Leaves the last call remeshed (512 for a whole chunk; 0: all reused). */
+size_t fm_mesh_chunk_cache_last_leaves(const fm_mesh_chunk_cache *cache);
+
 /* Mesh an F-rep field (positive inside; frep.h's fm_field, bounds included)
  * by rasterizing it with lib/stock's narrow-band rasterizer at voxel_mm and
  * meshing the whole grid. */

@@ -5,7 +5,8 @@
  * sampling of that boundary built here), normals follow the faces; the
  * union of the per-chunk meshes, welded, is the whole-grid mesh triangle
  * for triangle, also after a cut remeshes only the dirty chunks; a sphere
- * field meshed directly sits on the sphere. */
+ * field meshed directly sits on the sphere; chunks remeshed through their
+ * cache (only the changed leaves) equal chunks meshed afresh. */
 #include "fixtures.h"
 #include "test.h"
 
@@ -483,6 +484,180 @@ static void test_pocket(void)
     fm_stock_free(s);
 }
 
+/* A mesh's referenced vertices (position, normal, colour), sorted by
+ * position, without repeats: equal lists mean equal vertex attributes. */
+typedef struct vert_key {
+    float p[3], n[3];
+    uint8_t c[3];
+} vert_key;
+
+static int cmp_vert(const void *a, const void *b) { return memcmp(a, b, sizeof(float[3])); }
+
+static vert_key *vert_keys(const fm_mesh *m, size_t *count)
+{
+    vert_key *k = calloc(3 * m->triangle_count + 1, sizeof *k);
+    for (size_t t = 0; t < 3 * m->triangle_count; t++) {
+        const uint32_t v = m->triangles[t];
+        memcpy(k[t].p, m->positions + 3 * (size_t)v, sizeof k[t].p);
+        if (m->normals)
+            memcpy(k[t].n, m->normals + 3 * (size_t)v, sizeof k[t].n);
+        if (m->colors)
+            memcpy(k[t].c, m->colors + 3 * (size_t)v, sizeof k[t].c);
+    }
+    qsort(k, 3 * m->triangle_count, sizeof *k, cmp_vert);
+    size_t n = 0;
+    for (size_t t = 0; t < 3 * m->triangle_count; t++)
+        if (n == 0 || memcmp(k[n - 1].p, k[t].p, sizeof k[t].p) != 0)
+            k[n++] = k[t];
+    *count = n;
+    return k;
+}
+
+/* The cached chunk mesh against a fresh one: the same triangles, and each
+ * vertex position the same normal and colour. */
+static void check_same_chunk(const fm_mesh *cached, const fm_mesh *fresh)
+{
+    CHECK(cached->triangle_count == fresh->triangle_count);
+    if (cached->triangle_count != fresh->triangle_count) {
+        fprintf(stderr, "chunk triangles: %zu cached vs %zu fresh\n", cached->triangle_count,
+                fresh->triangle_count);
+        return;
+    }
+    tri_key *ka = tri_keys(cached), *kb = tri_keys(fresh);
+    size_t differ = 0;
+    for (size_t t = 0; t < cached->triangle_count; t++)
+        differ += memcmp(ka + t, kb + t, sizeof *ka) != 0;
+    CHECK(differ == 0);
+    size_t na = 0, nb = 0;
+    vert_key *va = vert_keys(cached, &na), *vb = vert_keys(fresh, &nb);
+    CHECK(na == nb);
+    size_t vdiffer = 0;
+    for (size_t i = 0; i < na && i < nb; i++)
+        vdiffer += memcmp(va[i].p, vb[i].p, sizeof va[i].p) != 0 ||
+                   memcmp(va[i].n, vb[i].n, sizeof va[i].n) != 0 ||
+                   memcmp(va[i].c, vb[i].c, sizeof va[i].c) != 0;
+    CHECK(vdiffer == 0);
+    if (differ || vdiffer)
+        fprintf(stderr, "cached chunk: %zu of %zu triangles, %zu of %zu vertices differ\n", differ,
+                cached->triangle_count, vdiffer, na);
+    free(ka);
+    free(kb);
+    free(va);
+    free(vb);
+}
+
+/* fm_mesh_from_stock_chunk_cached after each of a row of plunges (a tool
+ * moving 0.5 mm at a time across chunk seams, two tools for the colours):
+ * every chunk's cached mesh equals the chunk meshed afresh (triangles,
+ * normals, tool colours), a cut remeshes only part of a chunk's leaves, an
+ * unchanged chunk none, and the union of the cached chunks is the whole
+ * grid's closed mesh. */
+static void test_chunk_cache(void)
+{
+    fm_stock_options so;
+    fm_stock_options_default(&so);
+    so.voxel_mm = 0.1;
+    fm_error err;
+    fm_error_clear(&err);
+    const double lo[3] = {0, 0, 0}, hi[3] = {10, 9, 4};
+    fm_stock *s = fm_stock_new_box(lo, hi, &so, &err);
+    CHECK(s != NULL);
+    if (!s)
+        return;
+    fm_mesh_extract_options o;
+    fm_mesh_extract_default(&o);
+    o.coloring = FM_MESH_COLOR_TOOL;
+    enum { N = 16 };
+    fm_stock_chunk all[N];
+    size_t n = fm_stock_changed_chunks(s, 0, all, N);
+    CHECK(n == 4); /* 100 x 90 x 40 voxels: 2 x 2 x 1 chunks */
+    if (n > N)
+        n = N;
+    fm_mesh_chunk_cache *cache[N];
+    fm_mesh *kept[N];
+    for (size_t i = 0; i < n; i++) {
+        cache[i] = fm_mesh_chunk_cache_new();
+        CHECK(cache[i] != NULL);
+        kept[i] = fm_mesh_from_stock_chunk_cached(s, all[i].index, &o, cache[i], &err);
+        CHECK(kept[i] != NULL);
+        CHECK(fm_mesh_chunk_cache_last_leaves(cache[i]) == 512);
+    }
+    size_t partial = 0, reused = 0, calls = 0, unmarked_partial = 0;
+    for (int m = 0; m < 12; m++) {
+        uint64_t since = fm_stock_version(s);
+        cyl c = {2.03 + 0.5 * m, 5.77, 1.5, 3.0, 6};
+        fm_field f = cyl_field(&c);
+        fm_stock_cut cut = {1 + m % 2, -1, m, m + 1};
+        CHECK(fm_stock_subtract(s, &f, &cut, NULL, &err) == FM_OK);
+        fm_stock_chunk ch[N];
+        size_t nc = fm_stock_changed_chunks(s, since, ch, N);
+        CHECK(nc >= 1 && nc <= n);
+        /* every chunk, changed or not, through its cache */
+        for (size_t i = 0; i < n; i++) {
+            int changed = 0;
+            for (size_t k = 0; k < nc && k < N; k++)
+                changed |= !memcmp(ch[k].index, all[i].index, sizeof all[i].index);
+            fm_mesh *cm = fm_mesh_from_stock_chunk_cached(s, all[i].index, &o, cache[i], &err);
+            fm_mesh *fm = fm_mesh_from_stock_chunk(s, all[i].index, &o, &err);
+            CHECK(cm != NULL && fm != NULL);
+            const size_t leaves = fm_mesh_chunk_cache_last_leaves(cache[i]);
+            calls++;
+            /* (a chunk the stock did not mark may still remesh the border
+             * leaves next to a changed leaf of its neighbour) */
+            partial += leaves > 0 && leaves < 512;
+            unmarked_partial += !changed && leaves > 0;
+            reused += leaves == 0;
+            if (cm && fm)
+                check_same_chunk(cm, fm);
+            fm_mesh_free(fm);
+            fm_mesh_free(kept[i]);
+            kept[i] = cm;
+        }
+    }
+    printf("chunk cache: %zu of %zu chunk meshings partial (%zu of them in chunks the stock did "
+           "not mark), %zu reused whole\n",
+           partial, calls, unmarked_partial, reused);
+    CHECK(partial >= 12);
+    CHECK(reused >= 1);
+    /* Nothing cut since: every chunk comes from its cache as it was. */
+    for (size_t i = 0; i < n; i++) {
+        fm_mesh *again = fm_mesh_from_stock_chunk_cached(s, all[i].index, &o, cache[i], &err);
+        CHECK(again != NULL && fm_mesh_chunk_cache_last_leaves(cache[i]) == 0);
+        if (again && kept[i])
+            check_same_chunk(again, kept[i]);
+        fm_mesh_free(again);
+    }
+
+    /* The union of the cached chunks is the whole grid's mesh. */
+    fm_mesh *u = fm_mesh_new(0, 0, FM_MESH_NORMALS | FM_MESH_COLORS, NULL, NULL);
+    for (size_t i = 0; i < n; i++)
+        if (kept[i])
+            fm_mesh_append(u, kept[i], NULL);
+    fm_mesh_weld(u, NULL);
+    check_closed(u, "cached chunk union");
+    fm_mesh *w = fm_mesh_from_stock(s, &o, &err);
+    CHECK(w != NULL);
+    if (w) {
+        fm_mesh_weld(w, NULL);
+        check_same_mesh(u, w);
+    }
+    fm_mesh_free(w);
+    fm_mesh_free(u);
+
+    /* Other options mesh the chunk whole again. */
+    fm_mesh_extract_options on = o;
+    on.coloring = FM_MESH_COLOR_NONE;
+    fm_mesh *cm = fm_mesh_from_stock_chunk_cached(s, all[0].index, &on, cache[0], &err);
+    CHECK(cm && !cm->colors);
+    CHECK(fm_mesh_chunk_cache_last_leaves(cache[0]) == 512);
+    fm_mesh_free(cm);
+    for (size_t i = 0; i < n; i++) {
+        fm_mesh_free(kept[i]);
+        fm_mesh_chunk_cache_free(cache[i]);
+    }
+    fm_stock_free(s);
+}
+
 static void test_field_sphere(void)
 {
     sph sp = {{1.3, -2.2, 0.7}, 4.0};
@@ -530,5 +705,6 @@ int main(void)
 {
     test_pocket();
     test_field_sphere();
+    test_chunk_cache();
     return test_summary("mesh_extract");
 }
