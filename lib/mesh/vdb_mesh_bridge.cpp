@@ -328,10 +328,11 @@ fm_mesh *chunk(fm_stock *stock, const int32_t index[3], const fm_mesh_extract_op
 // per 8^3 leaf (the faces of the grid edges that start in that leaf) and a
 // hash of every leaf's values (and active mask) in the chunk and the ring of
 // leaves around it. The next call remeshes only the leaves whose hash
-// changed and their 26 neighbours: a leaf's faces read values at most one
-// voxel outside it, their normals two, their colours (tool marks, which
-// change only where a value does) one, so every other leaf's piece is what
-// a fresh run would make. One OpenVDB run over those leaves (a copy of them
+// changed and the neighbours such a change reaches: a leaf's faces read
+// values at most one voxel outside it, their normals two, their colours
+// (tool marks, which change only where a value does) one, so a neighbour
+// whose values changed only further than two voxels from the leaf leaves
+// its piece as a fresh run would make it. One OpenVDB run over those leaves (a copy of them
 // one leaf wider, the surface mask on them) gives a polygon pool per
 // sign-flag leaf; a pool's leaf is found from its vertices (every vertex of
 // a face lies in a cell next to the face's edge, so within one voxel of
@@ -355,26 +356,73 @@ uint64_t mix(uint64_t h, uint64_t v)
     return h ^ (h >> 31);
 }
 
-uint64_t leaf_hash(const Grid::ConstAccessor &acc, const Coord &c)
+// A leaf is hashed in 27 zones, by each coordinate's class: the two voxels
+// at its low side (0), the four in the middle (1), the two at its high side
+// (2); a neighbour's faces read values at most two voxels into the leaf, so
+// only a change in the zones facing it makes the neighbour remesh. Values and
+// active states both count. A tile (or nothing) hashes its value alone, the
+// same in every zone.
+constexpr int ZONES = 27;
+
+int zone_class(int v) { return v < 2 ? 0 : v < LD - 2 ? 1 : 2; }
+
+uint64_t leaf_hash(const Grid::ConstAccessor &acc, const Coord &c, uint32_t zone[ZONES])
 {
     if (const Leaf *leaf = acc.probeConstLeaf(c)) {
         const float *buf = leaf->buffer().data();
-        uint64_t h = 1;
-        for (size_t i = 0; i < Leaf::SIZE; i += 2) {
-            uint32_t a, b;
-            std::memcpy(&a, buf + i, 4);
-            std::memcpy(&b, buf + i + 1, 4);
-            h = mix(h, (uint64_t(a) << 32) | b);
-        }
         const auto &mask = leaf->getValueMask();
-        for (openvdb::Index i = 0; i < Leaf::NodeMaskType::WORD_COUNT; i++)
-            h = mix(h, mask.template getWord<openvdb::Index64>(i));
-        return h;
+        uint64_t h[ZONES];
+        for (int i = 0; i < ZONES; i++)
+            h[i] = uint64_t(i) + 1;
+        for (int x = 0; x < LD; x++) {
+            const uint64_t word = mask.template getWord<openvdb::Index64>(openvdb::Index(x));
+            for (int y = 0; y < LD; y++)
+                for (int z = 0; z < LD; z += 2) {
+                    const int off = (x * LD + y) * LD + z;
+                    uint32_t a, b;
+                    std::memcpy(&a, buf + off, 4);
+                    std::memcpy(&b, buf + off + 1, 4);
+                    const uint64_t on = (word >> (y * LD + z)) & 3u;
+                    const int zn = zone_class(x) * 9 + zone_class(y) * 3 + zone_class(z);
+                    h[zn] = mix(h[zn], ((uint64_t(a) << 32) | b) ^ (on * 0xD6E8FEB86659FD93ull));
+                }
+        }
+        uint64_t whole = 1;
+        for (int i = 0; i < ZONES; i++) {
+            whole = mix(whole, h[i]);
+            zone[i] = uint32_t(h[i] ^ (h[i] >> 32));
+        }
+        return whole;
     }
     uint32_t bits;
     const float v = acc.getValue(c);
     std::memcpy(&bits, &v, 4);
-    return mix(mix(2, bits), acc.isValueOn(c) ? 1 : 0);
+    const uint64_t h = mix(mix(2, bits), acc.isValueOn(c) ? 1 : 0);
+    for (int i = 0; i < ZONES; i++)
+        zone[i] = uint32_t(h ^ (h >> 32));
+    return h;
+}
+
+// Does a change in ring slot r (at offset d from a chunk leaf, each -1..1)
+// reach that leaf's faces? Only through the zones on r's side facing it.
+bool change_reaches(const uint32_t *now, const uint32_t *before, const int d[3])
+{
+    for (int zx = 0; zx < 3; zx++) {
+        if ((d[0] < 0 && zx != 2) || (d[0] > 0 && zx != 0))
+            continue;
+        for (int zy = 0; zy < 3; zy++) {
+            if ((d[1] < 0 && zy != 2) || (d[1] > 0 && zy != 0))
+                continue;
+            for (int zz = 0; zz < 3; zz++) {
+                if ((d[2] < 0 && zz != 2) || (d[2] > 0 && zz != 0))
+                    continue;
+                const int zn = zx * 9 + zy * 3 + zz;
+                if (now[zn] != before[zn])
+                    return true;
+            }
+        }
+    }
+    return false;
 }
 
 bool same_options(const fm_mesh_extract_options &a, const fm_mesh_extract_options &b)
@@ -393,6 +441,7 @@ struct fm_mesh_chunk_cache {
     int32_t index[3] = {0, 0, 0};
     fm_mesh_extract_options opt{};
     std::vector<uint64_t> hash = std::vector<uint64_t>(RL * RL * RL, 0);
+    std::vector<uint32_t> zones = std::vector<uint32_t>(RL * RL * RL * ZONES, 0);
     std::vector<fm_mesh *> pieces = std::vector<fm_mesh *>(CL * CL * CL, nullptr);
     size_t last_leaves = 0;
     ~fm_mesh_chunk_cache()
@@ -668,13 +717,16 @@ fm_mesh *chunk_cached(fm_stock *stock, const int32_t index[3], const fm_mesh_ext
                            (o.coloring != FM_MESH_COLOR_NONE ? FM_MESH_COLORS : 0u);
 
     std::vector<uint64_t> hash(RL * RL * RL);
+    std::vector<uint32_t> zones(RL * RL * RL * ZONES);
     {
         auto acc = grid.getConstAccessor();
         for (int x = 0; x < RL; x++)
             for (int y = 0; y < RL; y++)
-                for (int z = 0; z < RL; z++)
-                    hash[ring_slot(x, y, z)] =
-                        leaf_hash(acc, lo + Coord((x - 1) * LD, (y - 1) * LD, (z - 1) * LD));
+                for (int z = 0; z < RL; z++) {
+                    const int r = ring_slot(x, y, z);
+                    hash[r] = leaf_hash(acc, lo + Coord((x - 1) * LD, (y - 1) * LD, (z - 1) * LD),
+                                        &zones[size_t(r) * ZONES]);
+                }
     }
     const bool reuse = cc->valid && std::memcmp(cc->index, index, sizeof cc->index) == 0 &&
                        same_options(cc->opt, o);
@@ -689,7 +741,12 @@ fm_mesh *chunk_cached(fm_stock *stock, const int32_t index[3], const fm_mesh_ext
                         for (int b = 0; b < 3 && !dirty; b++)
                             for (int c = 0; c < 3 && !dirty; c++) {
                                 const int r = ring_slot(x + a, y + b, z + c);
-                                dirty = hash[r] != cc->hash[r];
+                                if (hash[r] == cc->hash[r])
+                                    continue;
+                                const int d[3] = {a - 1, b - 1, c - 1};
+                                dirty = (a == 1 && b == 1 && c == 1) ||
+                                        change_reaches(&zones[size_t(r) * ZONES],
+                                                       &cc->zones[size_t(r) * ZONES], d);
                             }
                     meshed[chunk_slot(x, y, z)] = dirty;
                     count += dirty;
@@ -713,6 +770,7 @@ fm_mesh *chunk_cached(fm_stock *stock, const int32_t index[3], const fm_mesh_ext
     std::memcpy(cc->index, index, sizeof cc->index);
     cc->opt = o;
     cc->hash.swap(hash);
+    cc->zones.swap(zones);
     return assemble(cc->pieces, attrs, o.budget, err);
 }
 
