@@ -4,8 +4,11 @@
  * along X), cut with an exact analytic swept volume; after each move the
  * changed chunks are remeshed and Draco-encoded as the daemon publishes them
  * (normals, tool colours). Prints per move: the cut, the chunks' meshing
- * (whole extraction, then the share of normals and colours), Draco at the
- * daemon's speed and at --speed, and the CPU time of it all.
+ * (whole extraction, then the share of normals and colours), Draco at
+ * speed 5 and at --speed, and the CPU time of it all; then the daemon's
+ * way (fm_mesh_chunk_cache, one per chunk: leaves remeshed, CPU of mesh +
+ * Draco speed 7 against whole chunks, Draco speed 7 against --speed on the
+ * cached meshes, how many chunks came out as their previous version).
  *   bench_remesh [--moves N] [--voxel MM] [--speed S]
  */
 #include "frep/frep.h"
@@ -147,14 +150,19 @@ int main(int argc, char **argv)
     double *t_cached = calloc((size_t)moves, sizeof(double));
     double *c_whole = calloc((size_t)moves, sizeof(double));
     double *c_cached = calloc((size_t)moves, sizeof(double));
+    double *c_enc7 = calloc((size_t)moves, sizeof(double));
+    double *c_encf = calloc((size_t)moves, sizeof(double));
+    size_t bytes7 = 0, bytesf_cached = 0;
     /* one cache per chunk, as the daemon keeps them (filled by a first
      * meshing of every chunk with surface) */
     enum { MAX_CACHES = 1024 };
     int32_t cache_index[MAX_CACHES][3];
     fm_mesh_chunk_cache *caches[MAX_CACHES];
+    fm_mesh *previous[MAX_CACHES] = {0};
+    size_t unchanged = 0;
     size_t ncaches = 0, leaves_total = 0, cached_differ = 0;
     if (!t_cut || !t_mesh || !t_bare || !t_enc5 || !t_encf || !c_all || !t_cached || !c_whole ||
-        !c_cached)
+        !c_cached || !c_enc7 || !c_encf)
         return 1;
     {
         fm_stock_chunk *all = malloc(4096 * sizeof *all);
@@ -220,11 +228,33 @@ int main(int argc, char **argv)
             t0 = bench_wall_s();
             fm_mesh *km = fm_mesh_from_stock_chunk_cached(s, changed[i].index, &eo, cache, &err);
             t_cached[m] += bench_wall_s() - t0;
-            if (km && km->triangle_count) fm_mesh_encode_draco(km, &d7, &dd, &dds, &err);
+            const double ce = bench_cpu_s();
+            if (km && km->triangle_count && fm_mesh_encode_draco(km, &d7, &dd, &dds, &err) == FM_OK)
+                bytes7 += dds;
             c_cached[m] += bench_cpu_s() - cw;
+            c_enc7[m] += bench_cpu_s() - ce;
+            free(dd);
+            dd = NULL;
+            cw = bench_cpu_s();
+            if (km && km->triangle_count && fm_mesh_encode_draco(km, &dfast, &dd, &dds, &err) == FM_OK)
+                bytesf_cached += dds;
+            c_encf[m] += bench_cpu_s() - cw;
             free(dd);
             leaves_total += fm_mesh_chunk_cache_last_leaves(cache);
             if (!km || !wm || km->triangle_count != wm->triangle_count) cached_differ++;
+            if (k < ncaches) {
+                fm_mesh *p = previous[k];
+                if (p && km && p->vertex_count == km->vertex_count &&
+                    p->triangle_count == km->triangle_count &&
+                    !memcmp(p->positions, km->positions, 12 * km->vertex_count) &&
+                    !memcmp(p->normals, km->normals, 12 * km->vertex_count) &&
+                    !memcmp(p->colors, km->colors, 3 * km->vertex_count) &&
+                    !memcmp(p->triangles, km->triangles, 12 * km->triangle_count))
+                    unchanged++;
+                fm_mesh_free(p);
+                previous[k] = km;
+                km = NULL;
+            }
             fm_mesh_free(km);
             fm_mesh_free(wm);
             if (getenv("BENCH_REMESH_LIST"))
@@ -268,7 +298,16 @@ int main(int argc, char **argv)
     printf("  publication CPU per move (mesh + Draco speed 7), median: whole chunks %.2f ms, "
            "cached %.2f ms (ratio %.2f)\n",
            1e3 * cw, 1e3 * cc, cw > 0 ? cc / cw : 0);
-    for (size_t k = 0; k < ncaches; k++) fm_mesh_chunk_cache_free(caches[k]);
+    printf("  Draco CPU per move (median) of the cached meshes: speed 7 %.2f ms (%.0f B), speed %d "
+           "%.2f ms (%.0f B)\n",
+           1e3 * median(c_enc7, moves), (double)bytes7 / moves, speed, 1e3 * median(c_encf, moves),
+           (double)bytesf_cached / moves);
+    printf("  %zu of %zu changed chunks' meshes identical to their previous version\n", unchanged,
+           chunks_total);
+    for (size_t k = 0; k < ncaches; k++) {
+        fm_mesh_chunk_cache_free(caches[k]);
+        fm_mesh_free(previous[k]);
+    }
     fm_stock_free(s);
     return 0;
 }
