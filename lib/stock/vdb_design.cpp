@@ -129,17 +129,110 @@ struct TileCell {
     Kind kind;
 };
 
-/* Per thread: accessors of both grids, the design sampler, and results. */
+/* The values of a leaf-sized cell and P voxels around it, copied from the
+ * cell's and its 26 neighbours' leaves (a cell without a leaf has one value
+ * throughout), so that the voxels near a cell's surface read their
+ * neighbours without an accessor: the same values, so the same results. */
+template <int P>
+struct Block {
+    static constexpr int N = LEAF_DIM + 2 * P;
+    float v[N * N * N];
+    bool ready = false;
+
+    static int at(int x, int y, int z) { return ((x + P) * N + (y + P)) * N + (z + P); }
+    static bool holds(int x, int y, int z)
+    {
+        return x >= -P && x < LEAF_DIM + P && y >= -P && y < LEAF_DIM + P && z >= -P &&
+               z < LEAF_DIM + P;
+    }
+
+    void fill(CAcc &acc, const Coord &o)
+    {
+        for (int dx = -1; dx <= 1; dx++)
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dz = -1; dz <= 1; dz++) {
+                    const Coord n = o.offsetBy(LEAF_DIM * dx, LEAF_DIM * dy, LEAF_DIM * dz);
+                    const Leaf *leaf = acc.probeConstLeaf(n);
+                    const float *src = leaf ? leaf->buffer().data() : nullptr;
+                    const float c = leaf ? 0.0f : acc.getValue(n);
+                    /* the part of the block in this neighbour, in its own
+                     * coordinates */
+                    const int x0 = dx < 0 ? LEAF_DIM - P : 0, x1 = dx > 0 ? P : LEAF_DIM;
+                    const int y0 = dy < 0 ? LEAF_DIM - P : 0, y1 = dy > 0 ? P : LEAF_DIM;
+                    const int z0 = dz < 0 ? LEAF_DIM - P : 0, z1 = dz > 0 ? P : LEAF_DIM;
+                    for (int x = x0; x < x1; x++)
+                        for (int y = y0; y < y1; y++) {
+                            float *dst = v + at(x + LEAF_DIM * dx, y + LEAF_DIM * dy,
+                                                z0 + LEAF_DIM * dz);
+                            if (src) {
+                                const float *row = src + (x << 6) + (y << 3);
+                                for (int z = z0; z < z1; z++) *dst++ = row[z];
+                            } else {
+                                for (int z = z0; z < z1; z++) *dst++ = c;
+                            }
+                        }
+                }
+        ready = true;
+    }
+};
+
+/* Per thread: accessors of both grids, the design's transform, the blocks
+ * of the cell at hand, and results. The stock's block reaches the six
+ * neighbours of every voxel; the design's, the corners of a sample up to
+ * a voxel and a half from the cell (foot points of voxels near the
+ * stock's surface; farther ones read through the accessor). */
 struct Worker {
     CAcc sa, da;
-    Sampler ds;
+    const openvdb::math::Transform &dxf;
     double max_gouge = 0, max_excess = 0;
     std::vector<Cell> cells;
+    Block<1> sb;
+    Block<2> db;
     explicit Worker(const Setup &s)
-        : sa(s.stock->constTree()), da(s.design->constTree()), ds(da, s.design->transform())
+        : sa(s.stock->constTree()), da(s.design->constTree()), dxf(s.design->transform())
     {
     }
 };
+
+/* foot_point for voxel i of the cell at o, reading the stock's block. */
+void foot_point_in(const Setup &s, Worker &w, const Coord &o, int i, double phi, double q[3])
+{
+    if (!w.sb.ready) w.sb.fill(w.sa, o);
+    const int x = i >> 6, y = (i >> 3) & 7, z = i & 7;
+    const float *v = w.sb.v;
+    const int c = Block<1>::at(x, y, z), sx = Block<1>::N * Block<1>::N, sy = Block<1>::N;
+    const double g[3] = {double(v[c + sx]) - double(v[c - sx]), double(v[c + sy]) - double(v[c - sy]),
+                         double(v[c + 1]) - double(v[c - 1])};
+    const double n2 = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+    world_of(s, voxel_of(o, i), q);
+    if (n2 > 0) {
+        const double inv = 1.0 / std::sqrt(n2);
+        for (int k = 0; k < 3; k++) q[k] -= phi * g[k] * inv;
+    }
+}
+
+/* The design's trilinear sample at world point q (BoxSampler's arithmetic,
+ * so the same value as its wsSample): the cell's eight corners from the
+ * design's block of the cell at o when they are in it, else through the
+ * accessor. */
+double design_sample_in(Worker &w, const Coord &o, const double q[3])
+{
+    const openvdb::Vec3d u = w.dxf.worldToIndex(openvdb::Vec3d(q[0], q[1], q[2]));
+    const openvdb::Vec3i b = openvdb::tools::local_util::floorVec3(u);
+    const openvdb::Vec3d uvw = u - b;
+    float data[2][2][2];
+    const int x = b[0] - o.x(), y = b[1] - o.y(), z = b[2] - o.z();
+    if (Block<2>::holds(x, y, z) && Block<2>::holds(x + 1, y + 1, z + 1)) {
+        if (!w.db.ready) w.db.fill(w.da, o);
+        const int N = Block<2>::N, c = Block<2>::at(x, y, z);
+        for (int a = 0; a < 2; a++)
+            for (int e = 0; e < 2; e++)
+                for (int d = 0; d < 2; d++) data[a][e][d] = w.db.v[c + (a * N + e) * N + d];
+    } else {
+        openvdb::tools::BoxSampler::getValues(data, w.da, Coord(b));
+    }
+    return openvdb::tools::BoxSampler::trilinearInterpolation(data, uvw);
+}
 
 /* Classify the voxels of one cell; sums[0..1] get its gouge and excess
  * shares. Keeps a Cell only when it has members. */
@@ -151,6 +244,7 @@ void classify(const Setup &s, Worker &w, const Coord &o, double sums[2])
     const float *dv = dl ? dl->buffer().data() : nullptr;
     const float sc = sl ? 0.0f : w.sa.getValue(o);
     const float dc = dl ? 0.0f : w.da.getValue(o);
+    w.sb.ready = w.db.ready = false;
     Cell cell;
     cell.origin = o;
     float share[LEAF_SIZE], depth[LEAF_SIZE];
@@ -175,8 +269,8 @@ void classify(const Setup &s, Worker &w, const Coord &o, double sums[2])
             member = true;
         } else {
             double q[3];
-            foot_point(s, w.sa, voxel_of(o, i), a, q);
-            const double dev = w.ds.wsSample(openvdb::Vec3d(q[0], q[1], q[2]));
+            foot_point_in(s, w, o, i, a, q);
+            const double dev = design_sample_in(w, o, q);
             const double d = gouge ? -dev : dev;
             depth[i] = float(d);
             clamped[i] = std::fabs(dev) >= s.clamp;
