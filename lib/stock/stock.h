@@ -285,8 +285,8 @@ double fm_design_tolerance(const fm_design *design);
 size_t fm_design_memory_bytes(const fm_design *design);
 /* Signed distance to the design's surface at a world point (mm), positive
  * inside the design: trilinear within the design's band, beyond it from the
- * design's surface points (exact for a plane face; within the crossings'
- * spacing elsewhere). At a point of the stock's surface: > 0 is a gouge that
+ * design's surface points (exact for a plane face; next to the design's
+ * edges and corners an upper bound off by up to about half a voxel). At a point of the stock's surface: > 0 is a gouge that
  * deep, < 0 excess that thick. fm_design_sample_points does it for n points
  * (xyz: 3 floats each, a mesh's positions) at once, reading the surface
  * points around those that need them once; FM_ERR_LIMIT when they exceed
