@@ -133,6 +133,13 @@ double fm_stock_spec_projected_area(const fm_stock_spec *s)
 typedef struct model_worker {
     fm_evaluator *ev;
     unsigned plain_leaves; /* leaves to evaluate point by point before the next grid try */
+    /* blocks by the parity of their keys (a box's neighbours across a
+     * block's face go to another slot) */
+    struct model_block {
+        int set;       /* key and tape are set */
+        double key[3]; /* the block: [key, key + 1] * BLOCK_VOXELS voxels per axis */
+        fm_tape *tape; /* shortened to the block and around it; NULL: nothing dropped */
+    } block[8];
     double x[4 * MODEL_CHUNK], y[4 * MODEL_CHUNK], z[4 * MODEL_CHUNK], f[4 * MODEL_CHUNK];
 } model_worker;
 
@@ -143,6 +150,7 @@ static void *model_worker_new(void *ctx)
     if (!w) return NULL;
     w->ev = fm_evaluator_new(mf->tape, NULL);
     w->plain_leaves = 0;
+    memset(w->block, 0, sizeof w->block);
     if (!w->ev) {
         free(w);
         return NULL;
@@ -156,6 +164,7 @@ static void model_worker_free(void *ctx, void *worker)
     model_worker *w = worker;
     if (!w) return;
     fm_evaluator_free(w->ev);
+    for (int b = 0; b < 8; b++) fm_tape_free(w->block[b].tape);
     free(w);
 }
 
@@ -170,6 +179,58 @@ static double model_box_distance(const fm_field *f, const double p[3])
         if (-d < in) in = -d;
     }
     return out2 > 0 ? -sqrt(out2) : in;
+}
+
+/* Shortened tapes by block: the space is cut in cubes of BLOCK_VOXELS
+ * voxels, and a worker keeps the model's tape shortened to the cubes it
+ * last worked in, each widened by half a cube each side. A box up to a
+ * cube across whose centre lies in such a cube (a leaf with its layer, or
+ * widened by the band; the rasterizer hands out a box's children one after
+ * another) is evaluated on that tape, or shortened further from it: the
+ * interval pass's leaf-level bounds and each leaf's own shortening then run
+ * over a short tape, not the whole model. Values and bounds are the same as
+ * on the whole tape: a shortened tape drops only the min/max branches that
+ * cannot win inside its box, where the bounds of the two did not overlap,
+ * so no sub-box bound changes either. */
+#define BLOCK_VOXELS 32
+
+/* Set the evaluator on a block's tape when box (mm) fits its block, making
+ * the block's tape first when the slot holds another block; on the whole
+ * tape otherwise. */
+static void use_block_tape(const fm_model_field *mf, model_worker *w, const fm_interval box[3])
+{
+    const double side = BLOCK_VOXELS * mf->voxel;
+    double key[3];
+    int fits = side > 0;
+    for (int k = 0; k < 3 && fits; k++) {
+        fits = box[k].hi - box[k].lo <= side;
+        key[k] = floor(0.5 * (box[k].lo + box[k].hi) / side);
+        fits = fits && fabs(key[k]) < 1e15;
+    }
+    fm_evaluator_use(w->ev, NULL);
+    if (!fits) return;
+    /* the box inside the block's region, rounding included */
+    for (int k = 0; k < 3; k++)
+        if (box[k].lo < (key[k] - 0.5) * side || box[k].hi > (key[k] + 1.5) * side) return;
+    struct model_block *b = &w->block[((long long)key[0] & 1) << 2 | ((long long)key[1] & 1) << 1 |
+                                      ((long long)key[2] & 1)];
+    if (!b->set || key[0] != b->key[0] || key[1] != b->key[1] || key[2] != b->key[2]) {
+        fm_tape_free(b->tape);
+        b->tape = NULL;
+        fm_interval region[4];
+        for (int k = 0; k < 3; k++) {
+            region[k].lo = (key[k] - 0.5) * side;
+            region[k].hi = (key[k] + 1.5) * side;
+            region[k].lo -= 1e-6 * (1 + fabs(region[k].lo));
+            region[k].hi += 1e-6 * (1 + fabs(region[k].hi));
+            b->key[k] = key[k];
+        }
+        region[3].lo = region[3].hi = 0;
+        fm_interval range;
+        b->tape = fm_eval_interval_shorten(w->ev, region, &range);
+        b->set = 1;
+    }
+    if (b->tape) fm_evaluator_use(w->ev, b->tape);
 }
 
 /* The normalized values at n points, on the tape the worker's evaluator
@@ -333,6 +394,7 @@ static void model_batch(void *ctx, void *worker, size_t n, const double *x, cons
         box[k].hi += 2e-6 * (1 + fabs(box[k].hi));
         box[k].lo -= 2e-6 * (1 + fabs(box[k].lo));
     }
+    use_block_tape(mf, w, box);
     fm_interval range;
     fm_tape *shorter = fm_eval_interval_shorten(w->ev, box, &range);
     if (shorter) fm_evaluator_use(w->ev, shorter);
@@ -419,10 +481,8 @@ static void model_batch(void *ctx, void *worker, size_t n, const double *x, cons
         if (8 * nredo > 7 * n) w->plain_leaves = PLAIN_LEAVES;
         for (size_t a = 0; a < nredo; a++) out[redo[a]] = pv[a];
     }
-    if (shorter) {
-        fm_evaluator_use(w->ev, NULL);
-        fm_tape_free(shorter);
-    }
+    fm_evaluator_use(w->ev, NULL);
+    fm_tape_free(shorter);
 }
 
 static fm_interval model_interval(void *ctx, void *worker, const fm_interval box[3])
@@ -435,7 +495,9 @@ static fm_interval model_interval(void *ctx, void *worker, const fm_interval box
         wide[k].hi = box[k].hi + mf->reach;
     }
     wide[3].lo = wide[3].hi = 0;
+    use_block_tape(mf, w, wide);
     const fm_interval f = fm_eval_interval(w->ev, wide);
+    fm_evaluator_use(w->ev, NULL);
     /* a hair beyond the band, so that the float band compares below it */
     const double beyond = mf->reach * (1 + 1e-6);
     if (f.lo > 0) return (fm_interval){beyond, INFINITY};
@@ -462,6 +524,7 @@ fm_status fm_model_field_open(const char *path, double voxel, double reach, cons
 {
     memset(mf, 0, sizeof *mf);
     mf->reach = reach;
+    mf->voxel = voxel;
     mf->graph = fm_graph_new(0);
     if (!mf->graph) return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
     fm_graph *g = mf->graph;

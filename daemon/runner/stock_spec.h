@@ -46,7 +46,8 @@ typedef struct fm_model_field {
     fm_graph *graph;
     fm_tape *tape;
     fm_field field;
-    double reach;
+    double reach; /* mm */
+    double voxel; /* mm: the grid's, sizes the blocks of shortened tapes */
 } fm_model_field;
 
 fm_status fm_model_field_open(const char *path, double voxel, double reach, const char *what,
