@@ -447,9 +447,14 @@ static void publish_chunks(job *j, fm_stock *stock, double program_time_s, int c
     free(fresh_v);
 }
 
+/* Only live jobs keep the caches: there the operator waits for each move's
+ * meshes, and a live stock is the HMI's one part. A G-code job publishes
+ * every publish_interval_s, its wait is not a person's, and on a large stock
+ * the caches would about double the meshes' memory (a chunk's faces again,
+ * plus 116 kB of leaf hashes per chunk). */
 void fm_publish_chunks(job *j, fm_stock *stock, double program_time_s)
 {
-    publish_chunks(j, stock, program_time_s, 1);
+    publish_chunks(j, stock, program_time_s, j->doc->spec.program_kind == FM_PROGRAM_LIVE);
 }
 
 fm_status fm_publish_ensure_meshes(job *j, fm_error *err)
