@@ -18,6 +18,21 @@ namespace {
 
 constexpr int CHUNK = FM_STOCK_CHUNK_VOXELS;
 
+// Copy the grid's leaf at c (a leaf origin) into st, or the tile there when
+// it is active or not the background; 1 when a leaf was copied.
+int copy_leaf(const Grid &grid, Grid::ConstAccessor &acc, const Coord &c, Tree &st)
+{
+    if (const Leaf *leaf = acc.probeConstLeaf(c)) {
+        st.addLeaf(new Leaf(*leaf));
+        return 1;
+    }
+    float v = acc.getValue(c);
+    bool on = acc.isValueOn(c);
+    if (on || v != grid.background())
+        st.addTile(1, c, v, on);
+    return 0;
+}
+
 fm_mesh *chunk(fm_stock *stock, const int32_t index[3], const fm_mesh_extract_options &o,
                fm_error *err)
 {
@@ -44,16 +59,7 @@ fm_mesh *chunk(fm_stock *stock, const int32_t index[3], const fm_mesh_extract_op
     for (int x = a[0]; x <= b[0]; x += L)
         for (int y = a[1]; y <= b[1]; y += L)
             for (int z = a[2]; z <= b[2]; z += L) {
-                Coord c(x, y, z);
-                if (const Leaf *leaf = acc.probeConstLeaf(c)) {
-                    st.addLeaf(new Leaf(*leaf));
-                    leaves++;
-                } else {
-                    float v = acc.getValue(c);
-                    bool on = acc.isValueOn(c);
-                    if (on || v != grid.background())
-                        st.addTile(1, c, v, on);
-                }
+                leaves += copy_leaf(grid, acc, Coord(x, y, z), st);
             }
     fm_mesh_extract_options oc = o;
     oc.adaptivity = 0;
@@ -390,15 +396,7 @@ int mesh_leaves(fm_stock *stock, const Grid &grid, const Coord &lo,
                 if (!copy[ring_slot(x, y, z)])
                     continue;
                 const Coord c = lo + Coord((x - 1) * LD, (y - 1) * LD, (z - 1) * LD);
-                if (const Leaf *leaf = acc.probeConstLeaf(c)) {
-                    st.addLeaf(new Leaf(*leaf));
-                    leaves++;
-                } else {
-                    float v = acc.getValue(c);
-                    bool on = acc.isValueOn(c);
-                    if (on || v != grid.background())
-                        st.addTile(1, c, v, on);
-                }
+                leaves += copy_leaf(grid, acc, c, st);
             }
     std::vector<fm_mesh *> fresh(CL * CL * CL, nullptr);
     auto drop = [&] {

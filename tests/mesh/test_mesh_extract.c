@@ -266,6 +266,18 @@ static tri_key *tri_keys(const fm_mesh *m)
     return k;
 }
 
+/* How many triangles of a and b (the same count) differ, as sets. */
+static size_t differing_triangles(const fm_mesh *a, const fm_mesh *b)
+{
+    tri_key *ka = tri_keys(a), *kb = tri_keys(b);
+    size_t differ = 0;
+    for (size_t t = 0; t < a->triangle_count; t++)
+        differ += memcmp(ka + t, kb + t, sizeof *ka) != 0;
+    free(ka);
+    free(kb);
+    return differ;
+}
+
 static void check_same_mesh(const fm_mesh *a, const fm_mesh *b)
 {
     CHECK(a->triangle_count == b->triangle_count);
@@ -274,15 +286,10 @@ static void check_same_mesh(const fm_mesh *a, const fm_mesh *b)
         fprintf(stderr, "triangles: %zu vs %zu\n", a->triangle_count, b->triangle_count);
         return;
     }
-    tri_key *ka = tri_keys(a), *kb = tri_keys(b);
-    size_t differ = 0;
-    for (size_t t = 0; t < a->triangle_count; t++)
-        differ += memcmp(ka + t, kb + t, sizeof *ka) != 0;
+    size_t differ = differing_triangles(a, b);
     CHECK(differ == 0);
     if (differ)
         fprintf(stderr, "%zu of %zu triangles differ\n", differ, a->triangle_count);
-    free(ka);
-    free(kb);
 }
 
 /* Chunk meshes kept per chunk, as a viewer keeps them. */
@@ -523,10 +530,7 @@ static void check_same_chunk(const fm_mesh *cached, const fm_mesh *fresh)
                 fresh->triangle_count);
         return;
     }
-    tri_key *ka = tri_keys(cached), *kb = tri_keys(fresh);
-    size_t differ = 0;
-    for (size_t t = 0; t < cached->triangle_count; t++)
-        differ += memcmp(ka + t, kb + t, sizeof *ka) != 0;
+    size_t differ = differing_triangles(cached, fresh);
     CHECK(differ == 0);
     size_t na = 0, nb = 0;
     vert_key *va = vert_keys(cached, &na), *vb = vert_keys(fresh, &nb);
@@ -540,8 +544,6 @@ static void check_same_chunk(const fm_mesh *cached, const fm_mesh *fresh)
     if (differ || vdiffer)
         fprintf(stderr, "cached chunk: %zu of %zu triangles, %zu of %zu vertices differ\n", differ,
                 cached->triangle_count, vdiffer, na);
-    free(ka);
-    free(kb);
     free(va);
     free(vb);
 }

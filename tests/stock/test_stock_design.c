@@ -125,6 +125,23 @@ static void check_top_excess(const fm_stock *s, const fm_design *d, const char *
     fm_deviation_free(&dev);
 }
 
+/* Distances to the design box of test_excess (its top face at z = -0.4,
+ * a face at x = 20): t mm above the top face, t below it (inside tiles of a
+ * band-3 grid), t beyond the x = 20 face, and off the top x = 20 edge by e
+ * mm in x and z (sqrt(2) e; within half a voxel, the surface points'
+ * bound near edges). */
+static void check_box_distances(const fm_design *d, const char *what, double t, double e)
+{
+    const double above[3] = {10, 10, -0.4 + t}, below[3] = {10, 10, -0.4 - t};
+    const double side[3] = {20 + t, 10, -5}, edge[3] = {20 + e, 10, -0.4 + e};
+    printf("%s: above %.4f below %.4f side %.4f edge %.4f\n", what, fm_design_sample(d, above),
+           fm_design_sample(d, below), fm_design_sample(d, side), fm_design_sample(d, edge));
+    CHECK_NEAR(fm_design_sample(d, above), -t, 1e-3);
+    CHECK_NEAR(fm_design_sample(d, below), t, 1e-3);
+    CHECK_NEAR(fm_design_sample(d, side), -t, 1e-3);
+    CHECK_NEAR(fm_design_sample(d, edge), -sqrt(2) * e, H / 2);
+}
+
 static void test_excess(void)
 {
     const double lo[3] = {0, 0, -10}, hi[3] = {20, 20, 0};
@@ -184,18 +201,8 @@ static void test_excess(void)
     if (!d) fprintf(stderr, "narrow vdb design: %s\n", err.message);
     if (d) {
         CHECK(fm_design_band_voxels(s, o.tolerance_mm) == 3);
-        /* 0.4 mm above the design's top face, 0.4 below it (inside tiles),
-         * 0.4 beyond its x = 20 face, and off its top x = 20 edge by 0.3 mm
-         * in x and z: sqrt(0.18) = 0.424 mm */
-        const double above[3] = {10, 10, 0}, below[3] = {10, 10, -0.8};
-        const double side[3] = {20.4, 10, -5}, edge[3] = {20.3, 10, -0.1};
-        printf("beyond the band: above %.4f below %.4f side %.4f edge %.4f\n",
-               fm_design_sample(d, above), fm_design_sample(d, below), fm_design_sample(d, side),
-               fm_design_sample(d, edge));
-        CHECK_NEAR(fm_design_sample(d, above), -0.4, 1e-3);
-        CHECK_NEAR(fm_design_sample(d, below), 0.4, 1e-3);
-        CHECK_NEAR(fm_design_sample(d, side), -0.4, 1e-3);
-        CHECK_NEAR(fm_design_sample(d, edge), -sqrt(0.18), H / 2);
+        /* beyond the band: from the design's surface points */
+        check_box_distances(d, "beyond the band", 0.4, 0.3);
         check_top_excess(s, d, "band-3 snapshot design", 160);
         fm_design_free(d);
     }
@@ -210,19 +217,8 @@ static void test_excess(void)
         CHECK(fm_design_band_voxels(s, wide.tolerance_mm) == 5);
         /* the added layers (0.3 .. 0.5 mm from the surface) hold distances
          * to the design box; samples whose cell reaches into them but not
-         * beyond the band (read from the grid): 0.3 mm above its top face,
-         * 0.3 mm below it (where the band-3 grid had inside tiles), 0.3 mm
-         * beyond its x = 20 face, and off its top x = 20 edge by 0.2 mm in
-         * x and z: sqrt(0.08) = 0.283 mm */
-        const double above[3] = {10, 10, -0.1}, below[3] = {10, 10, -0.7};
-        const double side[3] = {20.3, 10, -5}, edge[3] = {20.2, 10, -0.2};
-        printf("widened samples: above %.4f below %.4f side %.4f edge %.4f\n",
-               fm_design_sample(d, above), fm_design_sample(d, below), fm_design_sample(d, side),
-               fm_design_sample(d, edge));
-        CHECK_NEAR(fm_design_sample(d, above), -0.3, 1e-3);
-        CHECK_NEAR(fm_design_sample(d, below), 0.3, 1e-3);
-        CHECK_NEAR(fm_design_sample(d, side), -0.3, 1e-3);
-        CHECK_NEAR(fm_design_sample(d, edge), -sqrt(0.08), H / 2);
+         * beyond the band are read from the grid */
+        check_box_distances(d, "widened samples", 0.3, 0.2);
         /* the region is the excess deeper than the tolerance: the slab less,
          * along its 80 mm of side faces, the stock whose nearest surface is
          * a side face (depth t below the top, at most t from the side) at a
