@@ -77,22 +77,28 @@ inline void world_of(const Setup &s, const Coord &c, double x[3])
 }
 
 /* The point of the stock's surface nearest voxel c: one step along the
- * normal (central differences of phi), q = x - phi n. Exact for planes. */
-void foot_point(const Setup &s, CAcc &sa, const Coord &c, double phi, double q[3])
+ * normal (g: central differences of phi), q = x - phi n. Exact for planes. */
+void step_to_surface(const Setup &s, const Coord &c, double phi, const double g[3], double q[3])
 {
-    double g[3], n2 = 0;
-    for (int k = 0; k < 3; k++) {
-        Coord p = c, m = c;
-        p[k] += 1;
-        m[k] -= 1;
-        g[k] = double(sa.getValue(p)) - double(sa.getValue(m));
-        n2 += g[k] * g[k];
-    }
+    const double n2 = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
     world_of(s, c, q);
     if (n2 > 0) {
         const double inv = 1.0 / std::sqrt(n2);
         for (int k = 0; k < 3; k++) q[k] -= phi * g[k] * inv;
     }
+}
+
+/* step_to_surface with the differences read through the accessor. */
+void foot_point(const Setup &s, CAcc &sa, const Coord &c, double phi, double q[3])
+{
+    double g[3];
+    for (int k = 0; k < 3; k++) {
+        Coord p = c, m = c;
+        p[k] += 1;
+        m[k] -= 1;
+        g[k] = double(sa.getValue(p)) - double(sa.getValue(m));
+    }
+    step_to_surface(s, c, phi, g, q);
 }
 
 /* A leaf-sized cell after classification: which voxels are members of a
@@ -203,12 +209,7 @@ void foot_point_in(const Setup &s, Worker &w, const Coord &o, int i, double phi,
     const int c = Block<1>::at(x, y, z), sx = Block<1>::N * Block<1>::N, sy = Block<1>::N;
     const double g[3] = {double(v[c + sx]) - double(v[c - sx]), double(v[c + sy]) - double(v[c - sy]),
                          double(v[c + 1]) - double(v[c - 1])};
-    const double n2 = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
-    world_of(s, voxel_of(o, i), q);
-    if (n2 > 0) {
-        const double inv = 1.0 / std::sqrt(n2);
-        for (int k = 0; k < 3; k++) q[k] -= phi * g[k] * inv;
-    }
+    step_to_surface(s, voxel_of(o, i), phi, g, q);
 }
 
 /* The design's trilinear sample at world point q (BoxSampler's arithmetic,
