@@ -44,6 +44,20 @@ def mbpoll(port, *args):
     return {int(a): float(b) for a, b in re.findall(r"^\[(\d+)\]:\s+(\S+)", out.stdout.decode(), re.M)}
 
 
+def settled_status(url, job_id, still_s, timeout_s):
+    """The job's status once motions_done has not changed for still_s."""
+    code, last = curl_json(url + "/v1/jobs/" + job_id)
+    since = time.time()
+    deadline = since + timeout_s
+    while time.time() < deadline and time.time() - since < still_s:
+        time.sleep(0.25)
+        code, now = curl_json(url + "/v1/jobs/" + job_id)
+        if now["motions_done"] != last["motions_done"]:
+            since = time.time()
+        last = now
+    return last
+
+
 def main():
     frepmilld, frepmill = sys.argv[1], sys.argv[2]
     if not shutil.which("mbpoll"):
@@ -91,11 +105,14 @@ def main():
                     break
                 time.sleep(0.1)
             check(status["paused"] and status["state"] == "running", "HTTP shows the job paused")
-            time.sleep(0.5)
-            code, s1 = curl_json(d.url + "/v1/jobs/" + job_id)
+            # The worker holds at its next progress report, after the batch
+            # of cuts it is in (a second or more under the sanitizers), and
+            # publishes its count once more there: wait for that, then the
+            # count must hold still.
+            s1 = settled_status(d.url, job_id, 2.0, 60)
             time.sleep(1.0)
             code, s2 = curl_json(d.url + "/v1/jobs/" + job_id)
-            check(s1["motions_done"] == s2["motions_done"] and s2["paused"],
+            check(s1["motions_done"] == s2["motions_done"] and s2["paused"] and s2["state"] == "running",
                   "a paused job does not advance (motion %d)" % s2["motions_done"])
             regs = mbpoll(port, "-t", "3", "-r", "0", "-c", "29")
             check(int(regs[1]) & 0x04 and int(regs[28]) == 1 and int(regs[26]) == 0,
