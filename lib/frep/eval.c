@@ -85,6 +85,9 @@ void fm_evaluator_free(fm_evaluator *ev)
     free(ev->ivl_nan);
     free(ev->grad);
     free(ev->choice);
+    free(ev->sh_map);
+    free(ev->sh_live);
+    free(ev->sh_code);
     free(ev);
 }
 

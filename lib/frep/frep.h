@@ -264,6 +264,14 @@ fm_interval fm_eval_interval(fm_evaluator *ev, const fm_interval box[4]);
  * fm_tape_free. NULL if nothing could be removed (use the current tape). */
 fm_tape *fm_eval_interval_shorten(fm_evaluator *ev, const fm_interval box[4],
                                   fm_interval *result);
+/* fm_eval_interval_shorten into a tape the caller keeps in *slot (NULL at
+ * first; free it with fm_tape_free when done): the tape there is rewritten
+ * in place when it has room, so that shortening once per leaf of a grid
+ * allocates nothing after the first leaves. Returns *slot, or NULL when
+ * nothing could be removed (*slot is kept). The evaluator must not be using
+ * *slot (it is then left alone and NULL returned). */
+fm_tape *fm_eval_interval_shorten_in(fm_evaluator *ev, const fm_interval box[4],
+                                     fm_interval *result, fm_tape **slot);
 /* Value and gradient (df/dx, df/dy, df/dz, df/dt) by forward-mode
  * automatic differentiation. */
 double fm_eval_grad(fm_evaluator *ev, const double p[4], double grad[4]);

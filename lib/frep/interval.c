@@ -585,22 +585,54 @@ fm_interval fm_eval_interval(fm_evaluator *ev, const fm_interval box[4])
     return fm_eval_interval_nan(ev, box, NULL);
 }
 
-fm_tape *fm_eval_interval_shorten(fm_evaluator *ev, const fm_interval box[4],
-                                  fm_interval *result)
+/* Room in ev's shortening scratch for a tape of nleaf leaves and n
+ * instructions (the evaluator's root bounds every tape it shortens, so the
+ * scratch grows once). */
+static int shorten_scratch(fm_evaluator *ev, size_t nvn, size_t n)
 {
-    fm_interval r = fm_eval_interval_nan(ev, box, NULL);
-    if (result) *result = r;
+    if (nvn > ev->sh_nvn_cap) {
+        size_t bytes;
+        if (!fm_size_mul(nvn, 3 * sizeof *ev->sh_map, &bytes)) return 0;
+        uint32_t *map = malloc(bytes);
+        uint8_t *live = malloc(nvn);
+        if (!map || !live) {
+            free(map);
+            free(live);
+            return 0;
+        }
+        free(ev->sh_map);
+        free(ev->sh_live);
+        ev->sh_map = map;
+        ev->sh_live = live;
+        ev->sh_nvn_cap = nvn;
+    }
+    if (n > ev->sh_code_cap) {
+        fm_insn *code = malloc((n ? n : 1) * sizeof *code);
+        if (!code) return 0;
+        free(ev->sh_code);
+        ev->sh_code = code;
+        ev->sh_code_cap = n;
+    }
+    return 1;
+}
+
+/* The instructions of the evaluator's tape that can still win inside the
+ * box its last interval evaluation saw (ev->choice), into ev->sh_code in
+ * value-number form; *res gets the result's value number. Returns their
+ * number: the tape's length when nothing is dropped, and 0 with *res ==
+ * FM_NO_OPERAND when the scratch cannot be had. */
+static size_t shorten_code(fm_evaluator *ev, uint32_t *res)
+{
     const fm_tape *t = ev->tape;
-    size_t n = t->ninsns, decided = 0;
-    for (size_t k = 0; k < n; k++) decided += ev->choice[k] != CHOOSE_NONE;
-    if (!decided) return NULL;
+    size_t n = t->ninsns;
     uint32_t nleaf = t->nleaf;
     size_t nvn = nleaf + n;
-    uint32_t *alias = malloc(nvn * sizeof *alias);
-    uint32_t *renum = malloc(nvn * sizeof *renum);
-    uint8_t *live = calloc(nvn, 1);
-    fm_insn *code = malloc(n * sizeof *code);
-    if (!alias || !renum || !live || !code) goto fail;
+    *res = FM_NO_OPERAND;
+    if (!shorten_scratch(ev, nvn, n)) return 0;
+    uint32_t *alias = ev->sh_map, *renum = ev->sh_map + nvn;
+    uint8_t *live = ev->sh_live;
+    fm_insn *code = ev->sh_code;
+    memset(live, 0, nvn);
     for (size_t v = 0; v < nvn; v++) alias[v] = (uint32_t)v;
     /* Forward: operands through aliases; a decided instruction becomes an
      * alias of its winner (or a constant when the winner is immediate). */
@@ -646,21 +678,72 @@ fm_tape *fm_eval_interval_shorten(fm_evaluator *ev, const fm_interval box[4],
         renum[v] = nleaf + (uint32_t)m;
         code[m++] = in;
     }
-    uint32_t res = renum[alias[t->result_ssa]];
-    free(alias);
-    free(renum);
-    free(live);
-    if (m >= n) {
-        free(code);
-        return NULL;
-    }
+    *res = renum[alias[t->result_ssa]];
+    return m;
+}
+
+/* Did the last interval evaluation decide any branch? */
+static int any_decided(const fm_evaluator *ev)
+{
+    for (size_t k = 0; k < ev->tape->ninsns; k++)
+        if (ev->choice[k] != CHOOSE_NONE) return 1;
+    return 0;
+}
+
+fm_tape *fm_eval_interval_shorten(fm_evaluator *ev, const fm_interval box[4],
+                                  fm_interval *result)
+{
+    fm_interval r = fm_eval_interval_nan(ev, box, NULL);
+    if (result) *result = r;
+    if (!any_decided(ev)) return NULL;
+    const fm_tape *t = ev->tape;
+    uint32_t res;
+    size_t m = shorten_code(ev, &res);
+    if (res == FM_NO_OPERAND || m >= t->ninsns) return NULL;
+    fm_insn *code = malloc((m ? m : 1) * sizeof *code);
+    if (!code) return NULL;
+    memcpy(code, ev->sh_code, m * sizeof *code);
     fm_tape *s = fm_tape_from_ssa(t->shared, t->param_values, code, m, res, t->root_ninsns);
     if (s && s->reg_capacity < t->reg_capacity) s->reg_capacity = t->reg_capacity;
     return s;
-fail:
-    free(alias);
-    free(renum);
-    free(live);
-    free(code);
-    return NULL;
+}
+
+fm_tape *fm_eval_interval_shorten_in(fm_evaluator *ev, const fm_interval box[4],
+                                     fm_interval *result, fm_tape **slot)
+{
+    fm_interval r = fm_eval_interval_nan(ev, box, NULL);
+    if (result) *result = r;
+    const fm_tape *t = ev->tape;
+    fm_tape *s = *slot;
+    /* the tape in use is not rewritten under the evaluator; keeping it is
+     * correct (a tape is valid wherever its shortenings are) */
+    if (s == t || !any_decided(ev)) return NULL;
+    uint32_t res;
+    size_t m = shorten_code(ev, &res);
+    if (res == FM_NO_OPERAND || m >= t->ninsns) return NULL;
+    if (!s || s->shared != t->shared || s->insns_cap < m) {
+        /* room for any shortening of the same root */
+        size_t cap = t->root_ninsns > m ? t->root_ninsns : m;
+        fm_insn *code = malloc((cap ? cap : 1) * sizeof *code);
+        if (!code) return NULL;
+        memcpy(code, ev->sh_code, m * sizeof *code);
+        fm_tape *made = fm_tape_from_ssa(t->shared, t->param_values, code, m, res, t->root_ninsns);
+        if (!made) return NULL;
+        made->insns_cap = cap;
+        if (made->reg_capacity < t->reg_capacity) made->reg_capacity = t->reg_capacity;
+        fm_tape_free(s);
+        *slot = made;
+        return made;
+    }
+    /* in place: the same family, so the same leaves and parameters */
+    memcpy(s->insns, ev->sh_code, m * sizeof *s->insns);
+    if (t->shared->nparams)
+        memcpy(s->param_values, t->param_values, t->shared->nparams * sizeof *s->param_values);
+    /* the value-number maps are free again: the slots' scratch */
+    s->nregs = fm_tape_assign_slots(s->insns, m, s->nleaf, res, ev->sh_map, &s->result);
+    s->ninsns = m;
+    s->result_ssa = res;
+    s->root_ninsns = t->root_ninsns > m ? t->root_ninsns : m;
+    s->reg_capacity = s->nregs > t->reg_capacity ? s->nregs : t->reg_capacity;
+    return s;
 }

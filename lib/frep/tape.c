@@ -634,26 +634,11 @@ void fm_tape_shared_release(fm_tape_shared *s)
     free(s);
 }
 
-fm_tape *fm_tape_from_ssa(fm_tape_shared *shared, const double *param_values, fm_insn *insns,
-                          size_t ninsns, uint32_t result_ssa, size_t root_ninsns)
+uint32_t fm_tape_assign_slots(fm_insn *insns, size_t ninsns, uint32_t nleaf, uint32_t result_ssa,
+                              uint32_t *scratch, uint32_t *result)
 {
-    uint32_t nleaf = (uint32_t)(FM_AXES + shared->nparams);
     size_t nvn = nleaf + ninsns;
-    fm_tape *t = calloc(1, sizeof *t);
-    uint32_t *last = malloc((nvn ? nvn : 1) * sizeof *last);
-    uint32_t *reg = malloc((nvn ? nvn : 1) * sizeof *reg);
-    uint32_t *free_list = malloc((nvn ? nvn : 1) * sizeof *free_list);
-    double *pv = malloc((shared->nparams ? shared->nparams : 1) * sizeof *pv);
-    if (!t || !last || !reg || !free_list || !pv || ninsns > FM_TAPE_MAX_INSNS) {
-        free(t);
-        free(last);
-        free(reg);
-        free(free_list);
-        free(pv);
-        free(insns);
-        return NULL;
-    }
-    if (shared->nparams) memcpy(pv, param_values, shared->nparams * sizeof *pv);
+    uint32_t *last = scratch, *reg = scratch + nvn, *free_list = scratch + 2 * nvn;
     for (size_t i = 0; i < nvn; i++) last[i] = 0;
     for (size_t i = 0; i < ninsns; i++) {
         const fm_insn *in = &insns[i];
@@ -685,20 +670,40 @@ fm_tape *fm_tape_from_ssa(fm_tape_shared *shared, const double *param_values, fm
         /* A value nobody reads frees its slot at once. */
         if (last[nleaf + i] == 0 && nleaf + i != result_ssa) free_list[nfree++] = out;
     }
+    *result = reg[result_ssa];
+    return nregs;
+}
+
+fm_tape *fm_tape_from_ssa(fm_tape_shared *shared, const double *param_values, fm_insn *insns,
+                          size_t ninsns, uint32_t result_ssa, size_t root_ninsns)
+{
+    uint32_t nleaf = (uint32_t)(FM_AXES + shared->nparams);
+    size_t nvn = nleaf + ninsns;
+    fm_tape *t = calloc(1, sizeof *t);
+    uint32_t *scratch = NULL;
+    size_t scratch_n;
+    if (fm_size_mul(nvn ? nvn : 1, 3 * sizeof *scratch, &scratch_n)) scratch = malloc(scratch_n);
+    double *pv = malloc((shared->nparams ? shared->nparams : 1) * sizeof *pv);
+    if (!t || !scratch || !pv || ninsns > FM_TAPE_MAX_INSNS) {
+        free(t);
+        free(scratch);
+        free(pv);
+        free(insns);
+        return NULL;
+    }
+    if (shared->nparams) memcpy(pv, param_values, shared->nparams * sizeof *pv);
+    t->nregs = fm_tape_assign_slots(insns, ninsns, nleaf, result_ssa, scratch, &t->result);
+    free(scratch);
     t->shared = shared;
     atomic_fetch_add(&shared->refs, 1);
     t->param_values = pv;
     t->nleaf = nleaf;
-    t->nregs = nregs;
-    t->reg_capacity = nregs;
+    t->reg_capacity = t->nregs;
     t->ninsns = ninsns;
+    t->insns_cap = ninsns;
     t->insns = insns;
     t->result_ssa = result_ssa;
-    t->result = reg[result_ssa];
     t->root_ninsns = root_ninsns > ninsns ? root_ninsns : ninsns;
-    free(last);
-    free(reg);
-    free(free_list);
     return t;
 }
 

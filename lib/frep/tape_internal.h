@@ -64,6 +64,7 @@ struct fm_tape {
     uint32_t result;      /* register slot of the result */
     uint32_t result_ssa;  /* value number of the result */
     size_t root_ninsns;   /* length of the tape shortenings start from (sizes scratch) */
+    size_t insns_cap;     /* instructions insns has room for (a tape rewritten in place) */
 };
 
 struct fm_evaluator {
@@ -79,6 +80,13 @@ struct fm_evaluator {
     size_t choice_cap;
     size_t nsub;
     struct fm_evaluator **sub; /* one per special op (NULL for VOXELS) */
+    /* shortening's scratch (interval.c), kept so that shortening a tape
+     * per leaf of a grid allocates nothing: value-number maps (3 per value
+     * number), liveness, and the shortened code */
+    uint32_t *sh_map;
+    uint8_t *sh_live;
+    fm_insn *sh_code;
+    size_t sh_nvn_cap, sh_code_cap;
 };
 
 /* tape.c */
@@ -88,6 +96,12 @@ struct fm_evaluator {
 fm_tape *fm_tape_from_ssa(fm_tape_shared *shared, const double *param_values, fm_insn *insns,
                           size_t ninsns, uint32_t result_ssa, size_t root_ninsns);
 void fm_tape_shared_release(fm_tape_shared *s);
+/* Register slots for insns (value-number form, nleaf leaves): a slot is
+ * reused once the last reader of its value has run. scratch holds
+ * 3 * (nleaf + ninsns) entries. Fills the slots of insns, sets *result to
+ * the result's slot and returns the number of slots. */
+uint32_t fm_tape_assign_slots(fm_insn *insns, size_t ninsns, uint32_t nleaf, uint32_t result_ssa,
+                              uint32_t *scratch, uint32_t *result);
 
 /* eval.c */
 static inline double fm_insn_operand(const double *reg, const fm_insn *in, int which)

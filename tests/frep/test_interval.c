@@ -245,6 +245,95 @@ static void check_csg_shortening(void)
     fm_graph_free(g);
 }
 
+/* fm_eval_interval_shorten_in gives the tape fm_eval_interval_shorten
+ * gives (same length, same values bit for bit, against the full tape), a
+ * tape of a tape too (a grid's block, then its leaf), and rewrites its slot
+ * in place: one tape per slot however many boxes. */
+static void check_shortening_in_place(void)
+{
+    int rewritten = 0, mismatches = 0, moved = 0;
+    for (int trial = 0; trial < 200; trial++) {
+        fm_graph *g = fm_graph_new(0);
+        fm_node root = random_dag(g, 10 + (size_t)(test_rand01() * 50), trial & 1);
+        fm_error err;
+        fm_tape *t = fm_tape_compile(g, root, &err);
+        fm_evaluator *ev = fm_evaluator_new(t, &err);
+        fm_tape *slot = NULL, *slot2 = NULL, *first = NULL, *first2 = NULL;
+        for (int b = 0; b < 20; b++) {
+            fm_interval box[4], r1, r2;
+            random_box(box);
+            fm_evaluator_use(ev, NULL);
+            fm_tape *ref = fm_eval_interval_shorten(ev, box, &r1);
+            fm_tape *in = fm_eval_interval_shorten_in(ev, box, &r2, &slot);
+            CHECK(same(r1.lo, r2.lo) && same(r1.hi, r2.hi));
+            CHECK((ref == NULL) == (in == NULL));
+            if (!ref || !in) {
+                fm_tape_free(ref);
+                continue;
+            }
+            CHECK(in == slot);
+            CHECK(fm_tape_length(in) == fm_tape_length(ref));
+            if (!first) first = in;
+            moved += in != first;
+            rewritten++;
+            /* in the box's lower corner, from the shortened tape */
+            fm_interval sub[4];
+            for (int i = 0; i < 4; i++) {
+                sub[i].lo = box[i].lo;
+                sub[i].hi = 0.5 * (box[i].lo + box[i].hi);
+            }
+            fm_evaluator_use(ev, in);
+            fm_tape *ref2 = fm_eval_interval_shorten(ev, sub, NULL);
+            fm_tape *in2 = fm_eval_interval_shorten_in(ev, sub, NULL, &slot2);
+            CHECK((ref2 == NULL) == (in2 == NULL));
+            CHECK(!ref2 || !in2 || fm_tape_length(in2) == fm_tape_length(ref2));
+            if (in2 && !first2) first2 = in2;
+            moved += in2 && in2 != first2;
+            /* the tape in use is left alone */
+            fm_evaluator_use(ev, in);
+            CHECK(fm_eval_interval_shorten_in(ev, sub, NULL, &slot) == NULL && slot == in);
+            for (int k = 0; k < 60; k++) {
+                double p[4];
+                const fm_interval *where = in2 && (k & 1) ? sub : box;
+                sample_in(where, k, p);
+                fm_evaluator_use(ev, NULL);
+                const double full = fm_eval_point(ev, p);
+                fm_evaluator_use(ev, where == sub ? in2 : in);
+                const double shorter = fm_eval_point(ev, p);
+                if (!same(full, shorter) && mismatches++ < 5)
+                    fprintf(stderr, "rewritten tape %.17g, full %.17g\n", shorter, full);
+            }
+            double xs[50], ys[50], zs[50], ts[50], out[50];
+            for (int k = 0; k < 50; k++) {
+                double p[4];
+                sample_in(box, k + 40, p);
+                xs[k] = p[0];
+                ys[k] = p[1];
+                zs[k] = p[2];
+                ts[k] = p[3];
+            }
+            fm_evaluator_use(ev, in);
+            fm_eval_batch(ev, 50, xs, ys, zs, ts, out);
+            fm_evaluator_use(ev, NULL);
+            for (int k = 0; k < 50; k++) {
+                double p[4] = {xs[k], ys[k], zs[k], ts[k]};
+                if (!same(out[k], fm_eval_point(ev, p)) && mismatches++ < 5)
+                    fprintf(stderr, "rewritten tape's batch %.17g\n", out[k]);
+            }
+            fm_tape_free(ref2);
+            fm_tape_free(ref);
+        }
+        fm_evaluator_free(ev);
+        fm_tape_free(slot);
+        fm_tape_free(slot2);
+        fm_tape_free(t);
+        fm_graph_free(g);
+    }
+    CHECK(rewritten > 100);
+    CHECK(mismatches == 0);
+    CHECK(moved == 0);
+}
+
 int main(void)
 {
     check_each_op();
@@ -252,5 +341,6 @@ int main(void)
     check_random_soundness(1);
     check_random_shortening();
     check_csg_shortening();
+    check_shortening_in_place();
     return test_summary("test_interval");
 }
