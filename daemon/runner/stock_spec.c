@@ -135,10 +135,12 @@ typedef struct model_worker {
     unsigned plain_leaves; /* leaves to evaluate point by point before the next grid try */
     /* blocks by the parity of their keys (a box's neighbours across a
      * block's face go to another slot) */
+    fm_tape *leaf_tape; /* the tape shortened to the leaf at hand, rewritten per leaf */
     struct model_block {
         int set;       /* key and tape are set */
         double key[3]; /* the block: [key, key + 1] * BLOCK_VOXELS voxels per axis */
         fm_tape *tape; /* shortened to the block and around it; NULL: nothing dropped */
+        fm_tape *own;  /* the slot's tape, rewritten for each new block */
     } block[8];
     double x[4 * MODEL_CHUNK], y[4 * MODEL_CHUNK], z[4 * MODEL_CHUNK], f[4 * MODEL_CHUNK];
 } model_worker;
@@ -150,6 +152,7 @@ static void *model_worker_new(void *ctx)
     if (!w) return NULL;
     w->ev = fm_evaluator_new(mf->tape, NULL);
     w->plain_leaves = 0;
+    w->leaf_tape = NULL;
     memset(w->block, 0, sizeof w->block);
     if (!w->ev) {
         free(w);
@@ -164,7 +167,8 @@ static void model_worker_free(void *ctx, void *worker)
     model_worker *w = worker;
     if (!w) return;
     fm_evaluator_free(w->ev);
-    for (int b = 0; b < 8; b++) fm_tape_free(w->block[b].tape);
+    for (int b = 0; b < 8; b++) fm_tape_free(w->block[b].own);
+    fm_tape_free(w->leaf_tape);
     free(w);
 }
 
@@ -215,7 +219,6 @@ static void use_block_tape(const fm_model_field *mf, model_worker *w, const fm_i
     struct model_block *b = &w->block[((long long)key[0] & 1) << 2 | ((long long)key[1] & 1) << 1 |
                                       ((long long)key[2] & 1)];
     if (!b->set || key[0] != b->key[0] || key[1] != b->key[1] || key[2] != b->key[2]) {
-        fm_tape_free(b->tape);
         b->tape = NULL;
         fm_interval region[4];
         for (int k = 0; k < 3; k++) {
@@ -227,7 +230,7 @@ static void use_block_tape(const fm_model_field *mf, model_worker *w, const fm_i
         }
         region[3].lo = region[3].hi = 0;
         fm_interval range;
-        b->tape = fm_eval_interval_shorten(w->ev, region, &range);
+        b->tape = fm_eval_interval_shorten_in(w->ev, region, &range, &b->own);
         b->set = 1;
     }
     if (b->tape) fm_evaluator_use(w->ev, b->tape);
@@ -396,7 +399,9 @@ static void model_batch(void *ctx, void *worker, size_t n, const double *x, cons
     }
     use_block_tape(mf, w, box);
     fm_interval range;
-    fm_tape *shorter = fm_eval_interval_shorten(w->ev, box, &range);
+    /* rewritten in place: no allocation per leaf (with the leaves' own,
+     * tapes allocated and freed per leaf made the build's malloc slow) */
+    fm_tape *shorter = fm_eval_interval_shorten_in(w->ev, box, &range, &w->leaf_tape);
     if (shorter) fm_evaluator_use(w->ev, shorter);
     if (!grid) {
         model_values(mf, w, n, x, y, z, out);
@@ -482,7 +487,6 @@ static void model_batch(void *ctx, void *worker, size_t n, const double *x, cons
         for (size_t a = 0; a < nredo; a++) out[redo[a]] = pv[a];
     }
     fm_evaluator_use(w->ev, NULL);
-    fm_tape_free(shorter);
 }
 
 static fm_interval model_interval(void *ctx, void *worker, const fm_interval box[3])
