@@ -478,11 +478,23 @@ typedef struct touch_ctx {
     int marks_failed; /* the tool marks did */
 } touch_ctx;
 
+/* A chunk's mesh reads values this many voxels outside the chunk (faces
+ * one, their normals two: lib/mesh), so a change that near a chunk's faces
+ * changes the chunk's mesh too. */
+#define MESH_READS_VOXELS 2
+
 static void touch_box(void *user, const int32_t lo[3], const int32_t hi[3])
 {
     touch_ctx *t = user;
     t->touched = 1;
-    if (fm_stock_mark_box(t->stock, lo, hi, t->version)) t->failed = 1;
+    /* the chunks whose mesh reads the box: its own and the neighbours
+     * within reach (grid coordinates stay far inside int32, rasterize) */
+    int32_t a[3], b[3];
+    for (int k = 0; k < 3; k++) {
+        a[k] = lo[k] - MESH_READS_VOXELS;
+        b[k] = hi[k] + MESH_READS_VOXELS;
+    }
+    if (fm_stock_mark_box(t->stock, a, b, t->version)) t->failed = 1;
 }
 
 static void leaf_set(void *user, const int32_t lo[3], const uint64_t set[8])

@@ -164,8 +164,10 @@ typedef struct fm_stock_chunk {
 
 /* Bumped by every subtraction that changed the grid; 1 after creation. */
 uint64_t fm_stock_version(const fm_stock *stock);
-/* Chunks changed after version since (0: all chunks with surface). Fills
- * up to cap entries and returns the number that match. */
+/* Chunks changed after version since (0: all chunks with surface): those
+ * with a changed leaf and those within two voxels of one, whose meshes read
+ * its values (faces one voxel beyond the chunk, normals two). Fills up to
+ * cap entries and returns the number that match. */
 size_t fm_stock_changed_chunks(const fm_stock *stock, uint64_t since, fm_stock_chunk *out,
                                size_t cap);
 void fm_stock_chunk_bounds(const fm_stock *stock, const int32_t index[3], double lo[3],
