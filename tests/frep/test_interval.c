@@ -134,6 +134,44 @@ static void check_random_soundness(int minmax_heavy)
     }
 }
 
+/* Does tape s (the evaluator's family) differ from the full tape at p?
+ * Says so for the first few of *mismatches. */
+static int point_differs(fm_evaluator *ev, const fm_tape *s, const double p[4], const char *what,
+                         int *mismatches)
+{
+    fm_evaluator_use(ev, NULL);
+    const double full = fm_eval_point(ev, p);
+    fm_evaluator_use(ev, s);
+    const double shorter = fm_eval_point(ev, p);
+    fm_evaluator_use(ev, NULL);
+    if (same(full, shorter)) return 0;
+    if ((*mismatches)++ < 5) fprintf(stderr, "%s %.17g, full %.17g\n", what, shorter, full);
+    return 1;
+}
+
+/* Batch on tape s at 50 points of the box against the full tape's points. */
+static void check_batch_on(fm_evaluator *ev, const fm_tape *s, const fm_interval box[4],
+                           const char *what, int *mismatches)
+{
+    double xs[50], ys[50], zs[50], ts[50], out[50];
+    for (int k = 0; k < 50; k++) {
+        double p[4];
+        sample_in(box, k + 40, p);
+        xs[k] = p[0];
+        ys[k] = p[1];
+        zs[k] = p[2];
+        ts[k] = p[3];
+    }
+    fm_evaluator_use(ev, s);
+    fm_eval_batch(ev, 50, xs, ys, zs, ts, out);
+    fm_evaluator_use(ev, NULL);
+    for (int k = 0; k < 50; k++) {
+        double p[4] = {xs[k], ys[k], zs[k], ts[k]};
+        if (!same(out[k], fm_eval_point(ev, p)) && (*mismatches)++ < 5)
+            fprintf(stderr, "%s's batch %.17g\n", what, out[k]);
+    }
+}
+
 /* Shortened tapes agree with the full tape inside the box, bit for bit. */
 static void check_random_shortening(void)
 {
@@ -162,40 +200,14 @@ static void check_random_shortening(void)
             for (int k = 0; k < 60; k++) {
                 double p[4];
                 sample_in(box, k, p);
-                fm_evaluator_use(ev, NULL);
-                double full = fm_eval_point(ev, p);
-                fm_evaluator_use(ev, s);
-                double shorter = fm_eval_point(ev, p);
-                if (!same(full, shorter) && mismatches++ < 5)
-                    fprintf(stderr, "shortened %.17g, full %.17g\n", shorter, full);
+                point_differs(ev, s, p, "shortened", &mismatches);
                 if (s2) {
                     sample_in(sub, k, p);
-                    fm_evaluator_use(ev, NULL);
-                    full = fm_eval_point(ev, p);
-                    fm_evaluator_use(ev, s2);
-                    shorter = fm_eval_point(ev, p);
-                    if (!same(full, shorter) && mismatches++ < 5)
-                        fprintf(stderr, "twice shortened %.17g, full %.17g\n", shorter, full);
+                    point_differs(ev, s2, p, "twice shortened", &mismatches);
                 }
             }
             /* Batch on the shortened tape equals point on the full one. */
-            double xs[50], ys[50], zs[50], ts[50], out[50];
-            for (int k = 0; k < 50; k++) {
-                double p[4];
-                sample_in(box, k + 40, p);
-                xs[k] = p[0];
-                ys[k] = p[1];
-                zs[k] = p[2];
-                ts[k] = p[3];
-            }
-            fm_evaluator_use(ev, s);
-            fm_eval_batch(ev, 50, xs, ys, zs, ts, out);
-            fm_evaluator_use(ev, NULL);
-            for (int k = 0; k < 50; k++) {
-                double p[4] = {xs[k], ys[k], zs[k], ts[k]};
-                if (!same(out[k], fm_eval_point(ev, p)) && mismatches++ < 5)
-                    fprintf(stderr, "shortened batch %.17g\n", out[k]);
-            }
+            check_batch_on(ev, s, box, "shortened", &mismatches);
             fm_tape_free(s2);
             fm_tape_free(s);
         }
@@ -294,32 +306,11 @@ static void check_shortening_in_place(void)
             CHECK(fm_eval_interval_shorten_in(ev, sub, NULL, &slot) == NULL && slot == in);
             for (int k = 0; k < 60; k++) {
                 double p[4];
-                const fm_interval *where = in2 && (k & 1) ? sub : box;
-                sample_in(where, k, p);
-                fm_evaluator_use(ev, NULL);
-                const double full = fm_eval_point(ev, p);
-                fm_evaluator_use(ev, where == sub ? in2 : in);
-                const double shorter = fm_eval_point(ev, p);
-                if (!same(full, shorter) && mismatches++ < 5)
-                    fprintf(stderr, "rewritten tape %.17g, full %.17g\n", shorter, full);
+                const int in_sub = in2 && (k & 1);
+                sample_in(in_sub ? sub : box, k, p);
+                point_differs(ev, in_sub ? in2 : in, p, "rewritten tape", &mismatches);
             }
-            double xs[50], ys[50], zs[50], ts[50], out[50];
-            for (int k = 0; k < 50; k++) {
-                double p[4];
-                sample_in(box, k + 40, p);
-                xs[k] = p[0];
-                ys[k] = p[1];
-                zs[k] = p[2];
-                ts[k] = p[3];
-            }
-            fm_evaluator_use(ev, in);
-            fm_eval_batch(ev, 50, xs, ys, zs, ts, out);
-            fm_evaluator_use(ev, NULL);
-            for (int k = 0; k < 50; k++) {
-                double p[4] = {xs[k], ys[k], zs[k], ts[k]};
-                if (!same(out[k], fm_eval_point(ev, p)) && mismatches++ < 5)
-                    fprintf(stderr, "rewritten tape's batch %.17g\n", out[k]);
-            }
+            check_batch_on(ev, in, box, "rewritten tape", &mismatches);
             fm_tape_free(ref2);
             fm_tape_free(ref);
         }
