@@ -90,7 +90,8 @@ static int run_plain(const job_case *jc, const char *out, double *wall, double *
 /* The floor under building a design grid of the given size: taking that
  * much fresh memory (an anonymous map, one write per 4 kB page), which the
  * grid's leaves cannot avoid. On the 2-core VM this costs about 17 us a
- * page (a bare machine: well under 1 us). CPU seconds, or -1. */
+ * page (typically well under 1 us on bare hardware; not measured here).
+ * CPU seconds, or -1. */
 static double fresh_memory_cpu_s(size_t bytes)
 {
     if (bytes == 0) return 0;
