@@ -134,6 +134,15 @@ static void check_random_soundness(int minmax_heavy)
     }
 }
 
+/* The lower half of each of the box's four ranges. */
+static void lower_corner(const fm_interval box[4], fm_interval sub[4])
+{
+    for (int i = 0; i < 4; i++) {
+        sub[i].lo = box[i].lo;
+        sub[i].hi = 0.5 * (box[i].lo + box[i].hi);
+    }
+}
+
 /* Does tape s (the evaluator's family) differ from the full tape at p?
  * Says so for the first few of *mismatches. */
 static int point_differs(fm_evaluator *ev, const fm_tape *s, const double p[4], const char *what,
@@ -191,10 +200,7 @@ static void check_random_shortening(void)
             shortened++;
             /* Shorten again in a corner of the box: a tape of a tape. */
             fm_interval sub[4];
-            for (int i = 0; i < 4; i++) {
-                sub[i].lo = box[i].lo;
-                sub[i].hi = 0.5 * (box[i].lo + box[i].hi);
-            }
+            lower_corner(box, sub);
             fm_evaluator_use(ev, s);
             fm_tape *s2 = fm_eval_interval_shorten(ev, sub, NULL);
             for (int k = 0; k < 60; k++) {
@@ -290,10 +296,7 @@ static void check_shortening_in_place(void)
             rewritten++;
             /* in the box's lower corner, from the shortened tape */
             fm_interval sub[4];
-            for (int i = 0; i < 4; i++) {
-                sub[i].lo = box[i].lo;
-                sub[i].hi = 0.5 * (box[i].lo + box[i].hi);
-            }
+            lower_corner(box, sub);
             fm_evaluator_use(ev, in);
             fm_tape *ref2 = fm_eval_interval_shorten(ev, sub, NULL);
             fm_tape *in2 = fm_eval_interval_shorten_in(ev, sub, NULL, &slot2);
