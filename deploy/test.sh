@@ -8,7 +8,7 @@
 #             (-DFM_SANITIZE=ON -DFM_FUZZ=ON): the integration tests and the
 #             unit tests under the sanitizers, but for those labelled timing
 #             or heavy (minutes of CPU there; they ran in release);
-#   fuzz      (after sanitize) each fuzz target for FM_FUZZ_SECONDS (45) from
+#   fuzz      (after sanitize) each fuzz target for FM_FUZZ_SECONDS (30) from
 #             its seed corpus, two at a time;
 #   asan      (on demand) a GCC build with AddressSanitizer + UBSan: the unit
 #             tests again (but those labelled timing).
