@@ -133,9 +133,9 @@ double fm_stock_spec_projected_area(const fm_stock_spec *s)
 typedef struct model_worker {
     fm_evaluator *ev;
     unsigned plain_leaves; /* leaves to evaluate point by point before the next grid try */
+    fm_tape *leaf_tape; /* the tape shortened to the leaf at hand, rewritten per leaf */
     /* blocks by the parity of their keys (a box's neighbours across a
      * block's face go to another slot) */
-    fm_tape *leaf_tape; /* the tape shortened to the leaf at hand, rewritten per leaf */
     struct model_block {
         int set;       /* key and tape are set */
         double key[3]; /* the block: [key, key + 1] * BLOCK_VOXELS voxels per axis */
@@ -365,10 +365,11 @@ static void model_batch(void *ctx, void *worker, size_t n, const double *x, cons
     model_worker *w = worker;
     if (n == 0) return;
     /* One shortened tape for the whole batch (a leaf's voxels, from the
-     * rasterizer), not one per chunk: shortening allocates a tape and costs
-     * about as much as evaluating a chunk (perf of bench/design: half of this
-     * function's time when it ran per chunk). A shortened tape gives the same
-     * values as the full one inside its box, so the values do not change. */
+     * rasterizer), not one per chunk: shortening costs about as much as
+     * evaluating a chunk (perf of bench/design: half of this function's time
+     * when it ran per chunk, allocations included, which the worker's slot
+     * now spares). A shortened tape gives the same values as the full one
+     * inside its box, so the values do not change. */
     fm_interval box[4] = {{INFINITY, -INFINITY}, {INFINITY, -INFINITY}, {INFINITY, -INFINITY},
                           {0, 0}};
     double axis[3][GRID_SIDE];
@@ -399,8 +400,6 @@ static void model_batch(void *ctx, void *worker, size_t n, const double *x, cons
     }
     use_block_tape(mf, w, box);
     fm_interval range;
-    /* rewritten in place: no allocation per leaf (with the leaves' own,
-     * tapes allocated and freed per leaf made the build's malloc slow) */
     fm_tape *shorter = fm_eval_interval_shorten_in(w->ev, box, &range, &w->leaf_tape);
     if (shorter) fm_evaluator_use(w->ev, shorter);
     if (!grid) {
