@@ -34,7 +34,7 @@ fm_status fm_stock_spec_parse(const char *text, fm_stock_spec *out, fm_error *er
 double fm_stock_spec_projected_area(const fm_stock_spec *spec);
 /* A HyperFun model (.hf) as an fm_field, the one builder for stocks and
  * designs (stock_spec.c says how): values are the model normalized to a
- * first-order distance (Shapiro eq. 4.9) cut by its bounding box; a box
+ * first-order distance (f / |grad f|) cut by its bounding box; a box
  * the raw model's interval over the box widened by reach (mm: the grid's
  * band) shows all inside or all outside is reported beyond the band (a
  * tile), so interior leaves are never evaluated and the grid's memory
