@@ -177,8 +177,14 @@ double fm_eval_point(fm_evaluator *ev, const double p[4])
     } while (0)
 
 /* sqrt sets no errno here (the result is NaN either way), which lets GCC
- * vectorize the sqrt loop; IEEE semantics are otherwise unchanged. */
-#if defined(__GNUC__) && !defined(__clang__)
+ * vectorize the sqrt loop; IEEE semantics are otherwise unchanged. The
+ * loops are also compiled for AVX2 (4 doubles a step instead of SSE2's 2),
+ * picked at load time where the CPU has it: AVX2 without FMA rounds every
+ * operation as SSE2 does, so the values are the same bits (lib/sweep/batch.c
+ * does the same). */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((optimize("no-math-errno"), target_clones("avx2", "default")))
+#elif defined(__GNUC__) && !defined(__clang__)
 __attribute__((optimize("no-math-errno")))
 #endif
 static void run_chunk(fm_evaluator *ev, size_t m)
