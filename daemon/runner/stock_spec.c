@@ -369,6 +369,69 @@ static int leaf_grid(size_t n, const double *x, const double *y, const double *z
 /* leaves done point by point after a leaf the grid did not serve */
 #define PLAIN_LEAVES 8
 
+/* normalize_leaf is also compiled for AVX2 (4 doubles a step instead of
+ * SSE2's 2), picked at load time where the CPU has it: AVX2 without FMA
+ * rounds every operation as SSE2 does, so the values are the same bits
+ * (this file is compiled without math errno: CMakeLists.txt). */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define MODEL_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define MODEL_VECTOR_CLONES
+#endif
+
+/* A leaf's normalized values from the model on its grid with a layer
+ * around it (f: GRID_SIDE^3, x slowest): the gradient from the neighbours,
+ * and again[i] set where the one-sided differences a step either side do
+ * not agree (curved, a min/max kink, or a short gradient: model_values
+ * decides there). inv: 1 / step between grid layers per axis; beyond: the
+ * signed distance beyond the bounds box's faces per axis (model_box_distance,
+ * separated). Written without branches, so that it vectorizes along z. */
+static MODEL_VECTOR_CLONES void normalize_leaf(const double *restrict f,
+                                               const double inv[3][GRID_SIDE - 1],
+                                               const double beyond[3][LEAF_SIDE],
+                                               double *restrict out,
+                                               int64_t *restrict again)
+{
+    const size_t sx = GRID_SIDE * GRID_SIDE, sy = GRID_SIDE;
+    for (int a = 1; a <= LEAF_SIDE; a++)
+        for (int b = 1; b <= LEAF_SIDE; b++) {
+            const double *restrict row = f + (size_t)a * sx + (size_t)b * sy;
+            const double ixu = inv[0][a], ixd = inv[0][a - 1];
+            const double iyu = inv[1][b], iyd = inv[1][b - 1];
+            const double bx = beyond[0][a - 1], by = beyond[1][b - 1];
+            const double ox = bx > 0 ? bx : 0, oy = by > 0 ? by : 0;
+            const double mxy = bx > by ? bx : by;
+            double *restrict o = out + ((size_t)(a - 1) * LEAF_SIDE + (size_t)(b - 1)) * LEAF_SIDE;
+            int64_t *restrict ag = again + ((size_t)(a - 1) * LEAF_SIDE + (size_t)(b - 1)) * LEAF_SIDE;
+            for (int c = 1; c <= LEAF_SIDE; c++) {
+                const double v0 = row[c];
+                const double ux = (row[c + sx] - v0) * ixu, dx = (v0 - row[c - sx]) * ixd;
+                const double uy = (row[c + sy] - v0) * iyu, dy = (v0 - row[c - sy]) * iyd;
+                const double uz = (row[c + 1] - v0) * inv[2][c], dz = (v0 - row[c - 1]) * inv[2][c - 1];
+                /* relative to the whole gradient: along a face the
+                 * slope is 0 up to rounding. NaN fails the test too. */
+                const double tol = LINEAR_TOL * (fabs(ux) + fabs(dx) + fabs(uy) + fabs(dy) +
+                                                 fabs(uz) + fabs(dz));
+                const double gx = 0.5 * (ux + dx), gy = 0.5 * (uy + dy), gz = 0.5 * (uz + dz);
+                const double g2 = gx * gx + gy * gy + gz * gz;
+                /* a short gradient: model_values' backward differences
+                 * decide, as they do for every point */
+                ag[c - 1] = !((fabs(ux - dx) <= tol) & (fabs(uy - dy) <= tol) &
+                              (fabs(uz - dz) <= tol) & (g2 >= 0.81));
+                const double v = v0 / sqrt(g2);
+                /* model_box_distance: the sum of the squares beyond the
+                 * faces outside, the nearest face inside */
+                const double bz = beyond[2][c - 1];
+                const double oz = bz > 0 ? bz : 0;
+                const double out2 = ox * ox + oy * oy + oz * oz;
+                const double mx = mxy > bz ? mxy : bz;
+                const double root = sqrt(out2); /* unconditional: no branch in the loop */
+                const double bd = out2 > 0 ? -root : -mx;
+                o[c - 1] = v < bd ? v : bd;
+            }
+        }
+}
+
 static void model_batch(void *ctx, void *worker, size_t n, const double *x, const double *y,
                         const double *z, double *out)
 {
@@ -448,40 +511,11 @@ static void model_batch(void *ctx, void *worker, size_t n, const double *x, cons
         double px[LEAF_SIDE * LEAF_SIDE * LEAF_SIDE], py[LEAF_SIDE * LEAF_SIDE * LEAF_SIDE],
             pz[LEAF_SIDE * LEAF_SIDE * LEAF_SIDE], pv[LEAF_SIDE * LEAF_SIDE * LEAF_SIDE];
         size_t redo[LEAF_SIDE * LEAF_SIDE * LEAF_SIDE], nredo = 0;
-        unsigned char again[LEAF_SIDE * LEAF_SIDE * LEAF_SIDE];
-        const size_t sx = GRID_SIDE * GRID_SIDE, sy = GRID_SIDE;
-        size_t i = 0;
-        for (int a = 1; a <= LEAF_SIDE; a++)
-            for (int b = 1; b <= LEAF_SIDE; b++)
-                for (int c = 1; c <= LEAF_SIDE; c++, i++) {
-                    const size_t g0 = (size_t)a * sx + (size_t)b * sy + (size_t)c;
-                    const double v0 = f[g0];
-                    const double ux = (f[g0 + sx] - v0) * inv[0][a],
-                                 dx = (v0 - f[g0 - sx]) * inv[0][a - 1];
-                    const double uy = (f[g0 + sy] - v0) * inv[1][b],
-                                 dy = (v0 - f[g0 - sy]) * inv[1][b - 1];
-                    const double uz = (f[g0 + 1] - v0) * inv[2][c],
-                                 dz = (v0 - f[g0 - 1]) * inv[2][c - 1];
-                    /* relative to the whole gradient: along a face the
-                     * slope is 0 up to rounding. NaN fails the test too. */
-                    const double tol = LINEAR_TOL * (fabs(ux) + fabs(dx) + fabs(uy) + fabs(dy) +
-                                                     fabs(uz) + fabs(dz));
-                    const double gx = 0.5 * (ux + dx), gy = 0.5 * (uy + dy), gz = 0.5 * (uz + dz);
-                    const double g2 = gx * gx + gy * gy + gz * gz;
-                    /* a short gradient: model_values' backward differences
-                     * decide, as they do for every point */
-                    again[i] = !((fabs(ux - dx) <= tol) & (fabs(uy - dy) <= tol) &
-                                 (fabs(uz - dz) <= tol) & (g2 >= 0.81));
-                    const double v = v0 / sqrt(g2);
-                    const double d[3] = {beyond[0][a - 1], beyond[1][b - 1], beyond[2][c - 1]};
-                    double out2 = 0, in = INFINITY;
-                    for (int k = 0; k < 3; k++) {
-                        if (d[k] > 0) out2 += d[k] * d[k];
-                        if (-d[k] < in) in = -d[k];
-                    }
-                    const double bd = out2 > 0 ? -sqrt(out2) : in;
-                    out[i] = v < bd ? v : bd;
-                }
+        /* 64-bit flags: the same width as the values, so that the loop
+         * vectorizes */
+        int64_t again[LEAF_SIDE * LEAF_SIDE * LEAF_SIDE];
+        normalize_leaf(f, inv, beyond, out, again);
+        size_t i;
         for (i = 0; i < n; i++) {
             if (!again[i]) continue;
             px[nredo] = x[i];
