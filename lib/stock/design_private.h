@@ -29,12 +29,20 @@ fm_status fm_vdb_design_distance(const fm_vdb *design, const double p[3], double
                                  size_t budget, fm_error *err);
 
 /* Both grids on one transform (same voxel and origin). tolerance in mm;
- * budget bounds the comparison's own tables; threads 0 = one per core. */
+ * budget bounds the comparison's own tables; threads 0 = one per core.
+ * field: the design's field when its grid is a topology
+ * (fm_vdb_rasterize_topology), whose marked cells are evaluated where they
+ * are read; then full gives the grid with values (made once, on first
+ * call; NULL and err when it cannot), which only a region deeper than the
+ * design's band needs. */
 typedef struct fm_vdb_compare_options {
     double tolerance;
     size_t max_regions;
     size_t budget;
     int threads;
+    const fm_field *field;
+    const fm_vdb *(*full)(void *user, fm_error *err);
+    void *full_user;
 } fm_vdb_compare_options;
 
 /* Deviation of stock from design (docs/stock.md, "Design comparison"). out

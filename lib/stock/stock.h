@@ -265,7 +265,11 @@ typedef struct fm_design_options {
 void fm_design_options_default(fm_design_options *opt);
 
 /* The design from a closed STL mesh (OpenVDB's mesh-to-volume), from an
- * F-rep field (a HyperFun model, rasterized like a field stock), or from a
+ * F-rep field (a HyperFun model, rasterized like a field stock: the
+ * comparison evaluates the field where it reads it, and the grid is made
+ * only for fm_design_sample*; the design takes the field over, keeps a copy
+ * of *field and calls field->release(field->ctx), when set, once it is
+ * freed or fails, so ctx must live until then), or from a
  * frepmill snapshot (fm_stock_save: an earlier simulation's result), which
  * is rebuilt onto the stock's transform when its voxel, origin or band
  * differ. opt may be NULL. NULL and err on failure: FM_ERR_INPUT bad

@@ -26,6 +26,16 @@ void fm_vdb_free(fm_vdb *v);
  * FM_ERR_LIMIT, before allocating leaves, when the boundary leaves found by
  * the interval pass would exceed budget bytes. */
 fm_status fm_vdb_rasterize(fm_vdb *v, const fm_field *field, size_t budget, fm_error *err);
+/* fm_vdb_rasterize's interval pass alone, into an empty grid: the inside
+ * tiles it makes, and each leaf it would evaluate as an active leaf-sized
+ * tile of value FM_VDB_LEAF_MARK (a value no level-set tile has: those are
+ * +-band), whose values are the field's batch over the leaf's voxel centres,
+ * -f clamped to the band (the design comparison evaluates them where it
+ * reads them, without a grid). Same budget check, for the leaves a
+ * rasterization would take. */
+#define FM_VDB_LEAF_MARK 0.0f
+fm_status fm_vdb_rasterize_topology(fm_vdb *v, const fm_field *field, size_t budget,
+                                    fm_error *err);
 
 /* What a subtraction reports, on the calling thread, after the parallel
  * work. Any callback may be NULL. */

@@ -13,6 +13,7 @@
 
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <memory>
 #include <new>
 
@@ -59,6 +60,14 @@ inline double inside_fraction(float phi, double inv_voxel)
 {
     double f = 0.5 - phi * inv_voxel;
     return f <= 0.0 ? 0.0 : (f >= 1.0 ? 1.0 : f);
+}
+
+/* A field's value clamped to the band, F-rep sign, as a grid stores it
+ * (negated); NaN counts as outside. */
+inline float clamp_to_band(double f, float bg)
+{
+    if (!(f == f)) return -bg;
+    return (float)std::min<double>(bg, std::max<double>(-bg, f));
 }
 
 /* Edge, in voxels, of the region a value found at this accessor depth

@@ -4,9 +4,11 @@
  * of gouge and excess (union-find over member voxels and tiles, 26
  * neighbours), their depths at the stock's surface (exact beyond the
  * design's band from a search over the design's surface points), and the
- * rebuild of a snapshot's level set onto the stock's transform. C API in
- * design_private.h; every exception stops at it. OpenVDB signs throughout
- * (phi < 0 inside). */
+ * rebuild of a snapshot's level set onto the stock's transform. A field's
+ * design is a topology whose marked cells are evaluated as they are read
+ * (field_cell), and its deviations are the field's values at the foot
+ * points. C API in design_private.h; every exception stops at it. OpenVDB
+ * signs throughout (phi < 0 inside). */
 #include "stock/design_private.h"
 #include "stock/vdb_bridge.hpp"
 
@@ -69,7 +71,16 @@ struct Setup {
     /* a design sample at or beyond this may interpolate clamped corners:
      * its true magnitude is at least this, maybe more */
     double clamp;
+    /* a field's design: the design grid is its topology, and a marked
+     * cell's values are the field's (fm_vdb_rasterize_topology) */
+    const fm_field *field = nullptr;
 };
+
+/* Is the design's value at a cell a mark (a field's leaf not stored)? */
+inline bool marked(const Setup &s, float design_value)
+{
+    return s.field && design_value == FM_VDB_LEAF_MARK;
+}
 
 inline void world_of(const Setup &s, const Coord &c, double x[3])
 {
@@ -194,11 +205,41 @@ struct Worker {
     std::vector<Cell> cells;
     Block<1> sb;
     Block<2> db;
+    /* a field's design: its worker state, and the cell's values */
+    const fm_field *field;
+    void *fw = nullptr;
+    float dvals[LEAF_SIZE];
     explicit Worker(const Setup &s)
-        : sa(s.stock->constTree()), da(s.design->constTree()), dxf(s.design->transform())
+        : sa(s.stock->constTree()), da(s.design->constTree()), dxf(s.design->transform()),
+          field(s.field)
     {
+        if (field && field->worker_new) {
+            fw = field->worker_new(field->ctx);
+            if (!fw) throw std::bad_alloc();
+        }
     }
+    ~Worker()
+    {
+        if (fw && field->worker_free) field->worker_free(field->ctx, fw);
+    }
+    Worker(const Worker &) = delete;
+    Worker &operator=(const Worker &) = delete;
 };
+
+/* A marked cell's design values: the field's batch at its voxel centres,
+ * negated and clamped to the band, the values fm_vdb_rasterize stores (the
+ * same points, so the same values). */
+void field_cell(const Setup &s, Worker &w, const Coord &o)
+{
+    double x[LEAF_SIZE], y[LEAF_SIZE], z[LEAF_SIZE], f[LEAF_SIZE];
+    for (int i = 0; i < LEAF_SIZE; i++) {
+        x[i] = s.origin[0] + s.h * (o.x() + (i >> 6));
+        y[i] = s.origin[1] + s.h * (o.y() + ((i >> 3) & 7));
+        z[i] = s.origin[2] + s.h * (o.z() + (i & 7));
+    }
+    s.field->batch(s.field->ctx, w.fw, LEAF_SIZE, x, y, z, f);
+    for (int i = 0; i < LEAF_SIZE; i++) w.dvals[i] = -clamp_to_band(f[i], s.bgd);
+}
 
 /* foot_point for voxel i of the cell at o, reading the stock's block. */
 void foot_point_in(const Setup &s, Worker &w, const Coord &o, int i, double phi, double q[3])
@@ -236,7 +277,9 @@ double design_sample_in(Worker &w, const Coord &o, const double q[3])
 }
 
 /* Classify the voxels of one cell; sums[0..1] get its gouge and excess
- * shares. Keeps a Cell only when it has members. */
+ * shares. Keeps a Cell only when it has members. The deviation at the foot
+ * points is read after the shares, all at once: a field's design evaluates
+ * them in one batch (its own value there, not a trilinear sample). */
 void classify(const Setup &s, Worker &w, const Coord &o, double sums[2])
 {
     const Leaf *sl = w.sa.probeConstLeaf(o);
@@ -245,11 +288,20 @@ void classify(const Setup &s, Worker &w, const Coord &o, double sums[2])
     const float *dv = dl ? dl->buffer().data() : nullptr;
     const float sc = sl ? 0.0f : w.sa.getValue(o);
     const float dc = dl ? 0.0f : w.da.getValue(o);
+    if (!dl && marked(s, dc)) {
+        field_cell(s, w, o);
+        dv = w.dvals;
+    }
     w.sb.ready = w.db.ready = false;
     Cell cell;
     cell.origin = o;
     float share[LEAF_SIZE], depth[LEAF_SIZE];
     uint8_t clamped[LEAF_SIZE];
+    /* voxels whose foot point is read: their index, foot point and sample */
+    int foot_of[LEAF_SIZE];
+    double fx[LEAF_SIZE], fy[LEAF_SIZE], fz[LEAF_SIZE], dev[LEAF_SIZE];
+    int nfoot = 0;
+    uint64_t member[8] = {}, gouge_bits[8] = {};
     double g = 0, e = 0;
     for (int i = 0; i < LEAF_SIZE; i++) {
         const double a = sv ? sv[i] : sc, b = dv ? dv[i] : dc;
@@ -263,33 +315,47 @@ void classify(const Setup &s, Worker &w, const Coord &o, double sums[2])
         share[i] = float(gouge ? fg : fe);
         depth[i] = std::numeric_limits<float>::quiet_NaN();
         clamped[i] = 0;
-        bool member;
+        if (gouge) gouge_bits[i >> 6] |= uint64_t(1) << (i & 63);
         if (gouge ? a >= s.bgs : a <= -s.bgs) {
             /* beyond the stock's band: air deep in the design, or stock
              * deep outside it; the region's surface is elsewhere */
-            member = true;
+            member[i >> 6] |= uint64_t(1) << (i & 63);
         } else {
             double q[3];
             foot_point_in(s, w, o, i, a, q);
-            const double dev = design_sample_in(w, o, q);
-            const double d = gouge ? -dev : dev;
-            depth[i] = float(d);
-            clamped[i] = std::fabs(dev) >= s.clamp;
-            double &mx = gouge ? w.max_gouge : w.max_excess;
-            if (d > mx) mx = d;
-            member = d > s.tol;
-        }
-        if (member) {
-            cell.member[i >> 6] |= uint64_t(1) << (i & 63);
-            if (gouge) cell.gouge[i >> 6] |= uint64_t(1) << (i & 63);
+            fx[nfoot] = q[0];
+            fy[nfoot] = q[1];
+            fz[nfoot] = q[2];
+            foot_of[nfoot++] = i;
         }
     }
     sums[0] = g;
     sums[1] = e;
+    if (nfoot > 0 && s.field) {
+        s.field->batch(s.field->ctx, w.fw, size_t(nfoot), fx, fy, fz, dev);
+        for (int k = 0; k < nfoot; k++) dev[k] = -double(clamp_to_band(dev[k], s.bgd));
+    } else {
+        for (int k = 0; k < nfoot; k++) {
+            const double q[3] = {fx[k], fy[k], fz[k]};
+            dev[k] = design_sample_in(w, o, q);
+        }
+    }
+    for (int k = 0; k < nfoot; k++) {
+        const int i = foot_of[k];
+        const bool gouge = (gouge_bits[i >> 6] >> (i & 63)) & 1;
+        const double d = gouge ? -dev[k] : dev[k];
+        depth[i] = float(d);
+        clamped[i] = std::fabs(dev[k]) >= s.clamp;
+        double &mx = gouge ? w.max_gouge : w.max_excess;
+        if (d > mx) mx = d;
+        if (d > s.tol) member[i >> 6] |= uint64_t(1) << (i & 63);
+    }
     uint32_t n = 0;
     for (int k = 0; k < 8; k++) {
+        cell.member[k] = member[k];
+        cell.gouge[k] = member[k] & gouge_bits[k];
         cell.prefix[k] = n;
-        n += uint32_t(__builtin_popcountll(cell.member[k]));
+        n += uint32_t(__builtin_popcountll(member[k]));
     }
     if (n == 0) return;
     cell.share.reserve(n);
@@ -322,7 +388,7 @@ struct Walk {
     {
         const int dsd = sa.getValueDepth(o), ddd = da.getValueDepth(o);
         const bool us = dsd < 3 && depth_extent(dsd) >= size;
-        const bool ud = ddd < 3 && depth_extent(ddd) >= size;
+        const bool ud = ddd < 3 && depth_extent(ddd) >= size && !marked(s, da.getValue(o));
         if (us && ud) {
             /* both constant: +-band, so a tile is all or nothing */
             const float a = sa.getValue(o), b = da.getValue(o);
@@ -766,6 +832,7 @@ fm_status compare(const fm_vdb *sv, const fm_vdb *dv, const fm_vdb_compare_optio
     s.bgd = s.design->background();
     s.tol = opt.tolerance;
     s.clamp = double(s.bgd) - std::sqrt(3.0) * s.h;
+    s.field = opt.field;
 
     /* 1. the cells of both trees */
     Walk walk(s);
@@ -919,6 +986,20 @@ fm_status compare(const fm_vdb *sv, const fm_vdb *dv, const fm_vdb_compare_optio
      * voxel (on a flat face every cell ties, and p* right under the centre
      * makes the bound the depth plus a hair). */
     CAcc sa(s.stock->constTree());
+    /* the design with values for its surface points: a field's is made
+     * here, only when a region needs it */
+    Setup sd = s;
+    bool need_points = false;
+    for (const Region &reg : regions) need_points = need_points || (reg.has_surface && reg.clamped);
+    if (need_points && s.field) {
+        const fm_vdb *full = opt.full ? opt.full(opt.full_user, err) : nullptr;
+        if (!full)
+            return err && err->code != FM_OK
+                       ? err->code
+                       : fm_error_set(err, FM_ERR_INPUT, "the design's grid is not available");
+        sd.design = full->grid.get();
+        sd.field = nullptr;
+    }
     for (Region &reg : regions) {
         if (!reg.has_surface || !reg.clamped) continue;
         /* The region (design material the stock lacks, or stock where the
@@ -940,11 +1021,11 @@ fm_status compare(const fm_vdb *sv, const fm_vdb *dv, const fm_vdb_compare_optio
             band;
         CoordBBox roi(reg.lo, reg.hi);
         roi.expand(reach);
-        std::unique_ptr<SurfacePoints> surface = std::make_unique<SurfacePoints>(s, roi);
+        std::unique_ptr<SurfacePoints> surface = std::make_unique<SurfacePoints>(sd, roi);
         if (surface->empty()) {
             CoordBBox all;
-            s.design->constTree().evalLeafBoundingBox(all);
-            surface = std::make_unique<SurfacePoints>(s, all);
+            sd.design->constTree().evalLeafBoundingBox(all);
+            surface = std::make_unique<SurfacePoints>(sd, all);
         }
         if (surface->bytes() > opt.budget)
             return fm_error_set(err, FM_ERR_LIMIT,

@@ -5,7 +5,8 @@
  * parallel; then a serial phase changes the topology. Building writes
  * phi = -f into an empty grid; subtracting a swept volume writes
  * phi = max(phi_stock, f) restricted to the leaves it can change, and
- * reports what changed (chunks, tool marks, removed volume). */
+ * reports what changed (chunks, tool marks, removed volume). A topology
+ * pass (a design's) stops after the interval pass and marks the leaves. */
 #include "stock/vdb_bridge.hpp"
 
 #include <openvdb/tools/Prune.h>
@@ -53,7 +54,9 @@ private:
     tbb::enumerable_thread_specific<void *> ets_;
 };
 
-enum class Mode { build, subtract };
+/* topology: build's interval pass only; the leaves it would evaluate become
+ * marks (fm_vdb_rasterize_topology) */
+enum class Mode { build, subtract, topology };
 
 /* A leaf-sized box that needs voxel work. leaf is the stock's existing leaf
  * there (subtract mode), or null where the stock is an inside tile (subtract)
@@ -223,14 +226,6 @@ struct JobResult {
 inline double seconds_now()
 {
     return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-/* The field clamped to the band, F-rep sign, as the grid stores it; NaN
- * counts as outside. */
-inline float clamp_to_band(double f, float bg)
-{
-    if (!(f == f)) return -bg;
-    return (float)std::min<double>(bg, std::max<double>(-bg, f));
 }
 
 /* Is the leaf (values and activity) now one uniform tile: no active voxel
@@ -514,6 +509,15 @@ fm_status run_rasterize(fm_vdb *v, const fm_field *field, Mode mode, size_t budg
                             double(budget) / 1048576.0);
     }
 
+    if (mode == Mode::topology) {
+        Tree &tree = v->grid->tree();
+        for (const Box &b : cls.inside)
+            tree.fill(CoordBBox(b.origin, b.origin.offsetBy(b.size - 1)), -v->background, false);
+        for (const LeafJob &j : cls.jobs) tree.addTile(1, j.origin, FM_VDB_LEAF_MARK, true);
+        refresh_bounds(v);
+        return FM_OK;
+    }
+
     const double t_voxels = seconds_now();
     const size_t njobs = cls.jobs.size();
     std::vector<JobResult> results(njobs);
@@ -652,6 +656,14 @@ fm_status fm_vdb_rasterize(fm_vdb *v, const fm_field *field, size_t budget, fm_e
 {
     return guarded(err, "rasterizing the stock", [&] {
         return run_rasterize(v, field, Mode::build, budget, nullptr, nullptr, err);
+    });
+}
+
+fm_status fm_vdb_rasterize_topology(fm_vdb *v, const fm_field *field, size_t budget,
+                                    fm_error *err)
+{
+    return guarded(err, "classifying the field", [&] {
+        return run_rasterize(v, field, Mode::topology, budget, nullptr, nullptr, err);
     });
 }
 

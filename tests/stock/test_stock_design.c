@@ -370,6 +370,94 @@ static void test_within_tolerance(void)
     fm_stock_free(s);
 }
 
+/* A field's design is compared without a grid of its own: each cell the
+ * rasterizer would make a leaf of is evaluated where the comparison reads
+ * it (the field's batch at its voxel centres, the values the grid would
+ * hold). Against that grid (the same field rasterized on the stock's
+ * transform, saved and loaded as a snapshot design, which is taken as it
+ * is) the comparison must find the same: the same regions, the volumes to
+ * rounding (the cells are summed in another order), and the depths within
+ * half a voxel (the field's own value at a foot point against the grid's
+ * trilinear sample). A ball half sunk into a pocketed stock: gouge where
+ * the pocket and the plunge cut into it, excess where the block stands
+ * outside it, on the stock's surface and through its tiles. */
+static void test_field_against_its_grid(void)
+{
+    const double lo[3] = {0, 0, -10}, hi[3] = {20, 20, 0};
+    fm_stock_options so;
+    fm_stock_options_default(&so);
+    so.voxel_mm = H;
+    so.band_voxels = 3;
+    so.threads = 2;
+    fm_error err;
+    const shape block = make_box(lo, hi);
+    fm_field bf = shape_field(&block);
+    fm_stock *s = fm_stock_new_from_field(&bf, &so, &err);
+    CHECK(s != NULL);
+    if (!s) return;
+    const double plo[3] = {5, 5, -0.2}, phi[3] = {15, 15, 1};
+    const shape pocket = make_box(plo, phi);
+    const shape plunge = make_cylinder(10, 10, -1.5, 1, 1.5);
+    cut(s, &pocket);
+    cut(s, &plunge);
+    const shape ball = make_sphere(10, 10, -2, 6);
+    fm_field f = shape_field(&ball);
+    fm_stock *g = fm_stock_new_from_field(&f, &so, &err);
+    char path[512];
+    snprintf(path, sizeof path, "%s/ball.vdb", dir);
+    CHECK(g && fm_stock_save(g, path, NULL, &err) == FM_OK);
+    fm_stock_free(g);
+    fm_design_options o;
+    fm_design_options_default(&o);
+    o.tolerance_mm = 0.05;
+    fm_design *dg = fm_design_load_vdb(s, path, &o, &err);
+    CHECK(dg != NULL);
+    fm_design *df = fm_design_from_field(s, &f, &o, &err);
+    CHECK(df != NULL);
+    /* until something reads its values, the field's design holds no leaves:
+     * its topology is a small part of its grid */
+    if (df && dg) CHECK(fm_design_memory_bytes(df) < fm_design_memory_bytes(dg) / 4);
+    fm_deviation a, b;
+    memset(&a, 0, sizeof a);
+    memset(&b, 0, sizeof b);
+    if (dg && df && compare(s, df, &a) && compare(s, dg, &b)) {
+        printf("field against its grid: gouges %zu / %zu (%.4f / %.4f mm, %.3f / %.3f mm3), "
+               "excess %zu / %zu (%.4f / %.4f mm, %.3f / %.3f mm3)\n",
+               a.gouge_total, b.gouge_total, a.max_gouge_mm, b.max_gouge_mm, a.gouge_volume_mm3,
+               b.gouge_volume_mm3, a.excess_total, b.excess_total, a.max_excess_mm,
+               b.max_excess_mm, a.excess_volume_mm3, b.excess_volume_mm3);
+        /* the ball's cap above the pocket floor and the plunge are gouged,
+         * the block around the ball is excess: both kinds are there */
+        CHECK(b.gouge_total >= 1 && b.excess_total >= 1);
+        CHECK(a.gouge_total == b.gouge_total && a.excess_total == b.excess_total);
+        CHECK_NEAR(a.gouge_volume_mm3, b.gouge_volume_mm3, 1e-9 * b.gouge_volume_mm3);
+        CHECK_NEAR(a.excess_volume_mm3, b.excess_volume_mm3, 1e-9 * b.excess_volume_mm3);
+        CHECK_NEAR(a.max_gouge_mm, b.max_gouge_mm, H / 2);
+        CHECK_NEAR(a.max_excess_mm, b.max_excess_mm, H / 2);
+        for (size_t i = 0; i < a.gouge_count && i < b.gouge_count; i++) {
+            CHECK_NEAR(a.gouges[i].depth_mm, b.gouges[i].depth_mm, H / 2);
+            CHECK_NEAR(a.gouges[i].volume_mm3, b.gouges[i].volume_mm3,
+                       1e-9 * b.gouges[i].volume_mm3);
+        }
+        for (size_t i = 0; i < a.excess_count && i < b.excess_count; i++) {
+            CHECK_NEAR(a.excess[i].depth_mm, b.excess[i].depth_mm, H / 2);
+            CHECK_NEAR(a.excess[i].volume_mm3, b.excess[i].volume_mm3,
+                       1e-9 * b.excess[i].volume_mm3);
+        }
+        /* samples beyond the band come from the grid (made for the
+         * regions deeper than the band), as the snapshot's do */
+        const double above[3] = {10, 10, 4.5}, inside[3] = {10, 10, -2};
+        CHECK_NEAR(fm_design_sample(df, above), fm_design_sample(dg, above), 1e-9);
+        CHECK_NEAR(fm_design_sample(df, above), -0.5, H / 2);
+        CHECK_NEAR(fm_design_sample(df, inside), fm_design_sample(dg, inside), 1e-9);
+    }
+    fm_deviation_free(&a);
+    fm_deviation_free(&b);
+    fm_design_free(df);
+    fm_design_free(dg);
+    fm_stock_free(s);
+}
+
 static void test_refusals(void)
 {
     const double lo[3] = {0, 0, -10}, hi[3] = {20, 20, 0};
@@ -428,6 +516,7 @@ int main(void)
     fm_deviation_free(&two);
     test_thick_excess();
     test_within_tolerance();
+    test_field_against_its_grid();
     test_refusals();
     char cmd[300];
     snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
