@@ -6,6 +6,7 @@
 #include <ctype.h>
 #include <errno.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -392,10 +393,11 @@ static MODEL_VECTOR_CLONES void normalize_leaf(const double *restrict f,
                                                double *restrict out,
                                                int64_t *restrict again)
 {
-    const size_t sx = GRID_SIDE * GRID_SIDE, sy = GRID_SIDE;
+    /* signed: a neighbour below is row[c - sx] */
+    const ptrdiff_t sx = GRID_SIDE * GRID_SIDE, sy = GRID_SIDE;
     for (int a = 1; a <= LEAF_SIDE; a++)
         for (int b = 1; b <= LEAF_SIDE; b++) {
-            const double *restrict row = f + (size_t)a * sx + (size_t)b * sy;
+            const double *restrict row = f + a * sx + b * sy;
             const double ixu = inv[0][a], ixd = inv[0][a - 1];
             const double iyu = inv[1][b], iyd = inv[1][b - 1];
             const double bx = beyond[0][a - 1], by = beyond[1][b - 1];
