@@ -4,7 +4,9 @@
  * an over-budget mesh are refused with errors that say why, including
  * meshes whose band is far larger than their area says (a sliver found by
  * fuzz_stl, a zero-area triangle, tiny triangles far apart) and
- * coordinates beyond the grid's index range. */
+ * coordinates beyond the grid's index range; open surfaces (as stock and
+ * as design) are refused where their first open edge is, and closed ones
+ * pass however their triangles are wound. */
 #include "stock/stock.h"
 #include "test.h"
 
@@ -203,6 +205,69 @@ static void test_thin_and_scattered(void)
     refused_small(p, 0.001, 64, FM_ERR_INPUT, "beyond the grid's index range");
 }
 
+/* OpenVDB's meshToLevelSet signs by flood-filling the outside: through a
+ * hole the fill reaches the inside, and an open box was taken as the thin
+ * shell of its band (at 0.5 mm, 3,920 of the 150,000 mm^3 its triangles
+ * enclose), a single triangle as 0.4 mm^3 of stock: silently, with every
+ * later figure wrong. Open surfaces are refused where the first open edge
+ * is; closed ones pass however their triangles are wound, thin or not. */
+static void test_open_surfaces(void)
+{
+    char p[512], want[128];
+    const double lo[3] = {1.25, -3.5, 0.3}, hi[3] = {13.75, 6.2, 8.85};
+    tri t[16], open[12];
+    int n = box_tris(lo, hi, t);
+    /* without its top face (triangles 2 and 3): the four edges of the top
+     * rim are open; the first triangle that has one is the y = lo face's
+     * second (corners 0, 5, 4: edge 5-4), the fourth left, on line 2 + 7 * 3
+     * of write_ascii's file. About the box's centre the triangles enclose
+     * the box but the top face's pyramid, V - A (H / 2) / 3. */
+    int m = 0;
+    for (int i = 0; i < n; i++)
+        if (i != 2 && i != 3) open[m++] = t[i];
+    snprintf(p, sizeof p, "%s/open_box.stl", dir);
+    write_ascii(p, open, m);
+    const double a = (hi[0] - lo[0]) * (hi[1] - lo[1]), ht = hi[2] - lo[2];
+    refused(p, FM_ERR_INPUT, "is not a closed surface: 4 of its edges bound one triangle only", 23);
+    snprintf(want, sizeof want, "triangles enclose %.1f mm^3", a * ht - a * ht / 6);
+    refused(p, FM_ERR_INPUT, want, 23);
+    refused(p, FM_ERR_INPUT, "in triangle 4;", 23);
+    /* the same as a design */
+    fm_stock_options o;
+    fm_stock_options_default(&o);
+    o.voxel_mm = 0.25;
+    fm_error err;
+    fm_stock *box = fm_stock_new_box(lo, hi, &o, &err);
+    CHECK(box != NULL);
+    fm_design *d = box ? fm_design_from_stl(box, p, NULL, &err) : NULL;
+    CHECK(d == NULL);
+    if (!d) CHECK_STR_CONTAINS(err.message, "the STL design");
+    printf("refusal: %s\n", err.message);
+    fm_design_free(d);
+    fm_stock_free(box);
+    /* one triangle, binary: three open edges, no line to name */
+    snprintf(p, sizeof p, "%s/one_triangle.stl", dir);
+    write_binary(p, t, 1, 0);
+    refused(p, FM_ERR_INPUT, "3 of its edges bound one triangle only", 0);
+    /* closed, every other triangle wound inward: it passes, whole */
+    for (int i = 1; i < n; i += 2) {
+        float v[3];
+        memcpy(v, t[i].v + 3, sizeof v);
+        memcpy(t[i].v + 3, t[i].v + 6, sizeof v);
+        memcpy(t[i].v + 6, v, sizeof v);
+    }
+    snprintf(p, sizeof p, "%s/flipped.stl", dir);
+    write_binary(p, t, n, 0);
+    check_volume(p, (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]), 0.001);
+    /* closed and thin: a 0.3 mm plate at 0.1 mm holds less than a two-voxel
+     * shell of its area, and its edges all pair up */
+    const double plo[3] = {0.05, 0.05, 0.05}, phi[3] = {10.05, 10.05, 0.35};
+    n = box_tris(plo, phi, t);
+    snprintf(p, sizeof p, "%s/plate.stl", dir);
+    write_binary(p, t, n, 0);
+    check_volume(p, 10 * 10 * 0.3, 0.001);
+}
+
 int main(void)
 {
     snprintf(dir, sizeof dir, "/tmp/fm-stock-stl-XXXXXX");
@@ -270,6 +335,7 @@ int main(void)
     printf("refusal: %s\n", err.message);
 
     test_thin_and_scattered();
+    test_open_surfaces();
 
     char cmd[600];
     snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
