@@ -328,13 +328,14 @@ static fm_status counted_bytes(const leaf_set *leaves, double *bytes)
 /* meshToLevelSet takes the sign from a flood fill of the outside: a hole
  * wider than a voxel lets the fill in, and the solid left is the band's
  * shell (a box without its top face at 0.5 mm: 3,920 of its 150,000 mm^3).
- * The volumes tell it: the level set's far from the triangles' own
- * (divergence theorem), or under a shell two voxels thick over the whole
- * area (an open sheet encloses nothing, and its shell is all it holds).
- * Only then are the open edges looked for: a surface whose edges all pair
- * up passes (a thin part, flipped triangles), and one with open edges is
- * refused with the first of them. A surface closed but for T-junctions
- * passes when it holds its volume. */
+ * The volumes tell it: the level set's against the triangles' own
+ * (divergence theorem), under half or over twice it (an open sheet
+ * encloses nothing, and its shell is all it holds), or under a voxel. Only
+ * then are the open edges looked for: a surface whose edges all pair up
+ * passes (flipped triangles make the triangles' volume wrong, not the
+ * grid's), and one with open edges is refused with the first of them. A
+ * surface closed but for T-junctions or cracks narrower than a voxel
+ * holds its volume and passes. */
 
 typedef struct edge_rec {
     float a[3], b[3]; /* a before b, lexicographically */
@@ -388,7 +389,7 @@ static fm_status check_closed(const char *path, const char *what, const mesh *m,
         lo[i % 3] = fmin(lo[i % 3], m->pts[i]);
         hi[i % 3] = fmax(hi[i % 3], m->pts[i]);
     }
-    double enclosed = 0, area = 0;
+    double enclosed = 0;
     for (size_t t = 0; t < m->n; t++) {
         double p[3][3];
         for (int j = 0; j < 3; j++)
@@ -397,21 +398,17 @@ static fm_status check_closed(const char *path, const char *what, const mesh *m,
                              p[1][2] * p[2][0] - p[1][0] * p[2][2],
                              p[1][0] * p[2][1] - p[1][1] * p[2][0]};
         enclosed += (p[0][0] * c[0] + p[0][1] * c[1] + p[0][2] * c[2]) / 6;
-        const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
-        const double w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-        area += 0.5 * sqrt(pow(u[1] * w[2] - u[2] * w[1], 2) + pow(u[2] * w[0] - u[0] * w[2], 2) +
-                           pow(u[0] * w[1] - u[1] * w[0], 2));
     }
     enclosed = fabs(enclosed);
     const double h = fm_vdb_voxel(v), held = fm_vdb_volume(v);
-    if (held >= 0.5 * enclosed && held <= 2 * enclosed && held >= 2 * area * h) return FM_OK;
+    if (held >= 0.5 * enclosed && held <= 2 * enclosed && held >= h * h * h) return FM_OK;
     edge_rec first = {{0, 0, 0}, {0, 0, 0}, 0};
     const size_t open = open_edges(m, &first);
     if (open == (size_t)-1)
         return fm_error_set(err, FM_ERR_LIMIT, "out of memory checking the STL %s %s", what,
                             path);
     if (open == 0) {
-        if (held >= h * h * h) return FM_OK; /* closed, and thin for its area */
+        if (held >= h * h * h) return FM_OK; /* closed: the winding is off, not the grid */
         return fm_error_set(err, FM_ERR_INPUT,
                             "the STL %s %s encloses no volume at %g mm voxels (its triangles "
                             "enclose %.3g mm^3): a %s must be a solid",
