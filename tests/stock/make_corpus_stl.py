@@ -3,7 +3,7 @@
 tiny valid meshes (a tetrahedron and a cube, binary and ASCII, a binary file whose
 header starts with "solid") and malformed files (wrong triangle count, truncated,
 NaN and huge coordinates, a quad facet, no endsolid, no triangles, a degenerate
-triangle). Run from anywhere: python3 tests/stock/make_corpus_stl.py"""
+triangle, a cube without its top face: an open surface, refused where its open edges are). Run from anywhere: python3 tests/stock/make_corpus_stl.py"""
 import os
 import struct
 
@@ -68,6 +68,8 @@ def main():
         "quad_facet.stl": ascii(TETRA[:1]).replace(b"  endloop", b"   vertex 1 1 0\n  endloop"),
         "bad_number.stl": ascii(TETRA[:1]).replace(b"vertex 0 4 0", b"vertex 0 4e 0x"),
         "degenerate.stl": ascii([((0, 0, 0), (5, 5, 5), (10, 10, 10))]),
+        "open_cube_ascii.stl": ascii(CUBE[:2] + CUBE[4:], "open"),
+        "open_cube_bin.stl": binary(CUBE[:2] + CUBE[4:]),
         "not_stl.txt": b"hello, this is not an STL file\n",
     }
     for name, data in files.items():
