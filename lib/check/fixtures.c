@@ -183,6 +183,19 @@ done:
     return st;
 }
 
+static fm_status add_stl(fm_check *c, const char *path, const char *what, double voxel_mm,
+                         fm_error *err)
+{
+    check_fixture *fx = new_fixture(c, path, err);
+    if (!fx) return err ? err->code : FM_ERR_INPUT;
+    fm_stock_options so;
+    grid_options(c, voxel_mm, &so);
+    fx->grid = fm_stock_new_from_stl_named(path, what, &so, err);
+    if (!fx->grid) return err ? err->code : FM_ERR_INPUT;
+    c->fixture_count++;
+    return FM_OK;
+}
+
 /* Where the tool can go, seen from the link frame_up table axes nearer
  * the base: the region's bounding ball turned about the inner table axes'
  * lines by any angle, innermost first (x_link = R_{j+1} ... R_n
@@ -242,7 +255,7 @@ fm_status fm_check_add_component(fm_check *c, int i, double voxel_mm, fm_error *
     }
     size_t before = c->fixture_count;
     fm_status st = hf ? fm_check_add_fixture_hf(c, path, NULL, voxel_mm, err)
-                      : fm_check_add_fixture_stl(c, path, voxel_mm, err);
+                      : add_stl(c, path, "machine component", voxel_mm, err);
     c->have_region = had_region;
     memcpy(c->region_lo, keep_lo, sizeof keep_lo);
     memcpy(c->region_hi, keep_hi, sizeof keep_hi);
@@ -256,12 +269,5 @@ fm_status fm_check_add_component(fm_check *c, int i, double voxel_mm, fm_error *
 
 fm_status fm_check_add_fixture_stl(fm_check *c, const char *path, double voxel_mm, fm_error *err)
 {
-    check_fixture *fx = new_fixture(c, path, err);
-    if (!fx) return err ? err->code : FM_ERR_INPUT;
-    fm_stock_options so;
-    grid_options(c, voxel_mm, &so);
-    fx->grid = fm_stock_new_from_stl(path, &so, err);
-    if (!fx->grid) return err ? err->code : FM_ERR_INPUT;
-    c->fixture_count++;
-    return FM_OK;
+    return add_stl(c, path, "fixture", voxel_mm, err);
 }

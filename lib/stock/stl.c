@@ -619,11 +619,17 @@ out:
     return grid;
 }
 
-fm_stock *fm_stock_new_from_stl(const char *path, const fm_stock_options *opt_in, fm_error *err)
+fm_stock *fm_stock_new_from_stl_named(const char *path, const char *what,
+                                      const fm_stock_options *opt_in, fm_error *err)
 {
     fm_stock_options opt;
     if (fm_stock_options_resolve(opt_in, &opt, err)) return NULL;
     const double origin[3] = {0, 0, 0};
-    fm_vdb *v = fm_stl_to_vdb(path, &opt, origin, "stock", err);
+    fm_vdb *v = fm_stl_to_vdb(path, &opt, origin, what ? what : "stock", err);
     return v ? fm_stock_wrap(v, &opt, err) : NULL;
+}
+
+fm_stock *fm_stock_new_from_stl(const char *path, const fm_stock_options *opt, fm_error *err)
+{
+    return fm_stock_new_from_stl_named(path, "stock", opt, err);
 }

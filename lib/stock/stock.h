@@ -46,8 +46,13 @@ fm_stock *fm_stock_new_cylinder(double x, double y, double z0, double z1, double
  * leaves the interval pass finds. */
 fm_stock *fm_stock_new_from_field(const fm_field *field, const fm_stock_options *opt,
                                   fm_error *err);
-/* Binary or ASCII STL of a closed mesh (cast or pre-machined stock). */
+/* Binary or ASCII STL of a closed mesh (cast or pre-machined stock). An
+ * open surface is refused (FM_ERR_INPUT) with its first open edge. The
+ * _named form says what the solid is in its errors ("fixture", ...; the
+ * first says "stock"). */
 fm_stock *fm_stock_new_from_stl(const char *path, const fm_stock_options *opt, fm_error *err);
+fm_stock *fm_stock_new_from_stl_named(const char *path, const char *what,
+                                      const fm_stock_options *opt, fm_error *err);
 /* A snapshot written by fm_stock_save (never a file a network client sent).
  * opt supplies the budget and threads; voxel and band come from the file. */
 fm_stock *fm_stock_load_vdb(const char *path, const fm_stock_options *opt, fm_error *err);

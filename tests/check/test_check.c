@@ -21,6 +21,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "check/check.h"
 #include "job.h"
@@ -333,6 +334,87 @@ static void test_fixture_clamp(void)
                fm_check_fixture_distance(c, q), exact);
     }
     fm_check_free(c);
+}
+
+/* A clamp block given as an STL mesh: [-20, -10] x [20, 40] x [0, 20] beside
+ * a 100 x 60 x 30 block. The tool comes down at x = -30 (its side at -27,
+ * clear) to Z15 and rapids to x = -5 (its side at -8 and -2, between the
+ * clamp and the stock) through the clamp: line 5. The deepest point of the
+ * tool in the clamp is its tip face over the clamp's middle (x = -15, y =
+ * 30), 5 mm from the clamp's top and from its ends (D = 5). The same block
+ * without its top face is no solid: before the closedness check it became
+ * its band's shell and the rapid met only that; now the fixture is refused
+ * where its open edges are. */
+static void write_box_stl(const char *path, const double lo[3], const double hi[3], int no_top)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) return;
+    /* corners with bit 0 = x, 1 = y, 2 = z; each face wound outward */
+    static const int q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    fprintf(f, "solid clamp\n");
+    for (int k = 0; k < 6; k++) {
+        if (no_top && k == 1) continue;
+        const int t[2][3] = {{q[k][0], q[k][1], q[k][2]}, {q[k][0], q[k][2], q[k][3]}};
+        for (int j = 0; j < 2; j++) {
+            fprintf(f, "facet normal 0 0 0\nouter loop\n");
+            for (int v = 0; v < 3; v++) {
+                const int c = t[j][v];
+                fprintf(f, "vertex %g %g %g\n", c & 1 ? hi[0] : lo[0], c & 2 ? hi[1] : lo[1],
+                        c & 4 ? hi[2] : lo[2]);
+            }
+            fprintf(f, "endloop\nendfacet\n");
+        }
+    }
+    fprintf(f, "endsolid clamp\n");
+    fclose(f);
+}
+
+static void test_fixture_stl(void)
+{
+    const double lo[3] = {0, 0, 0}, hi[3] = {100, 60, 30};
+    const double clo[3] = {-20, 20, 0}, chi[3] = {-10, 40, 20};
+    const char *prog = "G21 G90\nG0 Z60\nG0 X-30 Y30\nG0 Z15\nG0 X-5\nG0 Z60\n";
+    char path[64];
+    snprintf(path, sizeof path, "/tmp/fm-check-clamp-%d.stl", (int)getpid());
+    write_box_stl(path, clo, chi, 0);
+    fm_check_options opt;
+    fm_check_options_default(&opt);
+    opt.machine.start[2] = 60;
+    fm_check *c = check_program(prog, lo, hi, flat_tool(20, 40, 1), &opt, path);
+    if (c) {
+        dump(c);
+        CHECK(fm_check_count(c) == 1);
+        const fm_check_finding *f = fm_check_get(c, 0);
+        if (f) {
+            CHECK(f->kind == FM_CHECK_FIXTURE_CONTACT);
+            CHECK(f->part == FM_CHECK_PART_FLUTES);
+            CHECK(f->line == 5);
+            CHECK(f->fixture == 0);
+            const double D = 5;
+            CHECK(f->penetration_mm >= D - voxel * sqrt(3) / 2 - voxel);
+            CHECK(f->penetration_mm <= D + grid_exact);
+        }
+        fm_check_free(c);
+    }
+    write_box_stl(path, clo, chi, 1);
+    fm_check_options_default(&opt);
+    fm_error err;
+    fm_error_clear(&err);
+    c = fm_check_new(&opt, &err);
+    CHECK(c != NULL);
+    if (c) {
+        CHECK(fm_check_add_fixture_stl(c, path, voxel, &err) == FM_ERR_INPUT);
+        CHECK_STR_CONTAINS(err.message, "the STL fixture");
+        CHECK_STR_CONTAINS(err.message, "is not a closed surface: 4 of its edges");
+        /* the first open edge is in the y = lo face's second triangle, the
+         * fourth written, whose facet starts on line 2 + 7 * 3 */
+        CHECK(err.line == 23);
+        printf("refusal: %s\n", err.message);
+        CHECK(fm_check_fixture_count(c) == 0);
+        fm_check_free(c);
+    }
+    remove(path);
 }
 
 /* Start inside the stock: the default start is the machine origin, here
@@ -813,6 +895,7 @@ int main(int argc, char **argv)
     if (wanted(argc, argv, "holder_face")) test_holder_face();
     if (wanted(argc, argv, "fixture_scaled")) test_fixture_scaled();
     if (wanted(argc, argv, "fixture")) test_fixture_clamp();
+    if (wanted(argc, argv, "fixture_stl")) test_fixture_stl();
     if (wanted(argc, argv, "start")) test_start_in_stock();
     if (wanted(argc, argv, "spindle_plunge_travel")) test_spindle_plunge_travel();
     if (wanted(argc, argv, "rotary_travel")) test_rotary_travel();

@@ -5,7 +5,8 @@ end mill (a raster and a contour pass whose tool centres stay 3 mm inside the
 pocket's walls, so the walls are the design's and only the floor is 0.2 mm too
 deep). The job's report (and /report) carries "design" with max_gouge_mm = 0.2
 within half a voxel, the gouge in the pocket; a design naming a file on the
-server is refused (400 bad_design); options.stop_at stops after a line and
+server is refused (400 bad_design), an open one (a pocket wall left out) fails
+its job saying where its open edges are; options.stop_at stops after a line and
 options.tolerance reaches the comparison (the default is half a voxel, 0.05).
 Usage: test_design.py FREPMILLD FREPMILL"""
 import base64
@@ -64,9 +65,10 @@ def quad(tris, a, b, c, d, normal):
     tris.append((normal, a, c, d))
 
 
-def pocket_block_stl():
+def pocket_block_stl(open_wall=False):
     """Binary STL of [0,40]^2 x [-5,0] minus the pocket [10,30]^2 x [-1,0]:
-    closed, every edge shared by two triangles."""
+    closed, every edge shared by two triangles; open_wall leaves out the
+    pocket's last wall (its four edges then bound one triangle each)."""
     t = []
     z0, z1, zf = -5.0, 0.0, DESIGN_FLOOR
     quad(t, [0, 0, z0], [40, 0, z0], [40, 40, z0], [0, 40, z0], [0, 0, -1])
@@ -84,7 +86,8 @@ def pocket_block_stl():
     quad(t, [10, 10, zf], [30, 10, zf], [30, 10, z1], [10, 10, z1], [0, 1, 0])
     quad(t, [30, 10, zf], [30, 30, zf], [30, 30, z1], [30, 10, z1], [-1, 0, 0])
     quad(t, [30, 30, zf], [10, 30, zf], [10, 30, z1], [30, 30, z1], [0, -1, 0])
-    quad(t, [10, 30, zf], [10, 10, zf], [10, 10, z1], [10, 30, z1], [1, 0, 0])
+    if not open_wall:
+        quad(t, [10, 30, zf], [10, 10, zf], [10, 10, z1], [10, 30, z1], [1, 0, 0])
     out = bytearray(b"frepmill test design: a block with a pocket".ljust(80, b" "))
     out += struct.pack("<I", len(t))
     for n, a, b, c in t:
@@ -105,6 +108,23 @@ def main():
                                    "--data-binary", json.dumps(bad), d.url + "/v1/jobs")
             check(code == 400 and body.get("error", {}).get("code") == "bad_design",
                   "a design naming a server file is refused (%d, %s)" % (code, body))
+
+            # an open surface is no part: refused with its open edges, not
+            # compared as the band's shell
+            leaky = dict(job, design={"stl_base64": base64.b64encode(
+                pocket_block_stl(open_wall=True)).decode()})
+            job_id = submit(d.url, leaky, tmp)
+            status = wait_state(d.url, job_id, ("done", "failed", "cancelled"), 600)
+            msg = (status.get("error") or {}).get("message", "")
+            # about the box's centre (20, 20, -2.5) the triangles enclose the
+            # part, 40 x 40 x 5 - 20 x 20 x 1, and the missing wall's pyramid
+            # (20 x 1 mm at 10 mm): it no longer takes 200 / 3 off
+            enclosed = "enclose %.1f mm^3" % (40 * 40 * 5 - 20 * 20 * 1 + 20 * 1 * 10 / 3)
+            check(status["state"] == "failed"
+                  and "is not a closed surface: 4 of its edges bound one triangle only" in msg
+                  and enclosed in msg,
+                  "an open design fails its job with its open edges and volume (%s: %s)"
+                  % (status["state"], msg))
 
             job_id = submit(d.url, job, tmp)
             status = wait_state(d.url, job_id, ("done", "failed", "cancelled"), 600)
