@@ -15,9 +15,15 @@
 #include <string.h>
 #include <sys/stat.h>
 
-/* Bytes held per triangle while converting: our floats and indices, and
- * the bridge's copies of both. */
-#define BYTES_PER_TRIANGLE (9 * 4 + 2 * 4 + 3 * 4 + 9 * 4 + 3 * 4)
+/* Bytes held per triangle at the peak, beside the grid: our floats and an
+ * ASCII facet's line, and then either our indices and the bridge's copies
+ * of floats and indices (converting) or three edge records (checking that
+ * the surface is closed, after the indices are freed). */
+#define EDGE_RECORD_BYTES 28
+#define CONVERT_BYTES (3 * 4 + 9 * 4 + 3 * 4)
+#define CHECK_BYTES (3 * EDGE_RECORD_BYTES)
+#define BYTES_PER_TRIANGLE                                                                       \
+    (9 * 4 + 2 * 4 + (CONVERT_BYTES > CHECK_BYTES ? CONVERT_BYTES : CHECK_BYTES))
 
 typedef struct mesh {
     float *pts;     /* 9 per triangle */
@@ -341,6 +347,7 @@ typedef struct edge_rec {
     float a[3], b[3]; /* a before b, lexicographically */
     uint32_t tri;
 } edge_rec;
+_Static_assert(sizeof(edge_rec) == EDGE_RECORD_BYTES, "the budget counts edge records");
 
 static int cmp_point(const float *p, const float *q)
 {
@@ -606,6 +613,8 @@ fm_vdb *fm_stl_to_vdb(const char *path, const fm_stock_options *opt_in, const do
         fm_vdb_free(v);
         goto out;
     }
+    free(tris);
+    tris = NULL;
     if (check_closed(path, what, &m, v, err)) {
         fm_vdb_free(v);
         goto out;
