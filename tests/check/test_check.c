@@ -284,6 +284,26 @@ static void test_fixture_scaled(void)
     fm_check_free(c);
 }
 
+
+/* The one finding of a rapid through fixture 0: the flutes on the given
+ * line, D deep (the exact depth; the grid reads it at most half a voxel's
+ * diagonal and a voxel short, never over, but for float rounding). */
+static const fm_check_finding *one_fixture_contact(const fm_check *c, int line, double D)
+{
+    dump(c);
+    CHECK(fm_check_count(c) == 1);
+    const fm_check_finding *f = fm_check_get(c, 0);
+    if (!f) return NULL;
+    CHECK(f->kind == FM_CHECK_FIXTURE_CONTACT);
+    CHECK(f->part == FM_CHECK_PART_FLUTES);
+    CHECK(f->severity == FM_CHECK_ERROR);
+    CHECK(f->line == line);
+    CHECK(f->fixture == 0);
+    CHECK(f->penetration_mm >= D - voxel * sqrt(3) / 2 - voxel);
+    CHECK(f->penetration_mm <= D + grid_exact);
+    return f;
+}
+
 /* examples/clamp.hf: a rapid at Z35 along y = 30 crosses the strap (z
  * 30..40, x -35..10), the bolt (radius 5 about (-12, 30), up to z 52) and
  * the nut (radius 9, z 40..48). The deepest point of the flutes (radius 3,
@@ -312,20 +332,8 @@ static void test_fixture_clamp(void)
     opt.machine.start[2] = 60;
     fm_check *c = check_program(prog, lo, hi, flat_tool(20, 40, 1), &opt, "../examples/clamp.hf");
     if (!c) return;
-    dump(c);
-    CHECK(fm_check_count(c) == 1);
-    const fm_check_finding *f = fm_check_get(c, 0);
-    if (f) {
-        CHECK(f->kind == FM_CHECK_FIXTURE_CONTACT);
-        CHECK(f->part == FM_CHECK_PART_FLUTES);
-        CHECK(f->severity == FM_CHECK_ERROR);
-        CHECK(f->line == 5);
-        CHECK(f->fixture == 0);
-        const double D = 8.151;
-        CHECK(f->penetration_mm >= D - voxel * sqrt(3) / 2 - voxel);
-        CHECK(f->penetration_mm <= D + grid_exact);
-        CHECK_NEAR(f->position[0], -38.0, 0.01);
-    }
+    const fm_check_finding *f = one_fixture_contact(c, 5, 8.151);
+    if (f) CHECK_NEAR(f->position[0], -38.0, 0.01);
     /* for the record: the fixture's grid against the exact distance */
     for (double z = 40.5; z <= 43.01; z += 0.5) {
         const double q[3] = {-12, 30, z};
@@ -383,18 +391,7 @@ static void test_fixture_stl(void)
     opt.machine.start[2] = 60;
     fm_check *c = check_program(prog, lo, hi, flat_tool(20, 40, 1), &opt, path);
     if (c) {
-        dump(c);
-        CHECK(fm_check_count(c) == 1);
-        const fm_check_finding *f = fm_check_get(c, 0);
-        if (f) {
-            CHECK(f->kind == FM_CHECK_FIXTURE_CONTACT);
-            CHECK(f->part == FM_CHECK_PART_FLUTES);
-            CHECK(f->line == 5);
-            CHECK(f->fixture == 0);
-            const double D = 5;
-            CHECK(f->penetration_mm >= D - voxel * sqrt(3) / 2 - voxel);
-            CHECK(f->penetration_mm <= D + grid_exact);
-        }
+        one_fixture_contact(c, 5, 5);
         fm_check_free(c);
     }
     write_box_stl(path, clo, chi, 1);
