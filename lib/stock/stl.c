@@ -363,7 +363,7 @@ static int cmp_edge_rec(const void *x, const void *y)
     return c ? c : cmp_point(e->b, f->b);
 }
 
-/* Edges used by one triangle only (endpoints matched bit for bit); *first
+/* Edges used by one triangle only (endpoints matched exactly); *first
  * gets the one in the earliest triangle. (size_t)-1 when out of memory. */
 static size_t open_edges(const mesh *m, edge_rec *first)
 {
