@@ -6,7 +6,7 @@
  * fuzz_stl, a zero-area triangle, tiny triangles far apart) and
  * coordinates beyond the grid's index range; open surfaces (as stock and
  * as design) are refused where their first open edge is, and closed ones
- * pass however their triangles are wound. */
+ * pass however their triangles are wound, with a T-junction too. */
 #include "stock/stock.h"
 #include "test.h"
 
@@ -249,6 +249,24 @@ static void test_open_surfaces(void)
     snprintf(p, sizeof p, "%s/one_triangle.stl", dir);
     write_binary(p, t, 1, 0);
     refused(p, FM_ERR_INPUT, "3 of its edges bound one triangle only", 0);
+    /* closed but with a T-junction: the top face split at the middle of its
+     * edge along y = lo, which the y = lo face does not share (three edges
+     * without a twin), holds its volume and passes */
+    {
+        tri tj[16];
+        int k = 0;
+        for (int i = 0; i < n; i++)
+            if (i != 2 && i != 3) tj[k++] = t[i];
+        const float x0 = (float)lo[0], x1 = (float)hi[0], y0 = (float)lo[1], y1 = (float)hi[1],
+                    z1 = (float)hi[2], xm = (float)((lo[0] + hi[0]) / 2);
+        const float top[3][9] = {{x0, y0, z1, xm, y0, z1, x0, y1, z1},
+                                 {xm, y0, z1, x1, y0, z1, x1, y1, z1},
+                                 {xm, y0, z1, x1, y1, z1, x0, y1, z1}};
+        for (int i = 0; i < 3; i++) memcpy(tj[k++].v, top[i], sizeof top[i]);
+        snprintf(p, sizeof p, "%s/t_junction.stl", dir);
+        write_binary(p, tj, k, 0);
+        check_volume(p, (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]), 0.001);
+    }
     /* closed, every other triangle wound inward: the triangles' volume is
      * off (their edges are checked), the grid's is not; it passes, whole */
     for (int i = 1; i < n; i += 2) {
