@@ -26,6 +26,7 @@
 #include "check/check.h"
 #include "job.h"
 #include "test.h"
+#include "test_stl.h"
 
 /* A 6 mm flat end mill: flutes 0..flute, shank up to length (6 mm
  * diameter, as the cutter), a 20 mm holder 30 mm long above it. */
@@ -353,31 +354,6 @@ static void test_fixture_clamp(void)
  * without its top face is no solid: before the closedness check it became
  * its band's shell and the rapid met only that; now the fixture is refused
  * where its open edges are. */
-static void write_box_stl(const char *path, const double lo[3], const double hi[3], int no_top)
-{
-    FILE *f = fopen(path, "w");
-    if (!f) return;
-    /* corners with bit 0 = x, 1 = y, 2 = z; each face wound outward */
-    static const int q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    fprintf(f, "solid clamp\n");
-    for (int k = 0; k < 6; k++) {
-        if (no_top && k == 1) continue;
-        const int t[2][3] = {{q[k][0], q[k][1], q[k][2]}, {q[k][0], q[k][2], q[k][3]}};
-        for (int j = 0; j < 2; j++) {
-            fprintf(f, "facet normal 0 0 0\nouter loop\n");
-            for (int v = 0; v < 3; v++) {
-                const int c = t[j][v];
-                fprintf(f, "vertex %g %g %g\n", c & 1 ? hi[0] : lo[0], c & 2 ? hi[1] : lo[1],
-                        c & 4 ? hi[2] : lo[2]);
-            }
-            fprintf(f, "endloop\nendfacet\n");
-        }
-    }
-    fprintf(f, "endsolid clamp\n");
-    fclose(f);
-}
-
 static void test_fixture_stl(void)
 {
     const double lo[3] = {0, 0, 0}, hi[3] = {100, 60, 30};
@@ -385,7 +361,7 @@ static void test_fixture_stl(void)
     const char *prog = "G21 G90\nG0 Z60\nG0 X-30 Y30\nG0 Z15\nG0 X-5\nG0 Z60\n";
     char path[64];
     snprintf(path, sizeof path, "/tmp/fm-check-clamp-%d.stl", (int)getpid());
-    write_box_stl(path, clo, chi, 0);
+    CHECK(fm_test_write_box_stl(path, clo, chi, FM_TEST_BOX_NO_FACE) == 0);
     fm_check_options opt;
     fm_check_options_default(&opt);
     opt.machine.start[2] = 60;
@@ -394,7 +370,7 @@ static void test_fixture_stl(void)
         one_fixture_contact(c, 5, 5);
         fm_check_free(c);
     }
-    write_box_stl(path, clo, chi, 1);
+    CHECK(fm_test_write_box_stl(path, clo, chi, FM_TEST_BOX_TOP) == 0);
     fm_check_options_default(&opt);
     fm_error err;
     fm_error_clear(&err);

@@ -12,6 +12,7 @@
 
 #include "job.h"
 #include "test.h"
+#include "test_stl.h"
 #include "toolpaths/tooltable/tooltable.h"
 
 #define PI 3.14159265358979323846
@@ -59,37 +60,6 @@ static double disc_strip(double r, double w)
     return 2 * (w * sqrt(r * r - w * w) + r * r * asin(w / r));
 }
 
-/* A closed box [lo, hi] as 12 ASCII STL facets, outward normals. */
-static int write_box_stl(const char *path, const double lo[3], const double hi[3])
-{
-    FILE *f = fopen(path, "w");
-    if (!f) return -1;
-    /* Each face: the axis, the side and two triangles over its corners
-     * (corner bits: x, y, z from lo (0) or hi (1)), counter-clockwise seen
-     * from outside. */
-    static const int faces[6][6] = {
-        {0, 2, 6, 0, 6, 4}, /* x = lo */
-        {1, 5, 7, 1, 7, 3}, /* x = hi */
-        {0, 4, 5, 0, 5, 1}, /* y = lo */
-        {2, 3, 7, 2, 7, 6}, /* y = hi */
-        {0, 1, 3, 0, 3, 2}, /* z = lo */
-        {4, 6, 7, 4, 7, 5}, /* z = hi */
-    };
-    fprintf(f, "solid box\n");
-    for (int i = 0; i < 6; i++)
-        for (int t = 0; t < 2; t++) {
-            fprintf(f, "facet normal 0 0 0\nouter loop\n");
-            for (int v = 0; v < 3; v++) {
-                int c = faces[i][3 * t + v];
-                fprintf(f, "vertex %.9g %.9g %.9g\n", c & 1 ? hi[0] : lo[0], c & 2 ? hi[1] : lo[1],
-                        c & 4 ? hi[2] : lo[2]);
-            }
-            fprintf(f, "endloop\nendfacet\n");
-        }
-    fprintf(f, "endsolid box\n");
-    return fclose(f);
-}
-
 int main(void)
 {
     fm_error err;
@@ -121,7 +91,7 @@ int main(void)
     snprintf(stl, sizeof stl, "%s/box.stl", dir);
     snprintf(vdb, sizeof vdb, "%s/after.vdb", dir);
     const double lo[3] = {0, 0, -10}, hi[3] = {40, 30, 0};
-    CHECK(write_box_stl(stl, lo, hi) == 0);
+    CHECK(fm_test_write_box_stl(stl, lo, hi, FM_TEST_BOX_NO_FACE) == 0);
     const double slot = (20 * 6 + PI * 9) * 3;
     if (run("G21 G90 T1 M6 S10000 M3\nG0 X10 Y10 Z5\nG1 Z-3 F300\nG1 X30 F800\nG0 Z5\nM2\n", stl, &r) == 0) {
         check_rel("stl box: initial volume", r.initial_volume_mm3, 40 * 30 * 10, CLAIMED);
