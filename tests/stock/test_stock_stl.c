@@ -278,6 +278,13 @@ static void test_open_surfaces(void)
     snprintf(p, sizeof p, "%s/flipped.stl", dir);
     write_binary(p, t, n, 0);
     check_volume(p, (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]), 0.001);
+    /* closed, but a 0.02 mm cube at 0.1 mm voxels: no voxel centre lies
+     * inside it, so the grid holds nothing of it */
+    const double tlo[3] = {0.01, 0.01, 0.01}, thi[3] = {0.03, 0.03, 0.03};
+    n = box_tris(tlo, thi, t);
+    snprintf(p, sizeof p, "%s/speck.stl", dir);
+    write_binary(p, t, n, 0);
+    refused(p, FM_ERR_INPUT, "encloses no volume at 0.1 mm voxels", 0);
     /* closed and thin: a 0.3 mm plate, three voxels at 0.1 mm */
     const double plo[3] = {0.05, 0.05, 0.05}, phi[3] = {10.05, 10.05, 0.35};
     n = box_tris(plo, phi, t);
