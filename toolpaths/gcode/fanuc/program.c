@@ -1,4 +1,4 @@
-/* gcode_fanuc.c: running a program in the Fanuc/Haas dialect: the programs
+/* program.c: running a program in the Fanuc/Haas dialect: the programs
  * of a text (from an O number, or the text's start, to the next O number or
  * '%'), the line loop (tape '%', block delete '/', sequence numbers N, the
  * program's own O line), macro statements (#i = expression, IF [..] GOTO n,
@@ -9,7 +9,7 @@
  * Called programs are looked up in the texts loaded so far, then as files
  * O<number>.nc, .ngc or .tap in the program's folder and on the subroutine
  * path. */
-#include "gcode_fanuc.h"
+#include "fanuc.h"
 
 #include <errno.h>
 #include <math.h>
@@ -22,8 +22,8 @@
 
 static void use_text(gc_interp *g, int t)
 {
-    const gc_fanuc_text *x = &g->fanuc->texts[t];
-    g->fanuc->cur_text = t;
+    const gc_fanuc_text *x = &FANUC(g)->texts[t];
+    FANUC(g)->cur_text = t;
     g->text = x->text;
     g->len = x->len;
     g->line_start = x->line_start;
@@ -53,7 +53,7 @@ static raw_kind classify(const char *t, size_t i, size_t e, long *number)
 
 static fm_status add_program(gc_interp *g, long number, int text, size_t first)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     if (f->nprograms == f->capprograms) {
         int cap = f->capprograms ? f->capprograms * 2 : 8;
         if (cap > 100000)
@@ -75,7 +75,7 @@ static fm_status add_program(gc_interp *g, long number, int text, size_t first)
 /* Programs of text t; *first_program: the index of its first. */
 static fm_status index_text(gc_interp *g, int t, int *first_program)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     const gc_fanuc_text *x = &f->texts[t];
     int open = -1; /* the program being extended, or -1 */
     *first_program = f->nprograms;
@@ -134,7 +134,7 @@ static int is_file(const char *path)
 /* Read a subprogram file as a new text. */
 static fm_status load_text(gc_interp *g, const char *path, int col, int *text)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     if (f->ntexts >= GC_FANUC_MAX_TEXTS)
         return gc_fail(g, FM_ERR_LIMIT, col, "more than %d subprogram files", GC_FANUC_MAX_TEXTS - 1);
     FILE *fp = fopen(path, "rb");
@@ -195,7 +195,7 @@ static fm_status load_text(gc_interp *g, const char *path, int col, int *text)
 /* O<number> in the texts loaded so far, else a file on the search path. */
 static fm_status locate_program(gc_interp *g, long number, const char *call, int col, int *program)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     int pi = find_program(f, number);
     if (pi >= 0) {
         *program = pi;
@@ -259,7 +259,7 @@ static int seq_cmp(const void *a, const void *b)
 /* The line of N<n> in program pi (the first if there are several). */
 static fm_status find_sequence(gc_interp *g, int pi, long n, const char *what, int col, size_t *line)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     gc_fanuc_program *p = &f->programs[pi];
     const gc_fanuc_text *x = &f->texts[p->text];
     if (!p->seq_built) {
@@ -323,13 +323,13 @@ static fm_status count_iteration(gc_interp *g, int col)
 static void jump(gc_interp *g, size_t line)
 {
     g->cur = line;
-    g->fanuc->jumped = 1;
+    FANUC(g)->jumped = 1;
 }
 
 fm_status gc_fanuc_call(gc_interp *g, gc_call_kind kind, long number, long repeats,
                         const double args[GC_FANUC_LOCALS], int col)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     char call[48];
     snprintf(call, sizeof call, "%s P%ld", kind == GC_CALL_G65 ? "G65" : kind == GC_CALL_M97
                                                                           ? "M97" : "M98", number);
@@ -377,7 +377,7 @@ fm_status gc_fanuc_call(gc_interp *g, gc_call_kind kind, long number, long repea
 
 fm_status gc_fanuc_return(gc_interp *g, int has_p, long p, int col)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     fm_status st;
     size_t line;
     if (f->nframes == 0) {
@@ -482,7 +482,7 @@ static int loop_statement(gc_interp *g, size_t idx, int *m)
  * scan runs once per line; later turns of the loop read the answer. */
 static fm_status loop_target(gc_interp *g, int m, int dir, int col, size_t *to)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     gc_fanuc_text *x = &f->texts[f->cur_text];
     if (!x->loop_jump) {
         x->loop_jump = calloc(x->nlines + 1, sizeof *x->loop_jump);
@@ -569,7 +569,7 @@ static fm_status go_to(gc_interp *g, size_t p, int col)
         return gc_fail(g, FM_ERR_INPUT, col, "GOTO %g: expected a sequence number", v);
     size_t line;
     if ((st = count_iteration(g, col))) return st;
-    if ((st = find_sequence(g, g->fanuc->cur_program, (long)v, "GOTO", col, &line))) return st;
+    if ((st = find_sequence(g, FANUC(g)->cur_program, (long)v, "GOTO", col, &line))) return st;
     jump(g, line);
     return FM_OK;
 }
@@ -662,9 +662,9 @@ static int macro_statement(gc_interp *g, size_t p, fm_status *st)
 
 /* ---- the line loop ---- */
 
-fm_status gc_fanuc_run(gc_interp *g)
+static fm_status fanuc_run(gc_interp *g)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     fm_status st = FM_OK;
     gc_fanuc_block *fb = malloc(sizeof *fb);
     if (!fb) return fm_error_set(g->err, FM_ERR_LIMIT, "out of memory");
@@ -765,11 +765,11 @@ out:
     return st;
 }
 
-fm_status gc_fanuc_init(gc_interp *g)
+static fm_status fanuc_init(gc_interp *g)
 {
     gc_fanuc *f = calloc(1, sizeof *f);
     if (!f) return fm_error_set(g->err, FM_ERR_LIMIT, "out of memory");
-    g->fanuc = f;
+    g->dialect = f;
     for (int l = 0; l < GC_FANUC_LEVELS; l++)
         for (int i = 0; i < GC_FANUC_LOCALS; i++) f->locals[l][i] = GC_VACANT;
     for (size_t i = 0; i < sizeof f->common / sizeof f->common[0]; i++) f->common[i] = GC_VACANT;
@@ -798,9 +798,9 @@ fm_status gc_fanuc_init(gc_interp *g)
     return FM_OK;
 }
 
-void gc_fanuc_free(gc_interp *g)
+static void fanuc_release(gc_interp *g)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     if (!f) return;
     free(f->texts[0].loop_jump);
     for (int i = 1; i < f->ntexts; i++) {
@@ -812,5 +812,7 @@ void gc_fanuc_free(gc_interp *g)
     for (int i = 0; i < f->nprograms; i++) free(f->programs[i].seq);
     free(f->programs);
     free(f);
-    g->fanuc = NULL;
+    g->dialect = NULL;
 }
+
+const gc_front_end gc_fanuc_front = {"fanuc", fanuc_init, fanuc_run, fanuc_release};

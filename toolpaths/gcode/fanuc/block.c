@@ -1,10 +1,10 @@
-/* gcode_fanuc_block.c: reading a Fanuc block: its words (a vacant variable
+/* block.c: reading a Fanuc block: its words (a vacant variable
  * leaves its address out), the G codes checked against Fanuc's modal groups
  * (codes a mill has but this simulation refuses get a message saying why),
  * G65's arguments A-Z into #1-#26 by Fanuc's argument specification I, and
  * which numbers were written without a decimal point (gcode_fanuc_exec.c
  * reads those in the least input increment). */
-#include "gcode_fanuc.h"
+#include "fanuc.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -97,7 +97,7 @@ static double argument_increment(const gc_interp *g, char c)
 
 fm_status gc_fanuc_parse_block(gc_interp *g, size_t p, gc_fanuc_block *fb)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     gc_block *b = &fb->b;
     const gc_line *ln = &g->ln;
     const char *s = ln->s;

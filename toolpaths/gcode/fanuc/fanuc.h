@@ -1,21 +1,21 @@
-/* gcode_fanuc.h: the Fanuc/Haas dialect's state and the functions its files
- * share. Private to toolpaths/gcode. The dialect reuses the interpreter's
- * motion output, line normalization and error helpers (gcode_internal.h) and
- * has its own reading of blocks, Macro B values, control flow and block
- * execution:
- *   gcode_fanuc.c        programs (%, O numbers, files on the search path), the
- *                        line loop, IF/GOTO/WHILE/DO/END, M98/M97/G65 calls, M99
- *   gcode_fanuc_expr.c   Macro B: numbers, [expressions], functions, variables
- *                        (#0 vacant, locals per call level, commons, system)
- *   gcode_fanuc_block.c  words of a block, Fanuc's G-code groups, the decimal
- *                        point and rounding rules of addresses
- *   gcode_fanuc_exec.c   executing a block: modal state, offsets, G68/G51/G16,
- *                        lines, arcs, dwells, G28/G30/G53
- *   gcode_fanuc_cycle.c  canned cycles G73 G74 G76 G81-G89 */
+/* fanuc.h: the Fanuc/Haas front end's state and the functions its files
+ * share; private to toolpaths/gcode/fanuc, which includes only the machine's
+ * header (machine/machine.h) and nothing of the other dialects. It reads
+ * blocks with Fanuc's decimal point rule, evaluates Macro B, runs Fanuc's
+ * control flow and tells the machine what each code means in Fanuc's table:
+ *   program.c  programs (%, O numbers, files on the search path), the line
+ *              loop, IF/GOTO/WHILE/DO/END, M98/M97/G65 calls, M99
+ *   expr.c     Macro B: numbers, [expressions], functions, variables
+ *              (#0 vacant, locals per call level, commons, system)
+ *   block.c    words of a block, Fanuc's G-code groups, the decimal point
+ *              and rounding rules of addresses
+ *   exec.c     executing a block: modal state, offsets, G68/G51/G16, lines,
+ *              arcs, dwells, G28/G30/G53
+ *   cycle.c    canned cycles G73 G74 G76 G81-G89 */
 #ifndef FM_GCODE_FANUC_H
 #define FM_GCODE_FANUC_H
 
-#include "gcode_internal.h"
+#include "toolpaths/gcode/machine/machine.h"
 
 #define GC_FANUC_LEVELS 5      /* local variable levels: main program 0, G65 calls 1-4 */
 #define GC_FANUC_MACRO_DEPTH 4 /* G65 calls nested (Fanuc's limit) */
@@ -121,10 +121,10 @@ typedef struct gc_fanuc {
     const char *alarm_text; /* #3000's message, found in the raw line */
 } gc_fanuc;
 
-/* ---- gcode_fanuc.c ---- */
-fm_status gc_fanuc_run(gc_interp *g);
-fm_status gc_fanuc_init(gc_interp *g);
-void gc_fanuc_free(gc_interp *g);
+#define FANUC(g) ((gc_fanuc *)(g)->dialect)
+
+/* ---- program.c ---- */
+extern const gc_front_end gc_fanuc_front;
 /* Subprogram and macro calls from a block (M98, M97, G65) and M99. */
 fm_status gc_fanuc_call(gc_interp *g, gc_call_kind kind, long number, long repeats,
                         const double args[GC_FANUC_LOCALS], int col);

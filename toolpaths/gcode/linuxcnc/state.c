@@ -1,7 +1,7 @@
-/* gcode_state.c: M70-M73 (saving and restoring modal state per call
+/* state.c: M70-M73 (saving and restoring modal state per call
  * level, LinuxCNC's list of what is saved) and the (debug, ...) /
  * (msg, ...) messages with LinuxCNC's parameter substitution. */
-#include "gcode_internal.h"
+#include "linuxcnc.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -45,13 +45,13 @@ static void restore_state(gc_interp *g, const gc_modal_state *s)
 
 fm_status gc_exec_modal_state(gc_interp *g, int m, int col)
 {
-    gc_frame *f = &g->frames[g->depth];
+    gc_frame *f = &LC(g)->frames[LC(g)->depth];
     switch (m) {
     case 70:
     case 73:
         save_state(g, &f->state);
         f->state_valid = 1;
-        f->state_autorestore = m == 73 && g->depth > 0;
+        f->state_autorestore = m == 73 && LC(g)->depth > 0;
         return FM_OK;
     case 71:
         f->state_valid = 0;
@@ -71,7 +71,7 @@ fm_status gc_exec_modal_state(gc_interp *g, int m, int col)
 
 fm_status gc_leave_level(gc_interp *g)
 {
-    gc_frame *f = &g->frames[g->depth];
+    gc_frame *f = &LC(g)->frames[LC(g)->depth];
     if (f->state_valid && f->state_autorestore) restore_state(g, &f->state);
     f->state_valid = f->state_autorestore = 0;
     return FM_OK;

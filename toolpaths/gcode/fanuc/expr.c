@@ -1,4 +1,4 @@
-/* gcode_fanuc_expr.c: Fanuc Custom Macro B values: numbers, [expressions]
+/* expr.c: Fanuc Custom Macro B values: numbers, [expressions]
  * with Fanuc's precedence (functions; * / AND MOD; + - OR XOR; EQ NE GT GE
  * LT LE), the functions SIN COS TAN ASIN ACOS ATAN SQRT ABS ROUND FIX FUP BIN
  * BCD LN EXP in degrees with Fanuc's output ranges and rounding, and the
@@ -7,7 +7,7 @@
  * timers, #4001-#4120 modal information, #5001.. positions, work offsets).
  * Vacancy follows Fanuc's rules: a vacant variable alone is vacant, in
  * arithmetic it is 0, and EQ/NE tell it from 0. */
-#include "gcode_fanuc.h"
+#include "fanuc.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -51,7 +51,7 @@ static double g_value(int code) { return code / 10.0; }
 /* #4001-#4022: the modal G codes of the groups Fanuc numbers 1-22. */
 static double modal_info(gc_interp *g, int group)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     switch (group) {
     case 1: return f->group1;
     case 2: return g->plane;
@@ -78,7 +78,7 @@ static double modal_info(gc_interp *g, int group)
 
 fm_status gc_fanuc_get_var(gc_interp *g, long n, int col, double *out)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     int table, axis;
     if (n == 0) {
         *out = GC_VACANT;
@@ -168,7 +168,7 @@ static fm_status alarm(gc_interp *g, double v, int col)
 
 fm_status gc_fanuc_set_var(gc_interp *g, long n, double v, int col)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     int table, axis;
     (void)table;
     if (n == 0) return bad_var(g, n, col, "#0 is always vacant; it cannot be assigned");
@@ -525,8 +525,8 @@ static fm_status read_function(gc_interp *g, const gc_line *ln, size_t *p, val *
     case F_ROUND:
         /* in an address, ROUND rounds to the address's least increment
          * (Haas: X[ROUND[#1]]); elsewhere to a whole number, half away from 0 */
-        if (g->fanuc->in_address && g->fanuc->address_increment > 0) {
-            double inc = g->fanuc->address_increment;
+        if (FANUC(g)->in_address && FANUC(g)->address_increment > 0) {
+            double inc = FANUC(g)->address_increment;
             r = gc_fanuc_round(a / inc) * inc;
         } else {
             r = gc_fanuc_round(a);

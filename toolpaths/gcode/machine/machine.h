@@ -1,20 +1,26 @@
-/* gcode_internal.h: the interpreter's state and the functions its files
- * share. Private to toolpaths/gcode. The files, by concern:
- *   gcode.c          entry points, options, loading a program, the line loop
- *   gcode_block.c    reading blocks: line normalization, words, modal groups
- *   gcode_expr.c     numbers, [expressions], functions, parameters, errors
- *   gcode_modal.c    executing a block in LinuxCNC's order: modal state, M codes
- *   gcode_motion.c   lines, arcs, dwells and canned cycles -> emitted motions
- *   gcode_offsets.c  coordinate systems (G5x, G10, G92, G53), G43, G28/G30
- *   gcode_oword.c    O-word control flow: subroutines, conditions, loops
- *   gcode_comp.c     cutter radius compensation (G40-G42.1)
- *   gcode_spline.c   G5/G5.1/G5.2 curves as exact parametric motions
- *   gcode_source.c   subroutine files on the subroutine path (o<name> call)
- *   gcode_state.c    M70-M73 saved modal state, (debug,...) messages */
-#ifndef FM_GCODE_INTERNAL_H
-#define FM_GCODE_INTERNAL_H
+/* machine.h: the one machine model every G-code dialect drives, and the
+ * public header of toolpaths/gcode/machine for the dialects' front ends
+ * (toolpaths/gcode/linuxcnc, toolpaths/gcode/fanuc). A front end reads a
+ * program (lines, words, its expression language, its control flow, its
+ * table of what each code means) and calls the machine, which keeps the
+ * modal state, units, planes, work offsets and their tables, tool length,
+ * cutter compensation, canned-cycle motions, arcs and helices, rotary axes
+ * and TCP, probing and splines, and emits motions. Nothing here knows a
+ * dialect: a front end keeps its own state in gc_interp.dialect. The files:
+ *   machine.c   the state: creating and freeing it, units, tool numbers
+ *   line.c      a normalized source line, errors at file:line:column, G names
+ *   source.c    the program's lines and those of files loaded from the path
+ *   motion.c    lines, arcs, dwells and canned cycles -> emitted motions
+ *   offsets.c   coordinate systems (G5x, G10, G92, G53), G43, G28/G30
+ *   comp.c      cutter radius compensation with LinuxCNC's geometry
+ *   spline.c    G5/G5.1/G5.2 curves as exact parametric motions
+ *   sync.c      G33/G33.1 spindle-synchronized moves, G38.x probing
+ *   rotary.c    rotary axes A B C, TCP, the joint values of each motion
+ * docs/gcode.md has the map of the front ends. */
+#ifndef FM_GCODE_MACHINE_H
+#define FM_GCODE_MACHINE_H
 
-#include "gcode.h"
+#include "toolpaths/gcode/gcode.h"
 
 #include <stddef.h>
 
@@ -107,43 +113,6 @@ typedef enum gc_plane { GC_PLANE_XY = 17, GC_PLANE_XZ = 18, GC_PLANE_YZ = 19 } g
 #define GC_SUB_PARAMS 30     /* #1 .. #30 are local to a call */
 #define GC_MAX_EXPR_DEPTH 64 /* nested brackets and parameter indirections */
 #define GC_MAX_NAME 128
-
-/* A string -> double table (named parameters). Open addressing. */
-typedef struct gc_table {
-    char **keys;
-    double *vals;
-    size_t cap, count;
-} gc_table;
-
-/* A repeat loop in progress: its label and the iterations left. */
-typedef struct gc_repeat {
-    char label[GC_MAX_NAME];
-    size_t line; /* the repeat line */
-    long left;
-} gc_repeat;
-
-/* The modal state M70/M73 save and M72 restores (LinuxCNC's list: units,
- * plane, distance modes, feed mode, coordinate system, tool length offset,
- * retract mode, F, S, spindle, coolant). */
-typedef struct gc_modal_state {
-    double unit;
-    int plane, absolute, arc_absolute, inverse_time, cs, retract_r;
-    double tlo[3];
-    double feed, speed;
-    int spindle_dir, coolant;
-} gc_modal_state;
-
-/* One O-word call in progress. */
-typedef struct gc_frame {
-    size_t return_line;            /* line index to continue at after return */
-    double saved[GC_SUB_PARAMS];   /* the caller's #1..#30 */
-    gc_table locals;               /* #<name> local to this call */
-    gc_repeat *repeats;
-    int nrepeats, caprepeats;
-    char sub[GC_MAX_NAME];
-    gc_modal_state state;          /* saved by M70 or M73 at this call level */
-    int state_valid, state_autorestore;
-} gc_frame;
 
 /* A subroutine file loaded by o<name> call (gcode_source.c); its lines
  * follow the program's and the files loaded before it. */
@@ -251,10 +220,6 @@ typedef struct gc_interp {
 
     /* parameters */
     double params[GC_NUM_PARAMS];
-    gc_table globals;
-    gc_table subs;      /* "o<name>" -> line index of its sub definition */
-    gc_frame *frames;   /* frames[0] is the main program */
-    int depth;          /* index of the active frame */
     long iterations;
     int expr_depth;
 
@@ -279,15 +244,11 @@ typedef struct gc_interp {
     int retract_r;      /* G99 */
     double cycle_r, cycle_cc, cycle_p, cycle_q, cycle_i, cycle_j, cycle_k, cycle_il;
     int cycle_il_flag;
-    int percent_mode;
     double rotation;    /* degrees: the active coordinate system's XY rotation (G10 L2 R) */
     gc_comp comp;
     gc_tool_edit *tool_edits;
     int ntool_edits, captool_edits;
-    int assign_col;     /* column of the assignment being made, for its errors */
     double tool_param_z, tool_param_dia; /* #5403 and #5410 in mm (gc_refresh_tool_params) */
-    double value;       /* #<_value> and #<_value_returned> (read-only) */
-    int value_returned;
 
     /* splines: G5.2 control points (program units x, y, weight) until G5.3 */
     double *nurbs;
@@ -300,7 +261,11 @@ typedef struct gc_interp {
     int nsources, capsources;
     size_t nlines_all;
     const char *line_name; /* the file of the current line, for messages */
-    struct gc_fanuc *fanuc; /* the Fanuc dialect's state (gcode_fanuc.h); NULL for LinuxCNC */
+    /* the dialect's front end (gcode.c picks it) and its own state: O-word
+     * frames and named parameters for LinuxCNC, programs, calls and Macro B
+     * variables for Fanuc */
+    const struct gc_front_end *front;
+    void *dialect;
 
     /* output */
     double mpos[3];     /* machine mm where the last motion ended: the next one starts there */
@@ -316,6 +281,27 @@ typedef struct gc_interp {
     int cur_line_for_motion;
     long cur_block;
 } gc_interp;
+
+/* A dialect's front end: gcode.c picks one by fm_gcode_options.dialect. init
+ * makes its state (g->dialect) and sets the dialect's power-on modes on the
+ * machine, run interprets the program line by line, release frees what init
+ * made (also after a failed init). */
+typedef struct gc_front_end {
+    const char *name;
+    fm_status (*init)(gc_interp *g);
+    fm_status (*run)(gc_interp *g);
+    void (*release)(gc_interp *g);
+} gc_front_end;
+
+/* ---- the machine's state (machine.c) ---- */
+
+/* Set up *g for a program text (indexed into lines; bounded by
+ * opt->max_program_bytes) with the machine's neutral state; the front end's
+ * init then sets its dialect's power-on modes. */
+fm_status gc_machine_init(gc_interp *g, const char *text, size_t len, const char *name,
+                          const fm_gcode_options *opt, fm_motion_sink sink, void *user,
+                          fm_error *err);
+void gc_machine_free(gc_interp *g);
 
 /* ---- a block: the words of one line (gcode_block.c) ---- */
 
@@ -396,13 +382,6 @@ fm_status gc_exec_spline(gc_interp *g, const gc_block *b, int code, int explicit
 fm_status gc_exec_sync(gc_interp *g, const gc_block *b, int code, int col);
 fm_status gc_exec_probe(gc_interp *g, const gc_block *b, int code, int col);
 
-/* M70-M73 (gcode_state.c). */
-fm_status gc_exec_modal_state(gc_interp *g, int m, int col);
-/* Leaving a call level: M73's automatic restore. */
-fm_status gc_leave_level(gc_interp *g);
-/* Hand the line's (debug,...) / (msg,...) text to the message callback. */
-void gc_emit_message(gc_interp *g, const gc_line *ln);
-
 /* Hand a motion to the sink with the modal state's tool, spindle, time and
  * line (gcode_motion.c); seconds is its duration. */
 fm_status gc_emit_motion(gc_interp *g, fm_motion *m, double seconds);
@@ -413,8 +392,6 @@ void gc_plane_axes(gc_plane plane, int *a, int *b, int *c);
 /* Machine mm of program point p, and back (rotation, G5x, G92). */
 void gc_to_machine(const gc_interp *g, const double p[3], double out[3]);
 void gc_from_machine(const gc_interp *g, const double m[3], double p[3]);
-/* The value of numbered parameter n as a program reads it. */
-double gc_param_value(gc_interp *g, int n);
 /* #5403, #5410: the spindle tool's table values, refreshed at M6 and G10. */
 void gc_refresh_tool_params(gc_interp *g);
 /* Tool diameter and length in mm, after G10 L1/L10/L11 edits. */
@@ -434,9 +411,6 @@ fm_status gc_normalize(gc_interp *g, size_t idx, gc_line *out, int report);
 
 /* ---- reading blocks (gcode_block.c) ---- */
 
-/* Read the words of the current line from s[p] into *b (zeroed by the caller). */
-fm_status gc_parse_block(gc_interp *g, size_t p, gc_block *b);
-gc_group gc_g_group(int code);
 void gc_g_name(int code, char *buf, size_t n);
 /* The block's G code of `group` (GC_G_NONE if none) and its column. */
 static inline int gc_block_g(const gc_block *b, gc_group group, int *col)
@@ -449,9 +423,6 @@ int gc_block_has_m(const gc_block *b, int m, int *col);
 int gc_block_has_axis(const gc_block *b);
 int gc_first_axis_col(const gc_block *b);
 
-/* ---- executing a block (gcode_modal.c) ---- */
-
-fm_status gc_exec_block(gc_interp *g, gc_block *b);
 /* Word c as a whole number, or an error at its column. */
 fm_status gc_int_word(gc_interp *g, const gc_block *b, char c, int *out);
 /* Tool number `tool` of word `word` (T, H, Q) is >= 0 and in the table. */
@@ -486,24 +457,6 @@ fm_status gc_exec_g92(gc_interp *g, const gc_block *b, int code, int col);
 fm_status gc_exec_home(gc_interp *g, const gc_block *b, int code);
 void gc_store_home(gc_interp *g, int code);
 fm_status gc_exec_tool_length(gc_interp *g, const gc_block *b, int code, int col);
-
-/* ---- O-words (gcode_oword.c) ---- */
-
-/* Run the O-word line whose 'o' is at g->ln.s[p]; *next is the line to run next. */
-fm_status gc_run_oword(gc_interp *g, size_t p, size_t *next);
-void gc_frame_free(gc_frame *f);
-
-/* Expressions: read a real value at s[*p] (number, [expr], #param, function). */
-fm_status gc_read_real(gc_interp *g, const gc_line *ln, size_t *p, double *out);
-/* Read the target of an assignment after '#': numbered (sets *num) or named (fills name). */
-fm_status gc_read_param_ref(gc_interp *g, const gc_line *ln, size_t *p, int *num, char *name);
-fm_status gc_set_named(gc_interp *g, const char *name, double v);
-int gc_get_named(gc_interp *g, const char *name, double *v);
-
-/* Tables. */
-int gc_table_get(const gc_table *t, const char *key, double *v);
-int gc_table_set(gc_table *t, const char *key, double v);
-void gc_table_free(gc_table *t);
 
 /* ---- rotary axes A, B, C (gcode_rotary.c) ---- */
 

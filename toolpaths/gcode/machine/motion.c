@@ -1,9 +1,9 @@
-/* gcode_motion.c: motions: straight lines, arcs and helices (IJK and R
+/* motion.c: motions: straight lines, arcs and helices (IJK and R
  * centres, LinuxCNC's tolerances), dwells, and the canned cycles G73 and
  * G81-G89 with LinuxCNC's rules for R, the initial level, G98/G99, L
  * repeats and G91. Each motion is converted from program units and
  * coordinates to machine millimetres and handed to the sink (emit). */
-#include "gcode_internal.h"
+#include "machine.h"
 
 #include <math.h>
 #include <stdio.h>

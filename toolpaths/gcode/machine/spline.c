@@ -1,4 +1,4 @@
-/* gcode_spline.c: G5 (cubic), G5.1 (quadratic) and G5.2/G5.3 (NURBS)
+/* spline.c: G5 (cubic), G5.1 (quadratic) and G5.2/G5.3 (NURBS)
  * curves as exact parametric motions (FM_MOTION_PARAM). A curve is kept as
  * a chain of rational Bezier segments (the NURBS decomposed at its knots),
  * so that the pose at any time is exact and the box of the curve over any
@@ -15,7 +15,7 @@
  * P1 = start + (I, J), P2 = end); both have unit weights. Program time
  * maps linearly to the curve parameter. Positions are machine millimetres
  * of the programmed point; the motion's tip_offset applies as for lines. */
-#include "gcode_internal.h"
+#include "machine.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,4 +1,4 @@
-/* gcode_fanuc_cycle.c: Fanuc's canned cycles for drilling, tapping and
+/* cycle.c: Fanuc's canned cycles for drilling, tapping and
  * boring in the selected plane (G17: holes along Z): G73 high-speed peck
  * (retract d after each peck of Q), G74 left-hand and G84 right-hand
  * tapping, G76 fine boring (oriented stop, shift Q, retract), G81 drilling,
@@ -12,7 +12,7 @@
  * returns to the initial level (where the cycle mode began), G99 to R.
  * The shift of G76 and G87 is along +X of the plane (Fanuc's parameter
  * default). */
-#include "gcode_fanuc.h"
+#include "fanuc.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -35,7 +35,7 @@ static fm_status mv(cyc *k, int rapid, double da, double cc)
 
 fm_status gc_fanuc_exec_cycle(gc_interp *g, const gc_fanuc_block *fb, int code, int col)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     char name[8];
     gc_g_name(code, name, sizeof name);

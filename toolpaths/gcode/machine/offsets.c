@@ -1,9 +1,9 @@
-/* gcode_offsets.c: offsets and coordinate systems: the G54-G59.3 tables
+/* offsets.c: offsets and coordinate systems: the G54-G59.3 tables
  * (#5221..) and their selection, G10 L2/L20, G92 and its variants, tool
  * length offsets (G43 H, G43.1, G49) and the G28/G30 reference points. The
  * interpreter keeps positions in program coordinates, so a changed offset
  * moves the current point the other way, as in LinuxCNC. */
-#include "gcode_internal.h"
+#include "machine.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -1,4 +1,4 @@
-/* gcode_rotary.c: the rotary axes A, B and C (degrees): end values of a
+/* rotary.c: the rotary axes A, B and C (degrees): end values of a
  * block (absolute, incremental, G53, LinuxCNC's unwrapping of wrapped
  * axes), their G5x and G92 offsets and G28/G30 positions (LinuxCNC's
  * parameters #5224.., #5214.., #5164..), the time a move takes (F in
@@ -6,7 +6,7 @@
  * G49), and the joint values and machine each motion carries. Without a
  * machine (fm_gcode_options.machine) the words are followed, as rs274
  * does, but move nothing. */
-#include "gcode_internal.h"
+#include "machine.h"
 
 #include <math.h>
 #include <string.h>

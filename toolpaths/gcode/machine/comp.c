@@ -1,4 +1,4 @@
-/* gcode_comp.c: cutter radius compensation (G40, G41, G42, G41.1, G42.1)
+/* comp.c: cutter radius compensation (G40, G41, G42, G41.1, G42.1)
  * with LinuxCNC's geometry, so that the compensated path equals rs274's:
  * the entry move ends tangent to the first programmed element, convex
  * corners get an arc about the programmed corner, concave corners are
@@ -11,7 +11,7 @@
  * w along its normal), in program units; gc_comp_to_plane and
  * gc_comp_from_plane map to and from X, Y, Z. LinuxCNC allows compensation
  * in G17 and G18 only. */
-#include "gcode_internal.h"
+#include "machine.h"
 
 #include <math.h>
 #include <stdio.h>

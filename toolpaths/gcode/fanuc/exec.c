@@ -1,4 +1,4 @@
-/* gcode_fanuc_exec.c: executing a Fanuc block: feed, speed, tool and M
+/* exec.c: executing a Fanuc block: feed, speed, tool and M
  * codes, plane and units, tool length (G43/G44 H with Fanuc's move of the
  * offset), work offsets (G54-G59, G54.1 P, G52, G92, G10 L2/L20), the
  * programmed-point transforms (G16 polar, G51 uniform scaling, G68
@@ -12,7 +12,7 @@
  * move), and fanuc->prog, the programmed point before polar coordinates,
  * scaling and rotation, from which the next absolute or incremental end point
  * is computed. */
-#include "gcode_fanuc.h"
+#include "fanuc.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -64,7 +64,7 @@ static void scale_point(const gc_fanuc *f, double p[3])
 
 void gc_fanuc_to_work(const gc_interp *g, const double prog[3], double work[3])
 {
-    const gc_fanuc *f = g->fanuc;
+    const gc_fanuc *f = FANUC(g);
     memcpy(work, prog, 3 * sizeof *work);
     if (!f->scaling && !f->rotation) return;
     if (f->scaling) scale_point(f, work);
@@ -84,7 +84,7 @@ void gc_fanuc_to_work(const gc_interp *g, const double prog[3], double work[3])
 
 void gc_fanuc_from_work(const gc_interp *g, const double work[3], double prog[3])
 {
-    const gc_fanuc *f = g->fanuc;
+    const gc_fanuc *f = FANUC(g);
     memcpy(prog, work, 3 * sizeof *prog);
     if (!f->scaling && !f->rotation) return;
     if (f->rotation) {
@@ -106,11 +106,11 @@ void gc_fanuc_from_work(const gc_interp *g, const double work[3], double prog[3]
 
 /* The current point in the program frame after a coordinate change that
  * does not move the machine (work offsets, G92, G68, G51, units). */
-static void reprogram(gc_interp *g) { gc_fanuc_from_work(g, g->pos, g->fanuc->prog); }
+static void reprogram(gc_interp *g) { gc_fanuc_from_work(g, g->pos, FANUC(g)->prog); }
 
 void gc_fanuc_apply_work_offset(gc_interp *g)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     double work[3];
     gc_fanuc_to_work(g, f->prog, work);
     for (int i = 0; i < 3; i++) {
@@ -133,7 +133,7 @@ static const char axis_letter[3] = {'x', 'y', 'z'};
 
 void gc_fanuc_target(gc_interp *g, const gc_fanuc_block *fb, double end[3])
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     int a, bb, c;
     gc_plane_axes(g->plane, &a, &bb, &c);
@@ -180,7 +180,7 @@ fm_status gc_fanuc_move(gc_interp *g, int rapid, const double prog_end[3])
 {
     double work[3];
     gc_fanuc_to_work(g, prog_end, work);
-    memcpy(g->fanuc->prog, prog_end, sizeof g->fanuc->prog);
+    memcpy(FANUC(g)->prog, prog_end, sizeof FANUC(g)->prog);
     return gc_move_line(g, rapid, work);
 }
 
@@ -193,7 +193,7 @@ static int has_plane_word(const gc_block *b)
 
 static fm_status exec_arc(gc_interp *g, const gc_fanuc_block *fb, int code, int col)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     char name[8];
     gc_g_name(code, name, sizeof name);
@@ -269,7 +269,7 @@ static fm_status exec_arc(gc_interp *g, const gc_fanuc_block *fb, int code, int 
 
 static void set_units(gc_interp *g, double unit)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     if (unit == g->unit) return;
     double k = g->unit / unit;
     for (int i = 0; i < 3; i++) {
@@ -308,7 +308,7 @@ static fm_status whole_word(gc_interp *g, const gc_block *b, char c, long lo, lo
 
 static fm_status tool_length(gc_interp *g, const gc_fanuc_block *fb, int code, int col, int *changed)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     fm_status st;
     *changed = 0;
@@ -335,7 +335,7 @@ static fm_status tool_length(gc_interp *g, const gc_fanuc_block *fb, int code, i
 
 static fm_status select_work_offset(gc_interp *g, const gc_fanuc_block *fb, int code, int col)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     if (code == GC_G54_1) {
         long pn;
@@ -355,7 +355,7 @@ static fm_status select_work_offset(gc_interp *g, const gc_fanuc_block *fb, int 
 
 static fm_status exec_g10(gc_interp *g, const gc_fanuc_block *fb, int col)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     long l, pn;
     fm_status st;
@@ -391,7 +391,7 @@ static fm_status exec_g92(gc_interp *g, const gc_fanuc_block *fb, int col)
     const gc_block *b = &fb->b;
     if (!has_plane_word(b))
         return gc_fail(g, FM_ERR_INPUT, col, "G92: no axis words; expected X, Y or Z values");
-    if (g->fanuc->rotation || g->fanuc->scaling)
+    if (FANUC(g)->rotation || FANUC(g)->scaling)
         return gc_fail(g, FM_ERR_INPUT, col, "G92 in G68 or G51 mode; cancel them first");
     for (int i = 0; i < 3; i++) {
         char c = axis_letter[i];
@@ -408,7 +408,7 @@ static fm_status exec_g92(gc_interp *g, const gc_fanuc_block *fb, int col)
  * reference point of those axes; the others stay. */
 static fm_status exec_reference(gc_interp *g, const gc_fanuc_block *fb, int code, int col)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     int ref = 0;
     fm_status st;
@@ -457,7 +457,7 @@ static fm_status exec_g53(gc_interp *g, const gc_fanuc_block *fb, int col)
 
 static fm_status exec_rotation(gc_interp *g, const gc_fanuc_block *fb, int col)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     int a, bb, c;
     gc_plane_axes(g->plane, &a, &bb, &c);
@@ -484,7 +484,7 @@ static fm_status exec_rotation(gc_interp *g, const gc_fanuc_block *fb, int col)
 
 static fm_status exec_scaling(gc_interp *g, const gc_fanuc_block *fb, int col)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     double k = 0;
     int have = 0;
@@ -548,7 +548,7 @@ typedef struct mcodes {
 
 static fm_status scan_m(gc_interp *g, const gc_block *b, mcodes *mc)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     memset(mc, 0, sizeof *mc);
     for (int i = 0; i < b->nm; i++) {
         int m = b->m[i];
@@ -590,7 +590,7 @@ static int has_m(const gc_block *b, int m)
 
 fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
 {
-    gc_fanuc *f = g->fanuc;
+    gc_fanuc *f = FANUC(g);
     gc_block *b = &fb->b;
     fm_status st;
     int col = 0, code;

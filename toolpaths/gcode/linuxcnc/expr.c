@@ -1,7 +1,7 @@
-/* gcode_expr.c: values in the G-code interpreter: number syntax, [...]
+/* expr.c: values in the G-code interpreter: number syntax, [...]
  * expressions with every LinuxCNC operator and function, numbered and named
  * parameters, and the error helper every file uses (file:line:column). */
-#include "gcode_internal.h"
+#include "linuxcnc.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -11,23 +11,6 @@
 
 /* LinuxCNC compares EQ and NE with this tolerance (TOLERANCE_EQUAL). */
 #define GC_TOLERANCE_EQUAL 0.0001
-
-fm_status gc_fail(gc_interp *g, fm_status code, int column, const char *fmt, ...)
-{
-    char msg[sizeof g->err->message];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
-    return fm_error_at(g->err, code, g->line_name ? g->line_name : g->name, g->lineno, column,
-                       "%s", msg);
-}
-
-int gc_col(const gc_line *ln, size_t p)
-{
-    if (p > ln->n) p = ln->n;
-    return ln->col[p];
-}
 
 /* ---- tables ---- */
 
@@ -129,7 +112,7 @@ static int predefined_named(gc_interp *g, const char *name, double *v)
         else if (!strcmp(n, "coord_system"))
             *v = g->cs <= 6 ? GC_G54 + 10 * (g->cs - 1) : GC_G59 + (g->cs - 6);
         else if (!strcmp(n, "current_tool") || !strcmp(n, "current_pocket")) *v = g->tool;
-        else if (!strcmp(n, "call_level")) *v = g->depth;
+        else if (!strcmp(n, "call_level")) *v = LC(g)->depth;
         else return 0;
         return 1;
     case 'f':
@@ -186,8 +169,8 @@ static int predefined_named(gc_interp *g, const char *name, double *v)
         else return 0;
         return 1;
     case 'v':
-        if (!strcmp(n, "value")) *v = g->value;
-        else if (!strcmp(n, "value_returned")) *v = g->value_returned;
+        if (!strcmp(n, "value")) *v = LC(g)->value;
+        else if (!strcmp(n, "value_returned")) *v = LC(g)->value_returned;
         else if (!strcmp(n, "vmajor")) *v = 2.9;
         else if (!strcmp(n, "vminor")) *v = 0;
         else if (!strcmp(n, "v")) *v = 0;
@@ -205,18 +188,18 @@ int gc_get_named(gc_interp *g, const char *name, double *v)
 {
     if (name[0] == '_') {
         if (predefined_named(g, name, v)) return 1;
-        return gc_table_get(&g->globals, name, v);
+        return gc_table_get(&LC(g)->globals, name, v);
     }
-    return gc_table_get(&g->frames[g->depth].locals, name, v);
+    return gc_table_get(&LC(g)->frames[LC(g)->depth].locals, name, v);
 }
 
 fm_status gc_set_named(gc_interp *g, const char *name, double v)
 {
     double old;
     if (name[0] == '_' && predefined_named(g, name, &old))
-        return gc_fail(g, FM_ERR_INPUT, g->assign_col,
+        return gc_fail(g, FM_ERR_INPUT, LC(g)->assign_col,
                        "#<%s> is a read-only parameter; expected a name of your own", name);
-    gc_table *t = name[0] == '_' ? &g->globals : &g->frames[g->depth].locals;
+    gc_table *t = name[0] == '_' ? &LC(g)->globals : &LC(g)->frames[LC(g)->depth].locals;
     if (t->count > 100000)
         return gc_fail(g, FM_ERR_LIMIT, 0, "#<%s>: too many named parameters (limit 100000)", name);
     if (!gc_table_set(t, name, v))

@@ -1,4 +1,4 @@
-/* gcode_source.c: the program's lines and those of subroutine files. An
+/* source.c: the program's lines and those of subroutine files. An
  * `o<name> call` whose subroutine is not in the program loads <name>.ngc
  * from the first folder of the subroutine path that has it
  * (fm_gcode_options.subroutine_path, ':'-separated, as LinuxCNC's
@@ -6,7 +6,7 @@
  * (and those of files loaded before it), so that O-word scans, calls and
  * error positions work on it as on the program; messages name the file and
  * its own line numbers. */
-#include "gcode_internal.h"
+#include "machine.h"
 
 #include <errno.h>
 #include <stdio.h>

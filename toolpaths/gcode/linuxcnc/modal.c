@@ -1,28 +1,14 @@
-/* gcode_modal.c: executing a block in LinuxCNC's order of execution
+/* modal.c: executing a block in LinuxCNC's order of execution
  * (feed mode, feed, speed, tool, M codes, dwell, plane, units, tool length,
  * coordinate system, distance modes, retract mode, non-modal codes, motion,
  * stops), which updates the modal state and calls the motions and offsets
  * the block asks for. */
-#include "gcode_internal.h"
+#include "linuxcnc.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-void gc_set_units(gc_interp *g, double unit)
-{
-    if (unit == g->unit) return;
-    double f = g->unit / unit;
-    for (int i = 0; i < 3; i++) {
-        g->pos[i] *= f;
-        g->g5x[i] *= f;
-        g->g92[i] *= f;
-        g->tlo[i] *= f;
-    }
-    gc_comp_scale(g, f);
-    g->unit = unit;
-}
 
 /* Codes LinuxCNC refuses while cutter radius compensation is on. */
 static fm_status comp_refuses(gc_interp *g, int col, const char *what)
@@ -32,25 +18,6 @@ static fm_status comp_refuses(gc_interp *g, int col, const char *what)
                    what);
 }
 
-fm_status gc_check_tool(gc_interp *g, int tool, int col, const char *word)
-{
-    if (tool < 0)
-        return gc_fail(g, FM_ERR_INPUT, col, "%s%d: expected a tool number >= 0", word, tool);
-    if (g->opt.tools && tool != 0 && !fm_tool_table_find(g->opt.tools, tool))
-        return gc_fail(g, FM_ERR_INPUT, col,
-                       "%s%d: tool %d is not in the tool table; expected one of its numbers",
-                       word, tool, tool);
-    return FM_OK;
-}
-
-fm_status gc_int_word(gc_interp *g, const gc_block *b, char c, int *out)
-{
-    double v = VAL(b, c);
-    if (floor(v) != v || fabs(v) > 1e9)
-        return gc_fail(g, FM_ERR_INPUT, COL(b, c), "%c%g: expected a whole number", c - 32, v);
-    *out = (int)v;
-    return FM_OK;
-}
 
 fm_status gc_exec_block(gc_interp *g, gc_block *b)
 {
@@ -59,7 +26,7 @@ fm_status gc_exec_block(gc_interp *g, gc_block *b)
     for (int i = 0; i < b->nassign; i++) {
         gc_assign *a = &b->assign[i];
         if (a->name[0]) {
-            g->assign_col = a->col;
+            LC(g)->assign_col = a->col;
             if ((st = gc_set_named(g, a->name, a->v))) return st;
         } else {
             g->params[a->num] = a->v;

@@ -1,11 +1,11 @@
-/* gcode_sync.c: motions whose speed or end come from outside the program:
+/* sync.c: motions whose speed or end come from outside the program:
  * G33 (spindle-synchronized feed: K is the distance per spindle turn) and
  * G33.1 (rigid tapping: in at that pitch, then out to the start), fed at
  * the feed the spindle speed and pitch give; and G38.2-G38.5 probing, where
  * the move ends where the probe trips, as the caller's probe callback finds
  * it (the runner: first contact with the stock), setting #5061-#5063 and
  * #5070 as LinuxCNC does. */
-#include "gcode_internal.h"
+#include "machine.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -1,8 +1,8 @@
-/* gcode_oword.c: O-word control flow: sub/endsub/call/return with
+/* oword.c: O-word control flow: sub/endsub/call/return with
  * arguments in #1-#30 and return values, if/elseif/else/endif, while,
  * do-while, repeat, break and continue. Lines are found by scanning the
  * program text for the O-word of the same name. */
-#include "gcode_internal.h"
+#include "linuxcnc.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -171,10 +171,10 @@ void gc_frame_free(gc_frame *f)
 
 static fm_status do_return(gc_interp *g, const gc_oword *o, size_t *next)
 {
-    if (g->depth == 0)
+    if (LC(g)->depth == 0)
         return gc_fail(g, FM_ERR_INPUT, o->col, "o%s %s outside a subroutine call", o->name,
                        kw_names[o->kw]);
-    gc_frame *f = &g->frames[g->depth];
+    gc_frame *f = &LC(g)->frames[LC(g)->depth];
     /* `return` may carry the label of the block it sits in (LinuxCNC's
      * retval.ngc returns from inside an if); endsub closes its own sub */
     if (o->kw == KW_ENDSUB && strcmp(f->sub, o->name))
@@ -192,9 +192,9 @@ static fm_status do_return(gc_interp *g, const gc_oword *o, size_t *next)
     memcpy(g->params + 1, f->saved, sizeof f->saved);
     *next = f->return_line;
     gc_frame_free(f);
-    g->depth--;
-    g->value_returned = has_value;
-    g->value = v;
+    LC(g)->depth--;
+    LC(g)->value_returned = has_value;
+    LC(g)->value = v;
     return FM_OK;
 }
 
@@ -206,7 +206,7 @@ static fm_status do_call(gc_interp *g, const gc_oword *o, size_t *next)
     char key[GC_MAX_NAME + 2];
     snprintf(key, sizeof key, "o%s", o->name);
     size_t subline;
-    if (!gc_table_get(&g->subs, key, &line)) {
+    if (!gc_table_get(&LC(g)->subs, key, &line)) {
         /* not seen yet: look for the definition anywhere in the program,
          * then for a file <name>.ngc on the subroutine path */
         int kw;
@@ -231,7 +231,7 @@ static fm_status do_call(gc_interp *g, const gc_oword *o, size_t *next)
                            "o%s call: no subroutine o%s in this program%s; expected an "
                            "o%s sub ... o%s endsub", o->name, o->name,
                            named ? " or on the subroutine path" : "", o->name, o->name);
-        gc_table_set(&g->subs, key, (double)subline);
+        gc_table_set(&LC(g)->subs, key, (double)subline);
     } else {
         subline = (size_t)line;
     }
@@ -249,11 +249,11 @@ static fm_status do_call(gc_interp *g, const gc_oword *o, size_t *next)
         return gc_fail(g, FM_ERR_INPUT, gc_col(&g->ln, p),
                        "o%s call: unexpected '%c'; expected [argument] words", o->name,
                        g->ln.s[p]);
-    if (g->depth + 1 > g->opt.max_call_depth)
+    if (LC(g)->depth + 1 > g->opt.max_call_depth)
         return gc_fail(g, FM_ERR_LIMIT, o->col,
                        "o%s call: calls nested deeper than %d; expected bounded recursion",
                        o->name, g->opt.max_call_depth);
-    gc_frame *f = &g->frames[++g->depth];
+    gc_frame *f = &LC(g)->frames[++LC(g)->depth];
     memset(f, 0, sizeof *f);
     memcpy(f->saved, g->params + 1, sizeof f->saved);
     memcpy(g->params + 1, args, sizeof args);
@@ -274,7 +274,7 @@ static fm_status control(gc_interp *g, gc_oword *o, size_t *next)
     case KW_SUB: {
         char key[GC_MAX_NAME + 2];
         snprintf(key, sizeof key, "o%s", o->name);
-        gc_table_set(&g->subs, key, (double)g->cur);
+        gc_table_set(&LC(g)->subs, key, (double)g->cur);
         j = scan(g, g->cur, 1, o->name, KWM(KW_ENDSUB), NULL);
         if (j == (size_t)-1) return missing(g, o, "endsub");
         *next = j + 1;
@@ -339,7 +339,7 @@ static fm_status control(gc_interp *g, gc_oword *o, size_t *next)
         return FM_OK;
     case KW_REPEAT: {
         if ((st = read_cond(g, o, &v))) return st;
-        gc_frame *f = &g->frames[g->depth];
+        gc_frame *f = &LC(g)->frames[LC(g)->depth];
         if (v < 1) {
             j = scan(g, g->cur, 1, o->name, KWM(KW_ENDREPEAT), NULL);
             if (j == (size_t)-1) return missing(g, o, "endrepeat");
@@ -363,7 +363,7 @@ static fm_status control(gc_interp *g, gc_oword *o, size_t *next)
         return FM_OK;
     }
     case KW_ENDREPEAT: {
-        gc_frame *f = &g->frames[g->depth];
+        gc_frame *f = &LC(g)->frames[LC(g)->depth];
         int i = f->nrepeats - 1;
         while (i >= 0 && strcmp(f->repeats[i].label, o->name)) i--;
         if (i < 0) return missing(g, o, "repeat");
@@ -385,7 +385,7 @@ static fm_status control(gc_interp *g, gc_oword *o, size_t *next)
             return FM_OK;
         }
         if (kw == KW_ENDREPEAT) {
-            gc_frame *f = &g->frames[g->depth];
+            gc_frame *f = &LC(g)->frames[LC(g)->depth];
             int i = f->nrepeats - 1;
             while (i >= 0 && strcmp(f->repeats[i].label, o->name)) i--;
             if (i >= 0) f->nrepeats = i;
