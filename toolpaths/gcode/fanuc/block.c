@@ -2,7 +2,7 @@
  * leaves its address out), the G codes checked against Fanuc's modal groups
  * (codes a mill has but this simulation refuses get a message saying why),
  * G65's arguments A-Z into #1-#26 by Fanuc's argument specification I, and
- * which numbers were written without a decimal point (gcode_fanuc_exec.c
+ * which numbers were written without a decimal point (fanuc/exec.c
  * reads those in the least input increment). */
 #include "fanuc.h"
 

@@ -4,7 +4,7 @@
  * programmed-point transforms (G16 polar, G51 uniform scaling, G68
  * rotation), dwells (X seconds, P milliseconds), G27/G28/G30/G53, lines and
  * arcs (I J K always incremental; R, and Fanuc's rule that a full circle
- * cannot be given with R). The interpreter's motion output (gcode_motion.c)
+ * cannot be given with R). The interpreter's motion output (motion.c)
  * turns the work coordinates into machine millimetres.
  *
  * Two points are kept: g->pos, where the tool is in work coordinates (as in
@@ -137,7 +137,7 @@ void gc_fanuc_target(gc_interp *g, const gc_fanuc_block *fb, double end[3])
     const gc_block *b = &fb->b;
     int a, bb, c;
     gc_plane_axes(g->plane, &a, &bb, &c);
-    /* A B C in degrees: the rotary axes (gcode_rotary.c) */
+    /* A B C in degrees: the rotary axes (rotary.c) */
     int rgiven[3];
     double rvalue[3];
     for (int i = 0; i < 3; i++) {
@@ -318,7 +318,7 @@ static fm_status tool_length(gc_interp *g, const gc_fanuc_block *fb, int code, i
         if ((st = gc_check_tool(g, (int)h, b->col[L('h')], "H"))) return st;
         f->h = (int)h;
     }
-    /* G43.4: G43 with tool centre point control on (gcode_rotary.c); G49 off */
+    /* G43.4: G43 with tool centre point control on (rotary.c); G49 off */
     if (code == GC_G43_4 && (st = gc_rot_tcp(g, 1, col))) return st;
     if (code == GC_G49) gc_rot_tcp(g, 0, col);
     if (code == GC_G43_4) code = GC_G43;

@@ -132,7 +132,7 @@ fm_status gc_fanuc_return(gc_interp *g, int has_p, long p, int col);
 /* The raw text of the current line (comments kept), for #3000's message. */
 void gc_fanuc_raw_line(const gc_interp *g, const char **text, size_t *len);
 
-/* ---- gcode_fanuc_expr.c ---- */
+/* ---- fanuc/expr.c ---- */
 
 /* How an address's number was written: the decimal point rule and the
  * dwell units depend on it. */
@@ -159,7 +159,7 @@ fm_status gc_fanuc_set_var(gc_interp *g, long num, double v, int col);
 /* Fanuc's rounding: half away from zero. */
 double gc_fanuc_round(double v);
 
-/* ---- gcode_fanuc_block.c ---- */
+/* ---- fanuc/block.c ---- */
 
 typedef struct gc_fanuc_block {
     unsigned char form[26];  /* gc_number_form of each word */
@@ -172,7 +172,7 @@ typedef struct gc_fanuc_block {
 fm_status gc_fanuc_parse_block(gc_interp *g, size_t p, gc_fanuc_block *fb);
 gc_group gc_fanuc_g_group(int code);
 
-/* ---- gcode_fanuc_exec.c ---- */
+/* ---- fanuc/exec.c ---- */
 fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb);
 /* Word c as a length in program units (the decimal point rule, rounded to
  * the least input increment), or as an angle in degrees. */
@@ -190,7 +190,7 @@ fm_status gc_fanuc_move(gc_interp *g, int rapid, const double prog_end[3]);
  * G52) into g->g5x; the current point keeps its machine position. */
 void gc_fanuc_apply_work_offset(gc_interp *g);
 
-/* ---- gcode_fanuc_cycle.c ---- */
+/* ---- fanuc/cycle.c ---- */
 fm_status gc_fanuc_exec_cycle(gc_interp *g, const gc_fanuc_block *fb, int code, int col);
 
 #endif

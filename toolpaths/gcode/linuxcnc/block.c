@@ -2,7 +2,7 @@
  * does (lower case, no spaces, comments removed, each character's source
  * column kept for errors), then its words (G and M codes checked against
  * their modal groups, letters, parameter assignments) gathered into a
- * gc_block for gcode_modal.c to execute. */
+ * gc_block for linuxcnc/modal.c to execute. */
 #include "linuxcnc.h"
 
 #include <math.h>

@@ -114,7 +114,7 @@ typedef enum gc_plane { GC_PLANE_XY = 17, GC_PLANE_XZ = 18, GC_PLANE_YZ = 19 } g
 #define GC_MAX_EXPR_DEPTH 64 /* nested brackets and parameter indirections */
 #define GC_MAX_NAME 128
 
-/* A subroutine file loaded by o<name> call (gcode_source.c); its lines
+/* A subroutine file loaded by o<name> call (source.c); its lines
  * follow the program's and the files loaded before it. */
 typedef struct gc_source {
     char *name;          /* path, for messages */
@@ -125,7 +125,7 @@ typedef struct gc_source {
     size_t first;        /* index of its first line among all lines */
 } gc_source;
 
-/* Cutter radius compensation (gcode_comp.c). Queued motions wait until the
+/* Cutter radius compensation (comp.c). Queued motions wait until the
  * next programmed element fixes their end point. Coordinates are those of
  * the compensation plane: u, v in the plane (G18: u = Z, v = X), w along
  * its normal; program units. */
@@ -172,7 +172,7 @@ typedef struct gc_comp {
     size_t nq, capq;
 } gc_comp;
 
-/* A curve as rational Bezier segments (gcode_spline.c), machine mm. */
+/* A curve as rational Bezier segments (spline.c), machine mm. */
 typedef struct gc_spline {
     int degree;
     size_t nseg, cap;
@@ -227,7 +227,7 @@ typedef struct gc_interp {
      * comparisons in cycles and arcs round exactly as rs274 does */
     double pos[3];      /* current point, program units and coordinates (rs274 prints these) */
     double g5x[3], g92[3], tlo[3];
-    /* rotary axes A B C (gcode_rotary.c): program degrees now and at the end
+    /* rotary axes A B C (rotary.c): program degrees now and at the end
      * of the pending move, their G5x and G92 offsets, TCP on */
     double rot[3], rot_next[3], rot_g5x[3], rot_g92[3];
     int tcp;
@@ -303,7 +303,7 @@ fm_status gc_machine_init(gc_interp *g, const char *text, size_t len, const char
                           fm_error *err);
 void gc_machine_free(gc_interp *g);
 
-/* ---- a block: the words of one line (gcode_block.c) ---- */
+/* ---- a block: the words of one line (line.c) ---- */
 
 #define GC_MAX_ASSIGN 256  /* parameter assignments on one line */
 
@@ -335,8 +335,7 @@ typedef struct gc_block {
 #define VAL(b, c) ((b)->v[L(c)])
 #define COL(b, c) ((b)->col[L(c)])
 
-/* ---- the extensions (gcode_comp.c, gcode_spline.c, gcode_source.c,
- * gcode_state.c) ---- */
+/* ---- compensation (comp.c), splines (spline.c), sources (source.c) ---- */
 
 void gc_comp_to_plane(gc_plane plane, const double xyz[3], double uvw[3]);
 void gc_comp_from_plane(gc_plane plane, const double uvw[3], double xyz[3]);
@@ -353,7 +352,7 @@ void gc_comp_scale(gc_interp *g, double f);
 fm_status gc_comp_dwell(gc_interp *g, double seconds);
 fm_status gc_comp_straight(gc_interp *g, int rapid, double feed, const double end_xyz[3], int col);
 fm_status gc_comp_arc(gc_interp *g, const gc_arc_data *a, double feed, int col);
-/* Emit a queued motion (gcode_motion.c). */
+/* Emit a queued motion (motion.c). */
 fm_status gc_emit_comp_move(gc_interp *g, const gc_comp_move *m);
 
 void gc_spline_free(gc_spline *s);
@@ -375,15 +374,15 @@ fm_status gc_load_subroutine_file(gc_interp *g, const char *name, int col, int *
                                   size_t *first);
 void gc_sources_free(gc_interp *g);
 
-/* G5, G5.1, G5.2 (a control point) and G5.3 (gcode_spline.c); explicit: the
+/* G5, G5.1, G5.2 (a control point) and G5.3 (spline.c); explicit: the
  * code is on the line (not only the modal motion). */
 fm_status gc_exec_spline(gc_interp *g, const gc_block *b, int code, int explicit_code, int col);
-/* G33, G33.1 and G38.2-G38.5 (gcode_sync.c). */
+/* G33, G33.1 and G38.2-G38.5 (sync.c). */
 fm_status gc_exec_sync(gc_interp *g, const gc_block *b, int code, int col);
 fm_status gc_exec_probe(gc_interp *g, const gc_block *b, int code, int col);
 
 /* Hand a motion to the sink with the modal state's tool, spindle, time and
- * line (gcode_motion.c); seconds is its duration. */
+ * line (motion.c); seconds is its duration. */
 fm_status gc_emit_motion(gc_interp *g, fm_motion *m, double seconds);
 /* Duration of a feed move of len_mm at the modal feed; *feed_mm is mm/min. */
 double gc_feed_seconds(gc_interp *g, double len_mm, double *feed_mm);
@@ -406,10 +405,10 @@ fm_status gc_fail(gc_interp *g, fm_status code, int column, const char *fmt, ...
     ;
 int gc_col(const gc_line *ln, size_t p);
 
-/* Normalize source line idx into *out (gcode_block.c). */
+/* Normalize source line idx into *out (line.c). */
 fm_status gc_normalize(gc_interp *g, size_t idx, gc_line *out, int report);
 
-/* ---- reading blocks (gcode_block.c) ---- */
+/* ---- reading blocks (line.c) ---- */
 
 void gc_g_name(int code, char *buf, size_t n);
 /* The block's G code of `group` (GC_G_NONE if none) and its column. */
@@ -428,7 +427,7 @@ fm_status gc_int_word(gc_interp *g, const gc_block *b, char c, int *out);
 /* Tool number `tool` of word `word` (T, H, Q) is >= 0 and in the table. */
 fm_status gc_check_tool(gc_interp *g, int tool, int col, const char *word);
 
-/* ---- motions (gcode_motion.c) ---- */
+/* ---- motions (motion.c) ---- */
 
 fm_status gc_check_feed(gc_interp *g, const char *what, int col);
 fm_status gc_move_line(gc_interp *g, int rapid, const double to[3]);
@@ -447,7 +446,7 @@ fm_status gc_move_arc(gc_interp *g, const double to[3], const double center_ab[2
 fm_status gc_exec_arc(gc_interp *g, const gc_block *b, int code, int col);
 fm_status gc_exec_cycle(gc_interp *g, const gc_block *b, int code, int col);
 
-/* ---- offsets and coordinate systems (gcode_offsets.c) ---- */
+/* ---- offsets and coordinate systems (offsets.c) ---- */
 
 double gc_tool_length_mm(gc_interp *g, int tool);
 void gc_set_g5x(gc_interp *g, int cs);
@@ -458,7 +457,7 @@ fm_status gc_exec_home(gc_interp *g, const gc_block *b, int code);
 void gc_store_home(gc_interp *g, int code);
 fm_status gc_exec_tool_length(gc_interp *g, const gc_block *b, int code, int col);
 
-/* ---- rotary axes A, B, C (gcode_rotary.c) ---- */
+/* ---- rotary axes A, B, C (rotary.c) ---- */
 
 void gc_rot_start(gc_interp *g);
 /* rot_next from the block's A B C words (gc_find_ends calls it). */
