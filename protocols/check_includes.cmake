@@ -1,4 +1,4 @@
-# check_includes.cmake: protocols/ never include daemon/ (DESIGN.md sec. 1):
+# check_includes.cmake: protocols/ never include daemon/ (ARCHITECTURE.md, "The layers"):
 # each protocol declares the service interface it needs and the daemon
 # hands it an implementation. Run by the build (cmake -P, before fm_http and
 # fm_modbus compile): every quoted #include in protocols/ must name a file in
@@ -23,6 +23,6 @@ foreach(src ${sources})
 endforeach()
 if(bad)
   string(REPLACE ";" "\n  " bad "${bad}")
-  message(FATAL_ERROR "protocols/ must not include the daemon (DESIGN.md sec. 1):\n  ${bad}")
+  message(FATAL_ERROR "protocols/ must not include the daemon (ARCHITECTURE.md sec. 1, The layers):\n  ${bad}")
 endif()
 file(WRITE ${STAMP} "ok\n")

@@ -4,7 +4,7 @@
  *    time per cut, voxels evaluated, voxels and mm of path per second.
  * 2. Stock size: the same 10 mm cut in boxes from 10 to 200 mm wide: the
  *    time and the leaves evaluated per cut must not grow with the stock
- *    (DESIGN.md sec. 3: work per move follows the swept surface).
+ *    (ARCHITECTURE.md, "Quality bars": work per move follows the swept surface).
  * Usage: bench_stock [repeats]. */
 #include <math.h>
 #include <stdio.h>

@@ -1,5 +1,5 @@
 /* findings_json.c: lib/check's findings as JSON (jansson); lib/ itself
- * knows no JSON (DESIGN.md sec. 1). */
+ * knows no JSON (ARCHITECTURE.md, "The layers"). */
 #include "findings_json.h"
 
 #include <math.h>

@@ -1,7 +1,7 @@
 /* job.h: the job runner shared by the CLI (`frepmill simulate`) and the
  * daemon: program -> motions -> swept volumes -> stock, with progress
  * reports along the way. Both front ends call fm_job_run, so they run
- * exactly the same pipeline (DESIGN.md sec. 1). */
+ * exactly the same pipeline (ARCHITECTURE.md, "The layers"). */
 #ifndef FM_JOB_H
 #define FM_JOB_H
 
@@ -35,7 +35,7 @@ typedef struct fm_job_motion_source {
 } fm_job_motion_source;
 
 /* The collision check (lib/check), run in the same pass as the cut
- * (DESIGN.md, "Checking in the same pass"): every motion is related to the
+ * (ARCHITECTURE.md, "Checking in the same pass"): every motion is related to the
  * stock as the runner cuts it, and findings are reported as they are
  * found. The check has a grid of its own voxel: the job's own grid when
  * voxel and band agree (`frepmill check`), else a second grid cut batch by

@@ -1,4 +1,4 @@
-/* frepmilld.c: the frepmill daemon (DESIGN.md sec. 4, docs/daemon.md):
+/* frepmilld.c: the frepmill daemon (ARCHITECTURE.md, "The daemon", docs/daemon.md):
  * reads its settings (file, then flags), opens the job store and resumes
  * unfinished jobs, starts the HTTP and Modbus servers, and waits for
  * signals: SIGTERM and SIGINT stop it cleanly (running jobs are

@@ -5,7 +5,7 @@
  * start position inside the stock, and the places where a search could not
  * decide (uncertain).
  *
- * The check runs in the same pass as the cut (DESIGN.md, "Checking in the
+ * The check runs in the same pass as the cut (ARCHITECTURE.md, "Checking in the
  * same pass"): the caller feeds every motion in program order with the
  * stock grid as it is then, except for the motions fed since its last
  * fm_check_stock_cut, whose flute sweeps are applied exactly. Within a

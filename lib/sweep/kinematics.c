@@ -1,6 +1,6 @@
 /* kinematics.c: machine kinematics. A machine's rotary axes (motion.h)
  * turn joint values into the tool's pose in the workpiece frame, where the
- * stock does not move (DESIGN.md "Rotary axes"): the chain from the tool
+ * stock does not move (ARCHITECTURE.md, "Rotary axes"): the chain from the tool
  * through the head axes, the linear axes and the table axes (inverted).
  * With TCP the programmed point is the tip in the workpiece frame and only
  * the orientation comes from the joints; without it every joint moves

@@ -24,7 +24,7 @@ typedef struct fm_path {
                         double axis_lo[3], double axis_hi[3]);
 } fm_path;
 
-/* A machine's rotary axes (DESIGN.md "Rotary axes", docs/sweep.md "Machine
+/* A machine's rotary axes (ARCHITECTURE.md, "Rotary axes", docs/sweep.md "Machine
  * kinematics"). Each axis turns the link it carries about a line: positive
  * joint values turn that link right-handed about `around` (as LinuxCNC).
  * Table axes turn the workpiece (stock, fixtures, design); head axes turn

@@ -1,6 +1,6 @@
 /* tools.h: cutters, shanks and holders. A tool table entry (fm_tool_spec)
  * says what the user declared; lib/tools turns it into F-rep solids of
- * revolution about +Z with the tip at the origin (DESIGN.md sec. 2).
+ * revolution about +Z with the tip at the origin (ARCHITECTURE.md, "Conventions").
  * Parsing of JSON and LinuxCNC .tbl tables lives in toolpaths/tooltable,
  * which fills these plain structs. */
 #ifndef FM_TOOLS_H
