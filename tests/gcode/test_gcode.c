@@ -253,8 +253,54 @@ static void test_errors(void)
     CHECK(run("G0 X1\nG0 X1 X2\n", &err) == FM_ERR_INPUT && ngot == 1);
 }
 
+/* Arc angles in inverse time under compensation (issue 32): the queued feed
+ * of a compensated block is F x its programmed length, so an arc whose sweep
+ * is read wrongly takes the wrong time. tests/gcode/programs/g93_comp_arcs.ngc
+ * (also compared with rs274 for its geometry): arc A, R 10 about the origin,
+ * counter-clockwise from 150 to 210 degrees (crossing +-180: 60 degrees), the
+ * tool inside it (left of a G3) on R 8; arc B, R 10, clockwise for 270
+ * degrees, the tool outside it on R 12. Every block takes 1/F = 1 s as
+ * programmed; a compensated arc takes (its length) / (F x the programmed
+ * length) = R_comp / R of it whatever its sweep: 0.8 s and 1.2 s. */
+static void test_arc_angles_inverse_time_comp(void)
+{
+    FILE *f = fopen("gcode/programs/g93_comp_arcs.ngc", "rb");
+    CHECK(f != NULL);
+    if (!f) return;
+    char text[2048];
+    size_t n = fread(text, 1, sizeof text - 1, f);
+    fclose(f);
+    text[n] = 0;
+    fm_error err;
+    CHECK(run(text, &err) == FM_OK);
+    CHECK(ngot == 5);
+    if (ngot != 5) return;
+    double s3 = 5 * sqrt(3.0);
+    /* the entry line ends on arc A's compensated circle (R 8) at 150 degrees */
+    CHECK(got[1].kind == FM_MOTION_LINE);
+    CHECK_NEAR(got[1].end[0], -0.8 * s3, 1e-6);
+    CHECK_NEAR(got[1].end[1], 4, 1e-6);
+    /* its time: the compensated length over F x the programmed length 20 */
+    CHECK_NEAR(got[1].t1 - got[1].t0,
+               hypot(1.3397459622 + 0.8 * s3, 22.3205080757 - 4) / 20.0, 1e-6);
+    const fm_motion *a = &got[2], *b = &got[3];
+    CHECK(a->kind == FM_MOTION_ARC && a->turns == 1);
+    CHECK_NEAR(a->center[0], 0, 1e-6);
+    CHECK_NEAR(a->center[1], 0, 1e-6);
+    CHECK_NEAR(a->end[0], -0.8 * s3, 1e-6); /* 8 (cos 210, sin 210) */
+    CHECK_NEAR(a->end[1], -4, 1e-6);
+    CHECK_NEAR(a->t1 - a->t0, 0.8, 1e-6);
+    CHECK(b->kind == FM_MOTION_ARC && b->turns == -1);
+    CHECK_NEAR(b->center[0], -2 * s3, 1e-6);
+    CHECK_NEAR(b->center[1], -10, 1e-6);
+    CHECK_NEAR(b->end[0], -2 * s3 - 6, 1e-6); /* centre + 12 (cos 120, sin 120) */
+    CHECK_NEAR(b->end[1], -10 + 6 * sqrt(3.0), 1e-6);
+    CHECK_NEAR(b->t1 - b->t0, 1.2, 1e-6);
+}
+
 int main(void)
 {
+    test_arc_angles_inverse_time_comp();
     test_times();
     test_units_offsets();
     test_tool_tip();

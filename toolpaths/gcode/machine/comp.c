@@ -61,19 +61,12 @@ void gc_comp_free(gc_comp *c)
 }
 
 /* The signed angle an arc sweeps from (x1, y1) to (x2, y2) about (cx, cy);
- * turn > 0 counter-clockwise, |turn| - 1 extra full circles (LinuxCNC's
- * find_turn). */
+ * turn > 0 counter-clockwise, |turn| - 1 extra full circles, the same start
+ * and end angle a full circle (gc_arc_sweep: lib/sweep's definition). */
 static double arc_sweep(double x1, double y1, double cx, double cy, int turn, double x2, double y2)
 {
-    if (turn == 0) return 0;
-    double alpha = atan2(y1 - cy, x1 - cx);
-    double beta = atan2(y2 - cy, x2 - cx);
-    if (turn > 0) {
-        if (beta <= alpha) beta += 2 * GC_PI;
-        return beta - alpha + (turn - 1) * 2 * GC_PI;
-    }
-    if (alpha <= beta) alpha += 2 * GC_PI;
-    return beta - alpha + (turn + 1) * 2 * GC_PI;
+    const double start[3] = {x1, y1, 0}, end[3] = {x2, y2, 0}, center[2] = {cx, cy};
+    return gc_arc_sweep(GC_PLANE_XY, start, end, center, turn);
 }
 
 /* The tool is inside the arc (on the side of its centre). */

@@ -388,6 +388,13 @@ fm_status gc_emit_motion(gc_interp *g, fm_motion *m, double seconds);
 double gc_feed_seconds(gc_interp *g, double len_mm, double *feed_mm);
 /* The plane's first and second axis and its normal, LinuxCNC's order. */
 void gc_plane_axes(gc_plane plane, int *a, int *b, int *c);
+/* The signed angle (radians, > 0 counter-clockwise in the plane) of an arc
+ * from start to end about center_ab in the plane's axes, turn > 0
+ * counter-clockwise with |turn| - 1 extra circles, the same start and end
+ * angle a full circle: lib/sweep's fm_motion_arc_of, the one definition of
+ * an arc. 0 for a degenerate arc (centre on the start point). */
+double gc_arc_sweep(gc_plane plane, const double start[3], const double end[3],
+                    const double center_ab[2], int turn);
 /* Machine mm of program point p, and back (rotation, G5x, G92). */
 void gc_to_machine(const gc_interp *g, const double p[3], double out[3]);
 void gc_from_machine(const gc_interp *g, const double m[3], double p[3]);

@@ -5,6 +5,8 @@
  * coordinates to machine millimetres and handed to the sink (emit). */
 #include "machine.h"
 
+#include "sweep/sweep.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -151,18 +153,17 @@ fm_status gc_move_arc(gc_interp *g, const double to[3], const double center_ab[2
     m.center[c] = m.start[c];
     m.plane_axis = c;
     m.turns = turns;
-    double sa = atan2(m.start[b] - m.center[b], m.start[a] - m.center[a]);
-    double ea = atan2(m.end[b] - m.center[b], m.end[a] - m.center[a]);
-    double r0 = hypot(m.start[a] - m.center[a], m.start[b] - m.center[b]);
-    double r1 = hypot(m.end[a] - m.center[a], m.end[b] - m.center[b]);
-    double sweep = turns > 0 ? ea - sa : sa - ea;
-    double chord = hypot(m.end[a] - m.start[a], m.end[b] - m.start[b]);
-    if (chord <= 1e-12 * (1 + r0)) sweep = 0;
-    while (sweep <= 1e-12) sweep += 2 * GC_PI;
-    while (sweep > 2 * GC_PI + 1e-12) sweep -= 2 * GC_PI;
-    sweep += 2 * GC_PI * (abs(turns) - 1);
-    double axial = m.end[c] - m.start[c];
-    double len = hypot(0.5 * (r0 + r1) * sweep, axial);
+    /* the arc's angle and length as lib/sweep runs it (one definition of an
+     * arc: the sweep, the check and the pictures read the same motion) */
+    fm_motion_arc arc;
+    double len;
+    if (fm_motion_arc_of(&m, &arc)) {
+        double r1 = arc.r0 + arc.dr;
+        len = hypot(0.5 * (arc.r0 + r1) * arc.dth, arc.dh);
+    } else {
+        /* a centre on the start point: no circle; the time of the chord */
+        len = hypot(hypot(m.end[0] - m.start[0], m.end[1] - m.start[1]), m.end[2] - m.start[2]);
+    }
     double sec = gc_feed_seconds(g, len, &m.feed);
     memcpy(g->pos, to, sizeof g->pos);
     return gc_emit_motion(g, &m, sec);
@@ -307,6 +308,26 @@ static fm_status arc_center(gc_interp *g, const gc_block *b, int code, const dou
     return FM_OK;
 }
 
+double gc_arc_sweep(gc_plane plane, const double start[3], const double end[3],
+                    const double center_ab[2], int turn)
+{
+    int a, b, c;
+    gc_plane_axes(plane, &a, &b, &c);
+    fm_motion m;
+    memset(&m, 0, sizeof m);
+    m.kind = FM_MOTION_ARC;
+    memcpy(m.start, start, sizeof m.start);
+    memcpy(m.end, end, sizeof m.end);
+    m.center[a] = center_ab[0];
+    m.center[b] = center_ab[1];
+    m.center[c] = start[c];
+    m.plane_axis = c;
+    m.turns = turn;
+    fm_motion_arc arc;
+    if (turn == 0 || !fm_motion_arc_of(&m, &arc)) return 0;
+    return arc.dth;
+}
+
 /* The feed a compensated motion keeps while queued: program units per
  * minute; in inverse time, the programmed length over the block's time. */
 static double queued_feed(const gc_interp *g, double programmed_len)
@@ -371,8 +392,8 @@ fm_status gc_exec_arc(gc_interp *g, const gc_block *b, int code, int col)
         return gc_fail(g, FM_ERR_INPUT, col,
                        "%s: the tool radius %.4f is larger than the radius %.4f of this "
                        "inside arc; expected a smaller tool", name, g->comp.radius, arc_r);
-    double sweep = fabs(atan2(end[bb] - cab[1], end[a] - cab[0]) - atan2(start[bb] - cab[1], start[a] - cab[0]));
-    return gc_comp_arc(g, &arc, queued_feed(g, arc_r * (sweep > 0 ? sweep : 2 * GC_PI)), col);
+    double sweep = fabs(gc_arc_sweep(g->plane, start, end, cab, turn));
+    return gc_comp_arc(g, &arc, queued_feed(g, arc_r * sweep), col);
 }
 
 fm_status gc_exec_straight(gc_interp *g, const gc_block *b, int rapid, int g53, int col)
