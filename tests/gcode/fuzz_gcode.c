@@ -2,7 +2,10 @@
  * end in FM_OK or a clean error, never a crash, a hang or a leak. A first
  * byte 0x01 selects the Fanuc dialect (the program is the rest), 0x00 the
  * LinuxCNC dialect; any other first byte is the first character of a
- * LinuxCNC program, so that plain .ngc seeds keep their meaning. */
+ * LinuxCNC program, so that plain .ngc seeds keep their meaning. Both
+ * dialects run with a machine too (the input's size picks none, an AC
+ * trunnion with TCP, a BC head, or a wrapped A indexer), so that the rotary
+ * words, TCP and G43.4 are fuzzed through the machine's kinematics. */
 #include <stddef.h>
 #include <stdint.h>
 
@@ -43,6 +46,37 @@ static fm_status half_probe(void *user, const fm_motion *move, int toward, int *
     return FM_OK;
 }
 
+/* The machines an input may run on (docs/check.md, "Machine file"). */
+static const fm_machine *pick_machine(size_t size)
+{
+    static fm_machine machines[3];
+    static int made;
+    if (!made) {
+        fm_machine *t = &machines[0]; /* AC trunnion, TCP on from the start */
+        t->rotary_count = 2;
+        t->tcp = 1;
+        t->rotary[0] = (fm_rotary_axis){.letter = 0, .carries = FM_ROTARY_TABLE,
+                                         .around = {1, 0, 0}, .has_limits = 1,
+                                         .limit_lo = -10, .limit_hi = 110};
+        t->rotary[1] = (fm_rotary_axis){.letter = 2, .carries = FM_ROTARY_TABLE,
+                                         .around = {0, 0, 1}};
+        fm_machine *h = &machines[1]; /* BC head with a pivot, TCP off */
+        h->rotary_count = 2;
+        h->rotary[0] = (fm_rotary_axis){.letter = 2, .carries = FM_ROTARY_HEAD,
+                                         .around = {0, 0, 1}, .pivot_length = 150};
+        h->rotary[1] = (fm_rotary_axis){.letter = 1, .carries = FM_ROTARY_HEAD,
+                                         .around = {0, 1, 0}, .pivot_length = 150};
+        fm_machine *a = &machines[2]; /* a wrapped A indexer along X */
+        a->rotary_count = 1;
+        a->rotary[0] = (fm_rotary_axis){.letter = 0, .carries = FM_ROTARY_TABLE,
+                                         .around = {1, 0, 0}, .through = {0, 0, 20},
+                                         .wrapped = 1};
+        made = 1;
+    }
+    size_t pick = (size >> 2) & 3;
+    return pick ? &machines[pick - 1] : NULL;
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     static fm_tool_spec tools[2];
@@ -60,6 +94,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     opt.message = drop_message;
     opt.probe = (size & 2) ? half_probe : NULL;
     opt.subroutine_path = "tests/gcode/programs/subs";
+    opt.machine = pick_machine(size);
     if (size > 0 && (data[0] == 0 || data[0] == 1)) {
         opt.dialect = data[0] ? FM_GCODE_FANUC : FM_GCODE_LINUXCNC;
         data++;
