@@ -196,6 +196,29 @@ static void test_boss_g42(void)
     CHECK_LINE(&r, 5, -5, 0, -10, -10, 6, 0);
 }
 
+/* The G41 boss with D changed to radius 3 before block 3: block 3 and
+ * after are offset by 3. The corner between blocks 2 and 3 meets block 2's
+ * offset x = -5 and block 3's y = 20 + 3; the next one x = 40 + 3 and
+ * y = 23. */
+static void test_radius_change(void)
+{
+    run r;
+    begin(&r, -10, -10, 0);
+    start(&r, GC_COMPC_LEFT, 5, 1);
+    line(&r, 0, 0, 1);
+    line(&r, 0, 20, 2);
+    if (!r.st) r.st = gc_compc_set_radius(&r.c, 3, "t.nc", 3, 1, &r.err);
+    line(&r, 40, 20, 3);
+    line(&r, 40, 0, 4);
+    finish(&r);
+    CHECK(r.st == FM_OK);
+    CHECK(r.o.n == 4);
+    CHECK_LINE(&r, 1, -5, 0, -5, 23, 2, 0);
+    CHECK_LINE(&r, 2, -5, 23, 43, 23, 3, 0);
+    /* finish: (40,0) + 3 (1,0) */
+    CHECK_LINE(&r, 3, 43, 23, 43, 0, 4, 0);
+}
+
 /* An equilateral triangle boss (0,0) (10,0) (5, 5 sqrt 3), counter-clockwise
  * with G42 (boss on the left), radius 1: the corner at (10,0) has alpha =
  * 60 degrees, Fanuc's acute rule with two extra vectors. */
@@ -638,6 +661,7 @@ int main(void)
     test_boss_g41();
     test_boss_g42();
     test_boss_acute();
+    test_radius_change();
     test_reversal();
     test_pocket();
     test_pocket_too_small();
