@@ -3,7 +3,8 @@
  * point is worked out by hand from the rules in Fanuc's manuals as that
  * file states them (the comments show the arithmetic): G41/G42 around a
  * boss (alpha 90: the intersection rule; alpha 60: the two extra vectors),
- * a pocket corner, arcs (convex, concave, line-arc inner and outer, arc-arc
+ * a pocket corner, arcs (convex, concave, line-arc inner and outer, arc-line,
+ * arc-arc
  * cusp), start-up and cancel blocks, a Fusion-style lead-in/lead-out, w-only
  * moves and dwells in offset mode (and past the look-ahead), and every
  * refusal with its line. Offsets: left normal of a direction (tu, tv) is
@@ -90,9 +91,9 @@ static void start(run *r, gc_compc_side side, double radius, int block)
     if (!r->st) r->st = gc_compc_start(&r->c, side, radius, "t.nc", block, 1, &r->err);
 }
 
-static void cancel(run *r, int block)
+static void cancel(run *r)
 {
-    if (!r->st) r->st = gc_compc_cancel(&r->c, "t.nc", block, 1, &r->err);
+    if (!r->st) r->st = gc_compc_cancel(&r->c, &r->err);
 }
 
 static void finish(run *r)
@@ -147,7 +148,7 @@ static void test_boss_g41(void)
     line(&r, 40, 20, 3);
     line(&r, 40, 0, 4);
     line(&r, 0, 0, 5);
-    cancel(&r, 6);
+    cancel(&r);
     line(&r, -10, -10, 6);
     finish(&r);
     CHECK(r.st == FM_OK);
@@ -178,7 +179,7 @@ static void test_boss_g42(void)
     line(&r, 40, 20, 3);
     line(&r, 0, 20, 4);
     line(&r, 0, 0, 5);
-    cancel(&r, 6);
+    cancel(&r);
     line(&r, -10, -10, 6);
     finish(&r);
     CHECK(r.st == FM_OK);
@@ -231,7 +232,7 @@ static void test_boss_acute(void)
     line(&r, 0, 0, 1);
     line(&r, 10, 0, 2);
     line(&r, 5, 5 * s3, 3);
-    cancel(&r, 4);
+    cancel(&r);
     line(&r, 5, 15, 4);
     finish(&r);
     CHECK(r.st == FM_OK);
@@ -303,7 +304,7 @@ static void test_pocket(void)
     line(&r, 40, 0, 2);
     line(&r, 40, 30, 3);
     line(&r, 20, 30, 4);
-    cancel(&r, 5);
+    cancel(&r);
     line(&r, 20, 15, 5);
     finish(&r);
     CHECK(r.st == FM_OK);
@@ -436,7 +437,7 @@ static void line_arc_corner(run *r, gc_compc_side side)
     line(r, 0, 0, 1);
     line(r, 10, 0, 2);
     arc(r, 30, 0, 20, 0, 1, 3);
-    cancel(r, 4);
+    cancel(r);
     line(r, 40, 10, 4);
     finish(r);
 }
@@ -471,6 +472,33 @@ static void test_line_arc_corners(void)
     CHECK_LINE(&r, 4, 28, 0, 40, 10, 4, 0);
 }
 
+/* An arc then a line at an outer corner: the clockwise upper half circle
+ * about (10,0), radius 10, from (0,0) to (20,0), then the line to (30,0),
+ * G42 (the tool inside the arc: radius 8), radius 2. At (20,0) the arc runs
+ * (0,-1) (right normal (-1,0): a1 = (18,0)), the line (1,0) (right normal
+ * (0,-1): a2 = (20,-2)): a left turn with the tool on the right, alpha 90.
+ * The arc's tangent line x = 18 meets y = -2 at (18,-2): the arc ends at
+ * a1 and a corner move of the arc's block goes down to (18,-2), where the
+ * line starts. */
+static void test_arc_line_corner(void)
+{
+    run r;
+    begin(&r, -5, -5, 0);
+    start(&r, GC_COMPC_RIGHT, 2, 1);
+    line(&r, 0, 0, 1);
+    arc(&r, 20, 0, 10, 0, -1, 2);
+    line(&r, 30, 0, 3);
+    finish(&r);
+    CHECK(r.st == FM_OK);
+    CHECK(r.o.n == 4);
+    /* start-up: the arc starts at (0,0) going (0,1), right normal (1,0) */
+    CHECK_LINE(&r, 0, -5, -5, 2, 0, 1, 0);
+    CHECK_ARC(&r, 1, 2, 0, 18, 0, 10, 0, -1, 2);
+    CHECK_LINE(&r, 2, 18, 0, 18, -2, 2, 1);
+    /* finish: (30,0) + 2 (0,-1) */
+    CHECK_LINE(&r, 3, 18, -2, 30, -2, 3, 0);
+}
+
 /* Two half circles (bumps) about (10,0) and (30,0), radius 10, meeting at
  * (20,0) in a cusp, the tool outside: an inner corner (the tangents are
  * opposite there; the bumps bend apart). Radius 2: the offset circles of
@@ -487,7 +515,7 @@ static void test_arc_arc_cusp(int mirror)
     line(&r, 0, 0, 1);
     arc(&r, 20, 0, 10, 0, -mirror, 2);
     arc(&r, 40, 0, 30, 0, -mirror, 3);
-    cancel(&r, 4);
+    cancel(&r);
     line(&r, 45, -5 * m, 4);
     finish(&r);
     double y = sqrt(44.0) * m;
@@ -540,7 +568,7 @@ static void test_lead_in_out(void)
     arc(&r, 0, 0, -5, 0, 1, 2);      /* G3 X0 Y0 R5 (lead-in) */
     line(&r, 0, 20, 3);              /* the wall */
     arc(&r, -5, 25, -5, 20, 1, 4);   /* G3 X-5 Y25 R5 (lead-out) */
-    cancel(&r, 5);
+    cancel(&r);
     line(&r, -15, 25, 5);            /* G40 G1 X-15 */
     finish(&r);
     CHECK(r.st == FM_OK);
@@ -629,7 +657,7 @@ static void test_refusals(void)
     start(&r, GC_COMPC_LEFT, 1, 1);
     line(&r, 10, 0, 1);
     line(&r, 20, 0, 2);
-    cancel(&r, 3);
+    cancel(&r);
     arc(&r, 30, 0, 25, 0, 1, 3);
     finish(&r);
     CHECK(r.st == FM_ERR_INPUT && r.err.line == 3);
@@ -669,6 +697,7 @@ int main(void)
     test_gouge_arc();
     test_arc_convex_concave();
     test_line_arc_corners();
+    test_arc_line_corner();
     test_arc_arc_cusp(1);
     test_arc_arc_cusp(-1);
     test_boss_obtuse();

@@ -453,9 +453,8 @@ fm_status gc_compc_set_radius(gc_compc *c, double radius, const char *file, int 
     return st;
 }
 
-fm_status gc_compc_cancel(gc_compc *c, const char *file, int line, int column, fm_error *err)
+fm_status gc_compc_cancel(gc_compc *c, fm_error *err)
 {
-    (void)file, (void)line, (void)column;
     if (c->state == ARMED) c->state = OFF;
     if (c->state != ON) return FM_OK;
     c->state = CANCELLING;

@@ -113,8 +113,10 @@ fm_status gc_compc_set_radius(gc_compc *c, double radius, const char *file, int 
 /* G40: the element waiting for its corner ends at the vector perpendicular
  * to its end (emitted now); the next plane element is the cancel block,
  * from there to its programmed end (an arc is refused, alarm 034). Nothing
- * happens when compensation is off; when armed it is simply turned off. */
-fm_status gc_compc_cancel(gc_compc *c, const char *file, int line, int column, fm_error *err);
+ * happens when compensation is off; when armed it is simply turned off.
+ * Fails only as the emit callback or the element's interference check
+ * (at that element's position) does. */
+fm_status gc_compc_cancel(gc_compc *c, fm_error *err);
 
 /* One programmed element (see gc_compc_elem). */
 fm_status gc_compc_add(gc_compc *c, const gc_compc_elem *in, fm_error *err);
