@@ -2,12 +2,12 @@
  * (toolpaths/gcode/machine/comp_intersect.c) on its own. Every expected
  * point is worked out by hand from the rules in Fanuc's manuals as that
  * file states them (the comments show the arithmetic): G41/G42 around a
- * boss (alpha 90: the intersection rule; alpha 60: the two extra vectors),
- * a pocket corner, arcs (convex, concave, line-arc inner and outer, arc-line,
- * arc-arc
- * cusp), start-up and cancel blocks, a Fusion-style lead-in/lead-out, w-only
- * moves and dwells in offset mode (and past the look-ahead), and every
- * refusal with its line. Offsets: left normal of a direction (tu, tv) is
+ * boss (alpha 90 and 135: the intersection rule; alpha 60 and 0: the two
+ * extra vectors), a D change, a pocket corner, arcs (convex, concave,
+ * line-arc inner and outer, arc-line, an arc-arc cusp, a near-tangent
+ * junction), start-up and cancel blocks, a Fusion-style lead-in/lead-out,
+ * w-only moves and dwells in offset mode (and past the look-ahead), and
+ * every refusal with its line. Offsets: left normal of a direction (tu, tv) is
  * (-tv, tu), right normal (tv, -tu). */
 #include <math.h>
 #include <stdio.h>
