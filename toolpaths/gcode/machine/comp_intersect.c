@@ -43,6 +43,10 @@
  *   later's. Beyond the limit the earlier element ends at the vector
  *   perpendicular to its end and the later one starts with a straight move
  *   to its offset start (Fanuc: "overcutting may occur").
+ * - A D change in offset mode applies to the plane elements given after it,
+ *   each offset by its own radius at the corners (Fanuc changes the vector
+ *   at the end of the block giving D: the same corner point, one block
+ *   earlier).
  * Corner moves belong to (carry the payload of) the element they extend or
  * lead into. Not done: a side change (G41 <-> G42) in offset mode, Fanuc's
  * types B and C start-up, the extra vector limit when an offset end lies far
