@@ -673,7 +673,7 @@ static void test_same_meaning(void)
 
 static void test_errors(void)
 {
-    expect_error("G90\nG41 D1 X1.\n", 2, 1, "cutter radius compensation is not supported");
+    expect_error("G90\nG31 X1.\n", 2, 1, "skip function");
     expect_error("WHILE [1 LT 2] DO4\nEND4\n", 1, 18, "loop number 4");
     expect_error("G00 X1.\nEND1\n", 2, 1, "END 1 without a matching DO 1");
     expect_error("WHILE [#1 GT 0] DO1\nG00 X1.\n", 1, 1, "WHILE [..] DO 1 without a matching END 1");

@@ -24,7 +24,7 @@ gc_group gc_fanuc_g_group(int code)
     case GC_G90: case GC_G91: return GC_GROUP_DISTANCE;
     case GC_G93: case GC_G94: return GC_GROUP_FEED_MODE;
     case GC_G20: case GC_G21: return GC_GROUP_UNITS;
-    case GC_G40: return GC_GROUP_CUTTER_COMP;
+    case GC_G40: case GC_G41: case GC_G42: return GC_GROUP_CUTTER_COMP;
     case GC_G43: case GC_G43_4: case GC_G44: case GC_G49: return GC_GROUP_TOOL_LENGTH;
     case GC_G98: case GC_G99: return GC_GROUP_RETURN_MODE;
     case GC_G54: case GC_G55: case GC_G56: case GC_G57: case GC_G58: case GC_G59: case GC_G54_1:
@@ -37,7 +37,7 @@ gc_group gc_fanuc_g_group(int code)
     case GC_G67: return GC_GROUP_MACRO_MODAL;
     case GC_G5: case GC_G5_1: case GC_G8: case GC_G103: case GC_G187: return GC_GROUP_LOOKAHEAD;
     case GC_G7: case GC_G12: case GC_G13: case GC_G22: case GC_G23: case GC_G29: case GC_G31:
-    case GC_G33: case GC_G37: case GC_G41: case GC_G42: case 450: case 460: case 470: case 480:
+    case GC_G33: case GC_G37: case 450: case 460: case 470: case 480:
     case GC_G50_1: case GC_G51_1: case GC_G60: case GC_G66: case GC_G95: case GC_G154:
     case GC_G43_1: case GC_G43_2: case 121: case 131: case 71:
         return GC_GROUP_REFUSED;
@@ -48,9 +48,6 @@ gc_group gc_fanuc_g_group(int code)
 static const char *refused(int code)
 {
     switch (code) {
-    case GC_G41: case GC_G42:
-        return "cutter radius compensation is not supported in the Fanuc dialect; give the "
-               "toolpath of the tool centre (G40) instead";
     case GC_G7: case 71: return "cylindrical interpolation is not supported";
     case GC_G12: case GC_G13:
         return "Haas circular pocket milling is not supported; program the circles with G02/G03";

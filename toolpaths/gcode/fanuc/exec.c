@@ -181,7 +181,7 @@ fm_status gc_fanuc_move(gc_interp *g, int rapid, const double prog_end[3])
     double work[3];
     gc_fanuc_to_work(g, prog_end, work);
     memcpy(FANUC(g)->prog, prog_end, sizeof FANUC(g)->prog);
-    return gc_move_line(g, rapid, work);
+    return gc_fanuc_line(g, rapid, work);
 }
 
 static int has_plane_word(const gc_block *b)
@@ -262,7 +262,7 @@ static fm_status exec_arc(gc_interp *g, const gc_fanuc_block *fb, int code, int 
     gc_fanuc_to_work(g, cen, wcen);
     double cab[2] = {wcen[a], wcen[bb]};
     memcpy(f->prog, end, sizeof f->prog);
-    return gc_move_arc(g, wend, cab, code == GC_G2 ? -1 : 1);
+    return gc_fanuc_arc(g, wend, cab, code == GC_G2 ? -1 : 1);
 }
 
 /* ---- modal state ---- */
@@ -607,6 +607,10 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
         return gc_fanuc_call(g, GC_CALL_G65, pn, reps, fb->args, fb->g65_col);
     }
 
+    int ccheck = gc_block_g(b, GC_GROUP_CYCLE, NULL);
+    if ((st = gc_fanuc_comp_check(g, fb, ccheck != GC_G_NONE ? ccheck : (int)g->motion)))
+        return st;
+
     /* feed mode, feed, speed, tool, tool change, spindle, coolant */
     code = gc_block_g(b, GC_GROUP_FEED_MODE, NULL);
     if (code == GC_G93) g->inverse_time = 1;
@@ -687,7 +691,7 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
         else if (b->has[L('u')]) sec = b->v[L('u')];
         if (sec < 0)
             return gc_fail(g, FM_ERR_INPUT, nonmodal_col, "G04: negative dwell time %g s", sec);
-        if ((st = gc_dwell(g, sec))) return st;
+        if ((st = gc_fanuc_dwell(g, sec))) return st;
     }
 
     /* motion mode of this block */
@@ -746,6 +750,11 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
     code = gc_block_g(b, GC_GROUP_COORD_SYSTEM, &col);
     if (code != GC_G_NONE && (st = select_work_offset(g, fb, code, col))) return st;
 
+    /* cutter radius compensation: this block's move starts or cancels it */
+    code = gc_block_g(b, GC_GROUP_CUTTER_COMP, &col);
+    if ((code != GC_G_NONE || b->has[L('d')]) && (st = gc_fanuc_comp_mode(g, fb, code, col)))
+        return st;
+
     /* scaling and rotation (their axis words are centres) */
     if (scaling == GC_G50) {
         f->scaling = 0;
@@ -792,6 +801,7 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
                 if (b->has[i] && (!best || b->col[i] < best)) best = b->col[i];
             mcol = best;
         }
+        f->motion_col = mcol;
         if (motion == GC_G0 || motion == GC_G1) {
             if (motion == GC_G1) {
                 if ((st = gc_check_feed(g, "G01", mcol))) return st;

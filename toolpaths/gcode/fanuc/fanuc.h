@@ -115,6 +115,8 @@ typedef struct gc_fanuc {
     double level_r, level_z;
     double block_end[3]; /* #5001-#5003: where the previous block ended */
 
+    int motion_col;      /* column of the block's motion, for compensation's errors */
+
     /* the current block */
     int in_address;      /* evaluating an address: ROUND rounds to its increment */
     double address_increment;
@@ -132,7 +134,7 @@ fm_status gc_fanuc_return(gc_interp *g, int has_p, long p, int col);
 /* The raw text of the current line (comments kept), for #3000's message. */
 void gc_fanuc_raw_line(const gc_interp *g, const char **text, size_t *len);
 
-/* ---- fanuc/expr.c ---- */
+/* ---- expr.c ---- */
 
 /* How an address's number was written: the decimal point rule and the
  * dwell units depend on it. */
@@ -159,7 +161,7 @@ fm_status gc_fanuc_set_var(gc_interp *g, long num, double v, int col);
 /* Fanuc's rounding: half away from zero. */
 double gc_fanuc_round(double v);
 
-/* ---- fanuc/block.c ---- */
+/* ---- block.c ---- */
 
 typedef struct gc_fanuc_block {
     unsigned char form[26];  /* gc_number_form of each word */
@@ -172,7 +174,7 @@ typedef struct gc_fanuc_block {
 fm_status gc_fanuc_parse_block(gc_interp *g, size_t p, gc_fanuc_block *fb);
 gc_group gc_fanuc_g_group(int code);
 
-/* ---- fanuc/exec.c ---- */
+/* ---- exec.c ---- */
 fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb);
 /* Word c as a length in program units (the decimal point rule, rounded to
  * the least input increment), or as an angle in degrees. */
@@ -190,7 +192,17 @@ fm_status gc_fanuc_move(gc_interp *g, int rapid, const double prog_end[3]);
  * G52) into g->g5x; the current point keeps its machine position. */
 void gc_fanuc_apply_work_offset(gc_interp *g);
 
-/* ---- fanuc/cycle.c ---- */
+/* ---- comp.c ---- */
+/* G40/G41/G42 and D of a block (code GC_G_NONE: only D). */
+fm_status gc_fanuc_comp_mode(gc_interp *g, const gc_fanuc_block *fb, int code, int col);
+/* What a control refuses while compensating; motion is the block's motion mode. */
+fm_status gc_fanuc_comp_check(gc_interp *g, const gc_fanuc_block *fb, int motion);
+/* Moves, arcs and dwells in work coordinates, through compensation while it runs. */
+fm_status gc_fanuc_line(gc_interp *g, int rapid, const double work[3]);
+fm_status gc_fanuc_arc(gc_interp *g, const double work[3], const double center_ab[2], int turn);
+fm_status gc_fanuc_dwell(gc_interp *g, double seconds);
+
+/* ---- cycle.c ---- */
 fm_status gc_fanuc_exec_cycle(gc_interp *g, const gc_fanuc_block *fb, int code, int col);
 
 #endif

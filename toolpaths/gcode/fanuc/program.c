@@ -758,7 +758,9 @@ static fm_status fanuc_run(gc_interp *g)
         if (st) goto out;
         if (!f->jumped) g->cur++;
     }
-    st = FM_OK;
+    /* the program's end: what compensation holds leaves (unless the sink
+     * stopped the run) */
+    st = g->stop && !g->ended ? FM_OK : gc_comp_c_finish(g);
 out:
     free(fb);
     use_text(g, 0);

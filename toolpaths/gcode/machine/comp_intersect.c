@@ -544,3 +544,5 @@ void gc_compc_programmed_point(const gc_compc *c, double out[3])
 {
     memcpy(out, c->prog, sizeof c->prog);
 }
+
+int gc_compc_idle(const gc_compc *c) { return c->state == OFF; }

@@ -125,6 +125,10 @@ fm_status gc_compc_add(gc_compc *c, const gc_compc_elem *in, fm_error *err);
  * perpendicular to its end) and turn compensation off. */
 fm_status gc_compc_finish(gc_compc *c, fm_error *err);
 
+/* Nothing waits and compensation is off: no G41/G42, or its cancel block
+ * has run. */
+int gc_compc_idle(const gc_compc *c);
+
 /* Compensation is armed or on (a G41/G42 not yet cancelled). */
 int gc_compc_active(const gc_compc *c);
 

@@ -64,6 +64,7 @@ void gc_machine_free(gc_interp *g)
     free(g->scan.s);
     free(g->scan.col);
     gc_comp_free(&g->comp);
+    gc_comp_c_free(g);
     gc_spline_free(&g->spline);
     free(g->nurbs);
     free(g->tool_edits);

@@ -246,6 +246,11 @@ typedef struct gc_interp {
     int cycle_il_flag;
     double rotation;    /* degrees: the active coordinate system's XY rotation (G10 L2 R) */
     gc_comp comp;
+    /* compensation C (comp_c.c): the engine from the first G41/G42 on, the
+     * plane and side it was started in */
+    struct gc_compc *comp_c;
+    gc_plane comp_c_plane;
+    int comp_c_left;
     gc_tool_edit *tool_edits;
     int ntool_edits, captool_edits;
     double tool_param_z, tool_param_dia; /* #5403 and #5410 in mm (gc_refresh_tool_params) */
@@ -355,6 +360,25 @@ fm_status gc_comp_arc(gc_interp *g, const gc_arc_data *a, double feed, int col);
 /* Emit a queued motion (motion.c). */
 fm_status gc_emit_comp_move(gc_interp *g, const gc_comp_move *m);
 
+/* Cutter radius compensation with intersected corners, Fanuc's type C
+ * (comp_c.c over comp_intersect.c): a dialect that uses it hands every line,
+ * arc and dwell to gc_comp_c_line/arc/dwell while gc_comp_c_routing is true
+ * (from G41/G42 until the cancel block after G40 has run). Coordinates as
+ * gc_move_line's; radius in program units (negative: the other side, 0: no
+ * offset). */
+fm_status gc_comp_c_start(gc_interp *g, int left, double radius, int col);
+fm_status gc_comp_c_radius(gc_interp *g, double radius, int col);
+fm_status gc_comp_c_cancel(gc_interp *g);
+int gc_comp_c_routing(const gc_interp *g);
+int gc_comp_c_on(const gc_interp *g);
+fm_status gc_comp_c_line(gc_interp *g, int rapid, const double to[3], int col);
+fm_status gc_comp_c_arc(gc_interp *g, const double to[3], const double center_ab[2], int turn,
+                        int col);
+fm_status gc_comp_c_dwell(gc_interp *g, double seconds);
+/* Program end: what waits leaves with the offset perpendicular to its end. */
+fm_status gc_comp_c_finish(gc_interp *g);
+void gc_comp_c_free(gc_interp *g);
+
 void gc_spline_free(gc_spline *s);
 fm_status gc_spline_build(gc_spline *s, const double *xyw, size_t npts, int order, fm_error *err);
 void gc_spline_point(const gc_spline *s, double u, double p[2]);
@@ -442,7 +466,6 @@ fm_status gc_move_line(gc_interp *g, int rapid, const double to[3]);
  * (center_ab[0], center_ab[1]) in the plane's axes; turns > 0 counter-clockwise. */
 fm_status gc_move_arc(gc_interp *g, const double to[3], const double center_ab[2], int turns);
 /* The plane's first and second axis and its normal (0 X, 1 Y, 2 Z; G18's first is Z). */
-void gc_plane_axes(gc_plane plane, int *a, int *b, int *c);
 fm_status gc_dwell(gc_interp *g, double seconds);
 /* The end point of a G0/G1/G2/G3 block in program coordinates; machine
  * coordinates with G53. */
