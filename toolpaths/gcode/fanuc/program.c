@@ -99,25 +99,6 @@ static fm_status index_text(gc_interp *g, int t, int *first_program)
     return FM_OK;
 }
 
-static fm_status index_lines(gc_interp *g, gc_fanuc_text *x)
-{
-    size_t n = 1;
-    for (size_t i = 0; i < x->len; i++)
-        if (x->text[i] == '\n') n++;
-    x->line_start = malloc((n + 1) * sizeof *x->line_start);
-    if (!x->line_start)
-        return fm_error_set(g->err, FM_ERR_LIMIT, "out of memory indexing %zu lines of %s", n,
-                            x->name);
-    size_t k = 0;
-    x->line_start[k++] = 0;
-    for (size_t i = 0; i < x->len; i++)
-        if (x->text[i] == '\n') x->line_start[k++] = i + 1;
-    x->line_start[k] = x->len;
-    x->nlines = n;
-    if (n > 1 && x->line_start[n - 1] == x->len) x->nlines = n - 1;
-    return FM_OK;
-}
-
 static int find_program(const gc_fanuc *f, long number)
 {
     for (int i = 0; i < f->nprograms; i++)
@@ -186,7 +167,7 @@ static fm_status load_text(gc_interp *g, const char *path, int col, int *text)
     strcpy(x->name, path);
     f->ntexts++;
     f->loaded_bytes += n;
-    fm_status st = index_lines(g, x);
+    fm_status st = gc_index_lines(x->text, x->len, x->name, &x->line_start, &x->nlines, g->err);
     if (st) return st;
     *text = f->ntexts - 1;
     return FM_OK;

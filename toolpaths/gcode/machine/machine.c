@@ -30,18 +30,8 @@ fm_status gc_machine_init(gc_interp *g, const char *text, size_t len, const char
         return fm_error_at(err, FM_ERR_LIMIT, g->name, 0, 0,
                            "program of %zu bytes is larger than the limit of %zu bytes "
                            "(max_program_bytes)", len, g->opt.max_program_bytes);
-    size_t n = 1;
-    for (size_t i = 0; i < len; i++)
-        if (text[i] == '\n') n++;
-    g->line_start = malloc((n + 1) * sizeof *g->line_start);
-    if (!g->line_start) return fm_error_set(err, FM_ERR_LIMIT, "out of memory indexing %zu lines", n);
-    size_t k = 0;
-    g->line_start[k++] = 0;
-    for (size_t i = 0; i < len; i++)
-        if (text[i] == '\n') g->line_start[k++] = i + 1;
-    g->line_start[k] = len;
-    g->nlines = n;
-    if (n > 1 && g->line_start[n - 1] == len) g->nlines = n - 1; /* trailing newline */
+    fm_status st = gc_index_lines(text, len, g->name, &g->line_start, &g->nlines, err);
+    if (st) return st;
     g->unit = g->opt.start_inch ? GC_INCH : 1.0;
     g->plane = GC_PLANE_XY;
     g->absolute = 1;

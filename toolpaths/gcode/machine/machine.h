@@ -386,6 +386,10 @@ void gc_spline_box(const gc_spline *s, double ua, double ub, double lo[2], doubl
 double gc_spline_length(const gc_spline *s);
 void gc_spline_path(gc_spline *s, double t0, double t1, double z);
 
+/* Offsets of the lines of text into *line_start (*nlines + 1 of them; a
+ * trailing newline ends the last line rather than starting an empty one). */
+fm_status gc_index_lines(const char *text, size_t len, const char *name, size_t **line_start,
+                         size_t *nlines, fm_error *err);
 /* The text of line idx (any source) and its length. */
 void gc_line_text(const gc_interp *g, size_t idx, const char **text, size_t *len);
 /* Make line idx current for messages: g->lineno and g->line_name. */

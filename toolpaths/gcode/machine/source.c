@@ -72,6 +72,24 @@ void gc_set_line(gc_interp *g, size_t idx)
     }
 }
 
+fm_status gc_index_lines(const char *text, size_t len, const char *name, size_t **line_start,
+                         size_t *nlines, fm_error *err)
+{
+    size_t n = 1;
+    for (size_t i = 0; i < len; i++)
+        if (text[i] == '\n') n++;
+    size_t *ls = malloc((n + 1) * sizeof *ls);
+    if (!ls) return fm_error_set(err, FM_ERR_LIMIT, "out of memory indexing %zu lines of %s", n, name);
+    size_t k = 0;
+    ls[k++] = 0;
+    for (size_t i = 0; i < len; i++)
+        if (text[i] == '\n') ls[k++] = i + 1;
+    ls[k] = len;
+    *nlines = n > 1 && ls[n - 1] == len ? n - 1 : n; /* a trailing newline ends the last line */
+    *line_start = ls;
+    return FM_OK;
+}
+
 void gc_sources_free(gc_interp *g)
 {
     for (int i = 0; i < g->nsources; i++) {
@@ -172,10 +190,11 @@ fm_status gc_load_subroutine_file(gc_interp *g, const char *name, int col, int *
     size_t len = 0;
     fm_status st = read_file(g, path, limit, &text, &len, col);
     if (st) return st;
-    size_t n = 1;
-    for (size_t i = 0; i < len; i++)
-        if (text[i] == '\n') n++;
-    size_t *ls = malloc((n + 1) * sizeof *ls);
+    size_t *ls = NULL, nlines = 0;
+    if ((st = gc_index_lines(text, len, path, &ls, &nlines, g->err))) {
+        free(text);
+        return st;
+    }
     char *pname = strdup(path);
     if (g->nsources == g->capsources) {
         int cap = g->capsources ? g->capsources * 2 : 4;
@@ -191,13 +210,6 @@ fm_status gc_load_subroutine_file(gc_interp *g, const char *name, int col, int *
         free(text);
         return fm_error_set(g->err, FM_ERR_LIMIT, "out of memory loading %s", path);
     }
-    size_t k = 0;
-    ls[k++] = 0;
-    for (size_t i = 0; i < len; i++)
-        if (text[i] == '\n') ls[k++] = i + 1;
-    ls[k] = len;
-    size_t nlines = n;
-    if (n > 1 && ls[n - 1] == len) nlines = n - 1;
     gc_source *s = &g->sources[g->nsources++];
     s->name = pname;
     s->text = text;
