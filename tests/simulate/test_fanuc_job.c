@@ -66,6 +66,88 @@ static const char *program =
     "M99\n"
     "%\n";
 
+/* A program in the shape Fusion 360's Haas post writes (header comments,
+ * G90 G94 G17, G21, G53 G0 Z0., T1 M6, S M3, G54.1 P1 (Haas writes G154 P1,
+ * the same offset), G43 Z H1, G187 P3, M8,
+ * a contour with a G41 D1 start-up line and tangent lead-in arc, a G40
+ * lead-out, G53 G0 Z0., M1, M30) around a 40 x 20 boss, 5 deep, in a block
+ * 8 mm wider on every side. The first line sets P1's offset as an operator
+ * sets it at the control (the part's top at machine Z-200). The compensated path (r 5) runs 5 mm
+ * outside the boss with square corners at (-5,-5), (-5,25), (45,25),
+ * (45,-5) (Fanuc's intersection for alpha = 90): the tool clears every
+ * point within 10 mm outside the boss's sides, and the block's corners
+ * (8, 8 from the boss's: 4.24 mm from the corner points) too, while the
+ * lead-in and lead-out arcs (R 10 about (-10,10), the tool inside them on
+ * R 5) stay off the boss. So the cut removes the block outside the boss to
+ * 5 mm: (56 x 36 - 40 x 20) x 5 = 6080 mm3. Without compensation the tool
+ * centre would follow the boss's outline and cut 5 mm into it. */
+static const char *fusion_program =
+    "%\n"
+    "O01001 (BOSS)\n"
+    "(Machine)\n"
+    "(  vendor: Haas Automation)\n"
+    "(  description: VF-2)\n"
+    "(T1 D=10. CR=0. - ZMIN=-5. - FLAT END MILL)\n"
+    "G10 L20 P1 X0. Y0. Z-200.\n"
+    "N10 G90 G94 G17\n"
+    "N15 G21\n"
+    "N20 G53 G0 Z0.\n"
+    "(2D CONTOUR1)\n"
+    "N25 T1 M6\n"
+    "N30 S8000 M3\n"
+    "N35 G54.1 P1\n"
+    "N40 G0 X-10. Y-25.\n"
+    "N45 G43 Z15. H1\n"
+    "N50 G187 P3\n"
+    "N55 M8\n"
+    "N60 G0 Z5.\n"
+    "N65 G1 Z-5. F1000.\n"
+    "N70 G41 D1 Y0. F1500.\n"
+    "N75 G3 X0. Y10. I0. J10.\n"
+    "N80 G1 Y20.\n"
+    "N85 X40.\n"
+    "N90 Y0.\n"
+    "N95 X0.\n"
+    "N100 Y10.\n"
+    "N105 G3 X-10. Y20. I-10. J0.\n"
+    "N110 G40 G1 Y35.\n"
+    "N115 G0 Z15.\n"
+    "N120 M9\n"
+    "N125 G53 G0 Z0.\n"
+    "N130 M1\n"
+    "N135 M30\n"
+    "%\n";
+
+static void test_fusion_haas(const fm_tool_table *tools)
+{
+    double exact = (56.0 * 36.0 - 40.0 * 20.0) * 5.0;
+    fm_job_spec spec;
+    fm_job_spec_default(&spec);
+    spec.program_text = fusion_program;
+    spec.program_length = strlen(fusion_program);
+    spec.program_name = "O01001.nc";
+    /* the block where G154 P1 puts the part: its top at machine Z-200 */
+    spec.stock_spec = "box:-8,-8,-230,48,28,-200";
+    spec.tools = tools;
+    spec.stock.voxel_mm = 0.1;
+    spec.dialect = "fanuc";
+    fm_job_result result;
+    fm_error err;
+    char buf[700];
+    fm_status st = fm_job_run(&spec, NULL, &result, &err);
+    CHECK(st == FM_OK);
+    if (st) {
+        fprintf(stderr, "Fusion-style job failed: %s\n", fm_error_format(&err, buf, sizeof buf));
+        return;
+    }
+    double v = result.removed_volume_mm3;
+    double rel = fabs(v - exact) / exact;
+    printf("Fusion 360 Haas-post program (G41 D1 lead-in, G40 lead-out), voxel 0.10: "
+           "removed %.3f mm3, closed form %.3f mm3, error %.3f%%\n", v, exact, 100 * rel);
+    CHECK(rel <= 0.005);
+    fm_stock_free(result.stock);
+}
+
 int main(void)
 {
     fm_tool_table tools;
@@ -122,6 +204,7 @@ int main(void)
     spec.dialect = "haas";
     CHECK(fm_job_run(&spec, NULL, &result, &err) == FM_ERR_INPUT);
     CHECK_STR_CONTAINS(err.message, "expected linuxcnc or fanuc");
+    test_fusion_haas(&tools);
     fm_tool_table_free(&tools);
     return test_summary("test_fanuc_job");
 }
