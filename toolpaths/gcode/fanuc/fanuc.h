@@ -5,8 +5,8 @@
  * control flow and tells the machine what each code means in Fanuc's table:
  *   program.c  programs (%, O numbers, files on the search path), the line
  *              loop, IF/GOTO/WHILE/DO/END, M98/M97/G65 calls, M99
- *   expr.c     Macro B: numbers, [expressions], functions, variables
- *              (#0 vacant, locals per call level, commons, system)
+ *   expr.c     Macro B: its expression table (machine/expr.c evaluates),
+ *              variables (#0 vacant, locals per call level, commons, system)
  *   block.c    words of a block, Fanuc's G-code groups, the decimal point
  *              and rounding rules of addresses
  *   exec.c     executing a block: modal state, offsets, G68/G51/G16, lines,

@@ -1,11 +1,9 @@
-/* expr.c: values in the G-code interpreter: number syntax, [...]
- * expressions with every LinuxCNC operator and function, numbered and named
- * parameters, and the error helper every file uses (file:line:column). */
+/* expr.c: LinuxCNC's values: its table for the expression engine
+ * (machine/expr.c: operators, precedence, functions, EXISTS), numbered and
+ * named parameters and the stores that keep them. */
 #include "linuxcnc.h"
 
 #include <math.h>
-#include <stdarg.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -224,34 +222,7 @@ double gc_param_value(gc_interp *g, int n)
     }
 }
 
-/* ---- numbers and expressions ---- */
-
-static fm_status read_number(gc_interp *g, const gc_line *ln, size_t *p, double *out)
-{
-    const char *s = ln->s;
-    size_t i = *p, start = *p;
-    int digits = 0, dots = 0;
-    if (s[i] == '+' || s[i] == '-') i++;
-    while ((s[i] >= '0' && s[i] <= '9') || s[i] == '.') {
-        if (s[i] == '.') dots++;
-        else digits++;
-        i++;
-    }
-    if (!digits || dots > 1)
-        return gc_fail(g, FM_ERR_INPUT, gc_col(ln, start),
-                       "bad number '%.*s'; expected digits with at most one '.', "
-                       "a [expression], a #parameter or a function",
-                       (int)(i - start > 20 ? 20 : (i - start ? i - start : 1)), s + start);
-    char buf[64];
-    if (i - start >= sizeof buf)
-        return gc_fail(g, FM_ERR_INPUT, gc_col(ln, start),
-                       "number with %zu characters; expected at most 63", i - start);
-    memcpy(buf, s + start, i - start);
-    buf[i - start] = '\0';
-    *out = strtod(buf, NULL);
-    *p = i;
-    return FM_OK;
-}
+/* ---- references and the expression table ---- */
 
 static fm_status read_name(gc_interp *g, const gc_line *ln, size_t *p, char *name)
 {
@@ -300,271 +271,67 @@ fm_status gc_read_param_ref(gc_interp *g, const gc_line *ln, size_t *p, int *num
     return param_index(g, ln, at, v, num);
 }
 
-static fm_status read_bracket(gc_interp *g, const gc_line *ln, size_t *p, double *out);
-
-typedef enum { OP_NONE, OP_POW, OP_MUL, OP_DIV, OP_MOD, OP_ADD, OP_SUB, OP_EQ, OP_NE, OP_GT,
-               OP_GE, OP_LT, OP_LE, OP_AND, OP_OR, OP_XOR } gc_op;
-
-static gc_op peek_op(const char *s, size_t *len)
-{
-    static const struct { const char *t; gc_op op; } ops[] = {
-        {"**", OP_POW}, {"*", OP_MUL}, {"/", OP_DIV}, {"mod", OP_MOD}, {"+", OP_ADD},
-        {"-", OP_SUB}, {"eq", OP_EQ}, {"ne", OP_NE}, {"gt", OP_GT}, {"ge", OP_GE},
-        {"lt", OP_LT}, {"le", OP_LE}, {"and", OP_AND}, {"or", OP_OR}, {"xor", OP_XOR}};
-    for (size_t i = 0; i < sizeof ops / sizeof ops[0]; i++) {
-        size_t n = strlen(ops[i].t);
-        if (!strncmp(s, ops[i].t, n)) {
-            *len = n;
-            return ops[i].op;
-        }
-    }
-    return OP_NONE;
-}
-
-/* LinuxCNC's precedence: ** > * / MOD > + - > comparisons > AND OR XOR. */
-static int precedence(gc_op op)
-{
-    switch (op) {
-    case OP_POW: return 5;
-    case OP_MUL: case OP_DIV: case OP_MOD: return 4;
-    case OP_ADD: case OP_SUB: return 3;
-    case OP_EQ: case OP_NE: case OP_GT: case OP_GE: case OP_LT: case OP_LE: return 2;
-    case OP_AND: case OP_OR: case OP_XOR: return 1;
-    default: return 0;
-    }
-}
-
-static fm_status apply_op(gc_interp *g, const gc_line *ln, size_t at, gc_op op, double a, double b,
-                          double *out)
-{
-    double r = 0;
-    switch (op) {
-    case OP_POW:
-        if (a < 0 && floor(b) != b)
-            return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
-                           "'**': %g raised to the non-integer power %g; expected a "
-                           "non-negative base or an integer exponent", a, b);
-        if (a == 0 && b < 0)
-            return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
-                           "'**': zero raised to the negative power %g", b);
-        r = pow(a, b);
-        break;
-    case OP_MUL: r = a * b; break;
-    case OP_DIV:
-        if (b == 0)
-            return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
-                           "'/': division by zero; expected a non-zero divisor");
-        r = a / b;
-        break;
-    case OP_MOD:
-        if (b == 0)
-            return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
-                           "'MOD': modulo by zero; expected a non-zero divisor");
-        r = fmod(a, b);
-        if (r < 0) r += fabs(b); /* LinuxCNC's MOD is never negative */
-        break;
-    case OP_ADD: r = a + b; break;
-    case OP_SUB: r = a - b; break;
-    case OP_EQ: r = fabs(a - b) < GC_TOLERANCE_EQUAL; break;
-    case OP_NE: r = fabs(a - b) >= GC_TOLERANCE_EQUAL; break;
-    case OP_GT: r = a > b; break;
-    case OP_GE: r = a >= b; break;
-    case OP_LT: r = a < b; break;
-    case OP_LE: r = a <= b; break;
-    case OP_AND: r = (a != 0) && (b != 0); break;
-    case OP_OR: r = (a != 0) || (b != 0); break;
-    case OP_XOR: r = (a != 0) != (b != 0); break;
-    default: break;
-    }
-    if (!isfinite(r))
-        return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
-                       "expression result is not a finite number (%g)", r);
-    *out = r;
-    return FM_OK;
-}
-
-static fm_status read_binary(gc_interp *g, const gc_line *ln, size_t *p, int min_prec, double *out)
-{
-    double lhs;
-    fm_status st = gc_read_real(g, ln, p, &lhs);
-    if (st) return st;
-    for (;;) {
-        size_t len;
-        gc_op op = peek_op(ln->s + *p, &len);
-        if (op == OP_NONE) break;
-        int prec = precedence(op);
-        if (prec < min_prec) break;
-        size_t at = *p;
-        *p += len;
-        double rhs;
-        st = read_binary(g, ln, p, prec + 1, &rhs);
-        if (st) return st;
-        st = apply_op(g, ln, at, op, lhs, rhs, &lhs);
-        if (st) return st;
-    }
-    *out = lhs;
-    return FM_OK;
-}
-
-static fm_status read_bracket(gc_interp *g, const gc_line *ln, size_t *p, double *out)
-{
-    size_t open = *p;
-    if (ln->s[*p] != '[')
-        return gc_fail(g, FM_ERR_INPUT, gc_col(ln, *p), "expected '[' at '%.10s'", ln->s + *p);
-    if (++g->expr_depth > GC_MAX_EXPR_DEPTH)
-        return gc_fail(g, FM_ERR_LIMIT, gc_col(ln, *p),
-                       "expression nested deeper than %d levels", GC_MAX_EXPR_DEPTH);
-    (*p)++;
-    fm_status st = read_binary(g, ln, p, 1, out);
-    g->expr_depth--;
-    if (st) return st;
-    if (ln->s[*p] != ']') {
-        if (ln->s[*p] == '\0')
-            return gc_fail(g, FM_ERR_INPUT, gc_col(ln, open),
-                           "'[' without ']'; expected ']' before the end of the line");
-        return gc_fail(g, FM_ERR_INPUT, gc_col(ln, *p),
-                       "unexpected '%c' in expression; expected an operator or ']'", ln->s[*p]);
-    }
-    (*p)++;
-    return FM_OK;
-}
-
-static double deg(double r) { return r * 180.0 / GC_PI; }
-static double rad(double d) { return d * GC_PI / 180.0; }
-
-static fm_status read_function(gc_interp *g, const gc_line *ln, size_t *p, double *out)
+/* '#' in an expression: the parameter's value; a named one must exist. */
+static fm_status read_param(gc_interp *g, const gc_line *ln, size_t *p, double *out)
 {
     size_t at = *p;
-    char fn[8];
-    size_t k = 0;
-    while (ln->s[*p] >= 'a' && ln->s[*p] <= 'z' && k < sizeof fn - 1) fn[k++] = ln->s[(*p)++];
-    fn[k] = '\0';
-    if (!strcmp(fn, "exists")) {
-        if (ln->s[*p] != '[' || ln->s[*p + 1] != '#' || ln->s[*p + 2] != '<')
-            return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
-                           "EXISTS: expected EXISTS[#<name>]");
-        size_t q = *p + 2;
-        char name[GC_MAX_NAME];
-        fm_status st = read_name(g, ln, &q, name);
-        if (st) return st;
-        if (ln->s[q] != ']')
-            return gc_fail(g, FM_ERR_INPUT, gc_col(ln, q), "EXISTS: expected ']' after #<%s>", name);
-        double v;
-        *out = gc_get_named(g, name, &v);
-        *p = q + 1;
-        return FM_OK;
-    }
-    static const char *names[] = {"abs", "acos", "asin", "atan", "cos", "exp", "fix",
-                                  "fup", "round", "ln", "sin", "sqrt", "tan"};
-    int which = -1;
-    for (int i = 0; i < (int)(sizeof names / sizeof names[0]); i++)
-        if (!strcmp(fn, names[i])) which = i;
-    if (which < 0)
-        return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
-                       "unknown word or function '%s'; expected a number, [expression], "
-                       "#parameter or one of ABS ACOS ASIN ATAN COS EXP FIX FUP ROUND LN SIN "
-                       "SQRT TAN EXISTS", fn);
-    if (ln->s[*p] != '[')
-        return gc_fail(g, FM_ERR_INPUT, gc_col(ln, *p), "%s: expected '[' after the function name",
-                       fn);
-    double a;
-    fm_status st = read_bracket(g, ln, p, &a);
+    int num;
+    char name[GC_MAX_NAME];
+    fm_status st = gc_read_param_ref(g, ln, p, &num, name);
     if (st) return st;
-    double r = 0;
-    switch (which) {
-    case 0: r = fabs(a); break;
-    case 1:
-    case 2:
-        if (a < -1 || a > 1)
-            return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
-                           "%s[%g]: argument out of range; expected -1 to 1", which == 1 ? "ACOS" : "ASIN", a);
-        r = deg(which == 1 ? acos(a) : asin(a));
-        break;
-    case 3:
-        if (ln->s[*p] == '/') {
-            (*p)++;
-            double b;
-            if (ln->s[*p] != '[')
-                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, *p), "ATAN: expected ATAN[y]/[x]");
-            st = read_bracket(g, ln, p, &b);
-            if (st) return st;
-            r = deg(atan2(a, b));
-        } else {
-            r = deg(atan(a));
-        }
-        break;
-    case 4: r = cos(rad(a)); break;
-    case 5: r = exp(a); break;
-    case 6: r = floor(a); break;
-    case 7: r = ceil(a); break;
-    case 8: r = round(a); break;
-    case 9:
-        if (a <= 0)
-            return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
-                           "LN[%g]: logarithm of a non-positive number; expected a value > 0", a);
-        r = log(a);
-        break;
-    case 10: r = sin(rad(a)); break;
-    case 11:
-        if (a < 0)
-            return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
-                           "SQRT[%g]: square root of a negative number; expected a value >= 0", a);
-        r = sqrt(a);
-        break;
-    case 12: r = tan(rad(a)); break;
+    if (!name[0]) {
+        *out = gc_param_value(g, num);
+    } else if (!gc_get_named(g, name, out)) {
+        return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
+                       "#<%s> is not defined; expected a parameter assigned earlier "
+                       "(or EXISTS[#<%s>] to test it)", name, name);
     }
-    if (!isfinite(r))
-        return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at), "%s: result is not a finite number", fn);
-    *out = r;
     return FM_OK;
 }
+
+/* EXISTS[#<name>]: 1 if the named parameter has a value (at '['). */
+static fm_status exists(gc_interp *g, const gc_line *ln, size_t *p, int col, double *out)
+{
+    if (ln->s[*p + 1] != '#' || ln->s[*p + 2] != '<')
+        return gc_fail(g, FM_ERR_INPUT, col, "EXISTS: expected EXISTS[#<name>]");
+    size_t q = *p + 2;
+    char name[GC_MAX_NAME];
+    fm_status st = read_name(g, ln, &q, name);
+    if (st) return st;
+    if (ln->s[q] != ']')
+        return gc_fail(g, FM_ERR_INPUT, gc_col(ln, q), "EXISTS: expected ']' after #<%s>", name);
+    double v;
+    *out = gc_get_named(g, name, &v);
+    *p = q + 1;
+    return FM_OK;
+}
+
+/* LinuxCNC's expressions: ** > * / MOD > + - > comparisons > AND OR XOR,
+ * EQ/NE within TOLERANCE_EQUAL (0.0001), MOD never negative, logic on
+ * truth values; FIX and FUP are floor and ceiling, angles -180..180. */
+static const gc_expr_op lcnc_ops[] = {
+    {"**", 5, GC_OP_POW}, {"*", 4, GC_OP_MUL}, {"/", 4, GC_OP_DIV}, {"mod", 4, GC_OP_MOD_NONNEG},
+    {"+", 3, GC_OP_ADD}, {"-", 3, GC_OP_SUB},
+    {"eq", 2, GC_OP_EQ}, {"ne", 2, GC_OP_NE}, {"gt", 2, GC_OP_GT}, {"ge", 2, GC_OP_GE},
+    {"lt", 2, GC_OP_LT}, {"le", 2, GC_OP_LE},
+    {"and", 1, GC_OP_AND}, {"or", 1, GC_OP_OR}, {"xor", 1, GC_OP_XOR}};
+
+static const gc_expr_func lcnc_funcs[] = {
+    {"ABS", GC_FN_ABS, GC_ARGS_ONE, NULL}, {"ACOS", GC_FN_ACOS, GC_ARGS_ONE, NULL},
+    {"ASIN", GC_FN_ASIN, GC_ARGS_ONE, NULL},
+    {"ATAN", GC_FN_ATAN, GC_ARGS_ONE | GC_ARGS_SLASH, NULL},
+    {"COS", GC_FN_COS, GC_ARGS_ONE, NULL}, {"EXP", GC_FN_EXP, GC_ARGS_ONE, NULL},
+    {"FIX", GC_FN_FLOOR, GC_ARGS_ONE, NULL}, {"FUP", GC_FN_CEIL, GC_ARGS_ONE, NULL},
+    {"ROUND", GC_FN_ROUND, GC_ARGS_ONE, NULL}, {"LN", GC_FN_LN, GC_ARGS_ONE, NULL},
+    {"SIN", GC_FN_SIN, GC_ARGS_ONE, NULL}, {"SQRT", GC_FN_SQRT, GC_ARGS_ONE, NULL},
+    {"TAN", GC_FN_TAN, GC_ARGS_ONE, NULL}, {"EXISTS", GC_FN_OWN, GC_ARGS_ONE, exists}};
+
+static const gc_expr_lang lcnc_expr = {
+    "parameter", lcnc_ops, (int)(sizeof lcnc_ops / sizeof lcnc_ops[0]),
+    lcnc_funcs, (int)(sizeof lcnc_funcs / sizeof lcnc_funcs[0]),
+    GC_TOLERANCE_EQUAL, 0, read_param};
 
 fm_status gc_read_real(gc_interp *g, const gc_line *ln, size_t *p, double *out)
 {
-    const char *s = ln->s;
-    char c = s[*p];
-    if (c == '+' || c == '-') {
-        /* a sign applies to whatever operand follows (rs274 accepts -[..], -#1, --1) */
-        if ((s[*p + 1] >= '0' && s[*p + 1] <= '9') || s[*p + 1] == '.')
-            return read_number(g, ln, p, out);
-        if (++g->expr_depth > GC_MAX_EXPR_DEPTH)
-            return gc_fail(g, FM_ERR_LIMIT, gc_col(ln, *p),
-                           "expression nested deeper than %d levels", GC_MAX_EXPR_DEPTH);
-        (*p)++;
-        double v;
-        fm_status st = gc_read_real(g, ln, p, &v);
-        g->expr_depth--;
-        if (st) return st;
-        *out = c == '-' ? -v : v;
-        return FM_OK;
-    }
-    if (c == '[') return read_bracket(g, ln, p, out);
-    if (c == '#') {
-        size_t at = *p;
-        if (++g->expr_depth > GC_MAX_EXPR_DEPTH)
-            return gc_fail(g, FM_ERR_LIMIT, gc_col(ln, *p),
-                           "parameter indirection nested deeper than %d levels", GC_MAX_EXPR_DEPTH);
-        int num;
-        char name[GC_MAX_NAME];
-        fm_status st = gc_read_param_ref(g, ln, p, &num, name);
-        g->expr_depth--;
-        if (st) return st;
-        if (name[0]) {
-            if (!gc_get_named(g, name, out))
-                return gc_fail(g, FM_ERR_INPUT, gc_col(ln, at),
-                               "#<%s> is not defined; expected a parameter assigned earlier "
-                               "(or EXISTS[#<%s>] to test it)", name, name);
-        } else {
-            *out = gc_param_value(g, num);
-        }
-        return FM_OK;
-    }
-    if (c >= 'a' && c <= 'z') return read_function(g, ln, p, out);
-    if ((c >= '0' && c <= '9') || c == '.') return read_number(g, ln, p, out);
-    if (c == '\0')
-        return gc_fail(g, FM_ERR_INPUT, gc_col(ln, *p),
-                       "missing value at the end of the line; expected a number, [expression] "
-                       "or #parameter");
-    return gc_fail(g, FM_ERR_INPUT, gc_col(ln, *p),
-                   "unexpected '%c'; expected a number, [expression] or #parameter", c);
+    return gc_expr_operand(g, &lcnc_expr, ln, p, out);
 }

@@ -3,7 +3,7 @@
  * includes nothing of the other dialects. Its files:
  *   run.c     the front end: start-up state, the line loop (%, /, N, O-word or block)
  *   block.c   the words of a block, G codes checked against LinuxCNC's modal groups
- *   expr.c    numbers, [expressions], functions, numbered and named parameters
+ *   expr.c    its expression table (machine/expr.c evaluates), numbered and named parameters
  *   modal.c   executing a block in LinuxCNC's order: modal state, M codes
  *   oword.c   O-word control flow: subroutines, conditions, loops
  *   state.c   M70-M73 saved modal state, (debug,...) and (msg,...) messages */

@@ -16,6 +16,7 @@
  *   spline.c    G5/G5.1/G5.2 curves as exact parametric motions
  *   sync.c      G33/G33.1 spindle-synchronized moves, G38.x probing
  *   rotary.c    rotary axes A B C, TCP, the joint values of each motion
+ *   expr.c      the one expression engine, driven by a dialect's table
  * docs/gcode.md has the map of the front ends. */
 #ifndef FM_GCODE_MACHINE_H
 #define FM_GCODE_MACHINE_H
@@ -507,5 +508,79 @@ void gc_rot_g92(gc_interp *g, const gc_block *b, int code);
 void gc_rot_home(gc_interp *g, const gc_block *b, int base);
 void gc_rot_store_home(gc_interp *g, int base);
 fm_status gc_rot_tcp(gc_interp *g, int on, int col);
+
+/* ---- expressions (expr.c) ----
+ * One engine reads every dialect's values: numbers, [brackets], binary
+ * operators by precedence level (left to right within one), unary signs,
+ * function calls, #references; errors at file:line:column; at most
+ * GC_MAX_EXPR_DEPTH nested brackets, signs and indirections. The dialect's
+ * table says what its operators and functions are and compute, and how '#'
+ * is read. A vacant value (Fanuc's #0) is NaN. */
+
+typedef enum gc_expr_opcode {
+    GC_OP_POW, GC_OP_MUL, GC_OP_DIV, GC_OP_ADD, GC_OP_SUB,
+    GC_OP_MOD,               /* the remainder with the dividend's sign (fmod) */
+    GC_OP_MOD_NONNEG,        /* the remainder from 0 to |b| */
+    GC_OP_EQ, GC_OP_NE,      /* within the table's eq_tolerance */
+    GC_OP_GT, GC_OP_GE, GC_OP_LT, GC_OP_LE,
+    GC_OP_AND, GC_OP_OR, GC_OP_XOR,             /* on truth values (non-zero is true) */
+    GC_OP_BIT_AND, GC_OP_BIT_OR, GC_OP_BIT_XOR  /* on the integer parts as 32-bit numbers */
+} gc_expr_opcode;
+
+typedef struct gc_expr_op {
+    const char *token;       /* as in the normalized (lower-case) line: "**", "mod" */
+    int level;               /* precedence: 1 binds loosest */
+    gc_expr_opcode code;
+} gc_expr_op;
+
+/* Functions; angles in degrees, results in the range named. */
+typedef enum gc_expr_fncode {
+    GC_FN_ABS, GC_FN_COS, GC_FN_EXP, GC_FN_LN, GC_FN_SIN, GC_FN_SQRT, GC_FN_TAN,
+    GC_FN_ACOS,              /* 0..180 */
+    GC_FN_ASIN,              /* -90..90 */
+    GC_FN_ASIN_270_90,       /* negative angles + 360 */
+    GC_FN_ATAN,              /* F[a] -90..90, F[y]/[x] -180..180 */
+    GC_FN_ATAN_0_360,        /* 0 <= angle < 360, F[0]/[0] refused */
+    GC_FN_BCD, GC_FN_BIN,    /* binary to BCD and back, 0..99999999 */
+    GC_FN_FLOOR, GC_FN_CEIL, GC_FN_TRUNC, GC_FN_AWAY, /* down, up, toward and away from 0 */
+    GC_FN_ROUND,             /* halves away from zero */
+    GC_FN_OWN                /* the front end's own (gc_expr_func.own) */
+} gc_expr_fncode;
+
+#define GC_ARGS_ONE 1        /* argument forms: F[a] */
+#define GC_ARGS_SLASH 2      /* F[y]/[x] */
+#define GC_ARGS_COMMA 4      /* F[y,x] */
+
+typedef struct gc_expr_func {
+    const char *name;        /* upper case */
+    gc_expr_fncode code;
+    int args;                /* GC_ARGS_* */
+    /* GC_FN_OWN: read the arguments at s[*p] ('[') and compute; col: the name's */
+    fm_status (*own)(gc_interp *g, const gc_line *ln, size_t *p, int col, double *out);
+} gc_expr_func;
+
+typedef struct gc_expr_lang {
+    const char *ref_name;    /* what '#' names, for messages: "parameter" */
+    const gc_expr_op *ops;   /* tried in order: "**" before "*" */
+    int nops;
+    const gc_expr_func *funcs; /* in the order messages list them */
+    int nfuncs;
+    double eq_tolerance;     /* EQ: |a - b| < eq_tolerance; 0: a == b */
+    /* NaN is vacant: alone, in brackets and under a sign it stays vacant;
+     * operators and functions see 0, but EQ/NE: vacant equals only vacant */
+    int vacancy;
+    /* '#' at s[*p]: read the reference past it and its value */
+    fm_status (*read_ref)(gc_interp *g, const gc_line *ln, size_t *p, double *out);
+} gc_expr_lang;
+
+/* One operand at s[*p] (a number, [expression], #reference or function
+ * after unary signs), or a whole expression (operands and operators). */
+fm_status gc_expr_operand(gc_interp *g, const gc_expr_lang *lang, const gc_line *ln, size_t *p,
+                          double *out);
+fm_status gc_expr_read(gc_interp *g, const gc_expr_lang *lang, const gc_line *ln, size_t *p,
+                       double *out);
+/* A number: a sign, digits with at most one '.' (*point: one; may be NULL). */
+fm_status gc_expr_number(gc_interp *g, const gc_expr_lang *lang, const gc_line *ln, size_t *p,
+                         double *out, int *point);
 
 #endif
