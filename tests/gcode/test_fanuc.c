@@ -695,13 +695,222 @@ static void test_errors(void)
     expect_error("G00 X1. #1=2\n", 1, 9, "variable assignment after other words");
     expect_error("G10 L10 P1 R5.\n", 1, 5, "tool offsets come from the tool table");
     expect_error("G68 X0 Y0\n", 1, 1, "R missing");
-    expect_error("G95 G01 X1.\n", 1, 1, "feed per revolution");
+    /* G95 is accepted now: a feed move with the spindle stopped is the error */
+    expect_error("G95 G01 X1. F0.1\n", 1, 5, "feed per revolution (G95) with the spindle stopped");
     expect_error("G12 I5.\n", 1, 1, "circular pocket");
     expect_error("M98\n", 1, 1, "P missing");
     expect_error("N10 G00 X1.\nM97 P20\n", 2, 1, "no sequence number N20");
     expect_error("G73 X0 Y0 Z-5. R2. F100\n", 1, 1, "peck depth Q missing");
     expect_error("G01 X1.\n", 1, 1, "feed rate is zero");
     expect_error("G00 X1.\nG02 X10. Y0 R2. F100\n", 2, 13, "radius too small");
+}
+
+/* ---- Haas codes and the codes CAM posts write (fanuc/haas.c) ---- */
+
+static void test_g154(void)
+{
+    /* Haas: G154 P1-P99 at #14001 + 20 (P - 1) (X Y Z first), P1-P20 the
+     * same offsets as G54.1 P1-P20 (#7001..). From the machine origin:
+     * P1 = (10, 20, -5), P21 = (100, -50, 0); X#1 Y[#2 + #3] in P21 with
+     * #14401 (P21 X = 100), #14002 and #7002 (both P1 Y = 20) is X100 Y40,
+     * machine (200, -10, 0); G91 G10 L20 P21 X5. adds 5 to P21 X; #15961 is
+     * P99 X */
+    em e[] = {{'R', 10, 20, -5},  {'R', 11, 21, -4}, {'R', 100, -50, 0}, {'R', 200, -10, 0},
+              {'R', 105, -50, 0}, {'R', 7, 0, 0}};
+    expect_motions("G154",
+                   "G10 L20 P1 X10. Y20. Z-5.\nG10 L20 P21 X100. Y-50. Z0\n"
+                   "G154 P1\nG00 X0 Y0 Z0\nG54.1 P1\nG00 X1. Y1. Z1.\n"
+                   "G154 P21\nG00 X0 Y0 Z0\n#1=#14401\n#2=#14002\n#3=#7002\nG00 X#1 Y[#2+#3]\n"
+                   "G91 G10 L20 P21 X5.\nG90 G00 X0 Y0\n#15961=7.\nG154 P99\nG00 X0 Y0 Z0\n",
+                   e, N(e));
+    expect_error("G154 P100\n", 1, 6, "expected a whole number from 1 to 99");
+    expect_error("G154\n", 1, 1, "G154: P missing");
+    expect_error("G10 L20 P100 X1.\n", 1, 9, "expected a whole number from 1 to 99");
+}
+
+/* Two programs give the same motions (kind, end, time). */
+static void expect_same(const char *what, const char *a, const char *b)
+{
+    static fm_motion first[200];
+    fm_error err;
+    CHECK(run(a, &err) == FM_OK);
+    int n = ngot < 200 ? ngot : 200;
+    memcpy(first, got, (size_t)n * sizeof *first);
+    CHECK(run(b, &err) == FM_OK);
+    CHECK(ngot == n && n > 0);
+    for (int i = 0; i < n && i < ngot; i++) {
+        int ok = first[i].kind == got[i].kind && first[i].line + 2 == got[i].line &&
+                 fabs(first[i].t1 - got[i].t1) < 1e-9;
+        for (int k = 0; k < 3; k++) ok = ok && fabs(first[i].end[k] - got[i].end[k]) < 1e-9;
+        CHECK(ok);
+        if (!ok) fprintf(stderr, "  %s: motion %d differs\n", what, i);
+    }
+}
+
+static void test_lookahead_codes(void)
+{
+    /* G187 (Haas accuracy: P1 rough, P2 medium, P3 finish, E the corner
+     * tolerance) and G103 (look-ahead limit P) change the servo behaviour,
+     * not the path: the motions are those of the program without them (two
+     * lines earlier) */
+    const char *body = "G90 G00 X0 Y0 Z5.\nG01 Z-1. F200.\nX20.\nG02 X40. R10.\nG00 Z5.\n";
+    char with[512];
+    snprintf(with, sizeof with, "G187 P3 E0.01\nG103 P4\n%sG187\nG103\nM30\n", body);
+    char without[512];
+    snprintf(without, sizeof without, "%sM30\n", body);
+    expect_same("G187 G103", without, with);
+}
+
+static void test_g95(void)
+{
+    /* G95: F is mm per revolution, the feed rate F x S. S1000 F0.2: 200
+     * mm/min, 10 mm take 3 s; the half circle R5 (5 pi mm) 1.5 pi s; at S500
+     * 100 mm/min, 10 mm 6 s; G94 F300.: 10 mm 2 s */
+    fm_error err;
+    CHECK(run("G90 G00 X0 Y0 Z0\nS1000 M03\nG95 G01 X10. F0.2\nG02 X20. R5.\nS500\nG01 X30.\n"
+              "#1=#4005\nG94 G01 X40. F300.\n#2=#4005\n#3=#1*1000+#2\nG00 Y#3\n", &err) == FM_OK);
+    CHECK(ngot == 6);
+    if (ngot == 6) {
+        CHECK_NEAR(got[1].feed, 200, 1e-9);
+        CHECK_NEAR(got[1].t1 - got[1].t0, 3, 1e-9);
+        CHECK_NEAR(got[2].t1 - got[2].t0, 5 * GC_TEST_PI / 200 * 60, 1e-9);
+        CHECK_NEAR(got[3].feed, 100, 1e-9);
+        CHECK_NEAR(got[3].t1 - got[3].t0, 6, 1e-9);
+        CHECK_NEAR(got[4].t1 - got[4].t0, 2, 1e-9);
+        CHECK_NEAR(got[5].end[1], 95 * 1000 + 94, 1e-9); /* #4005: 95, then 94 */
+    }
+    /* a canned cycle in G95: G81 from Z10., R2., Z-10.: the 12 mm feed at
+     * 0.1 x 2000 = 200 mm/min take 3.6 s */
+    CHECK(run("G90 G00 X0 Y0 Z10.\nS2000 M03\nG95 F0.1\nG81 X5. Y0 Z-10. R2.\n", &err) == FM_OK);
+    CHECK(ngot == 5);
+    if (ngot == 5) {
+        CHECK(got[3].kind == FM_MOTION_LINE);
+        CHECK_NEAR(got[3].end[2], -10, 1e-9);
+        CHECK_NEAR(got[3].t1 - got[3].t0, 3.6, 1e-9);
+    }
+    expect_error("S0 M03\nG95 G01 X1. F0.1\n", 2, 5, "feed per revolution (G95) with the spindle "
+                 "at S0");
+    expect_error("G96 S200 M03\nG95 G01 X1. F0.1\n", 2, 1, "G95 feed per revolution with G96");
+}
+
+static void test_circular_pocket(void)
+{
+    static fm_tool_spec tools[2];
+    static fm_tool_table table = {2, tools};
+    tools[0].number = 1;
+    tools[0].diameter = 10;
+    tools[1].number = 2;
+    tools[1].diameter = 6;
+    fm_gcode_options o = fanuc();
+    o.tools = &table;
+    fm_error err;
+    /* G12 I15. D1 (radius 5): one finished circle, the tool centre on
+     * radius 10 about (50, 50): feed down to Z-3., a clockwise half circle
+     * from the centre out to (60, 50) (about (55, 50), radius 5), the full
+     * circle, a half circle back to the centre (about (55, 50) again) */
+    em e1[] = {{'R', 50, 50, 2}, {'L', 50, 50, -3}, {'A', 60, 50, -3}, {'A', 60, 50, -3},
+               {'A', 50, 50, -3}};
+    expect_motions_opt("G12 finish", "G90 G00 X50. Y50. Z2.\nG12 I15. Z-3. D1 F300.\n", &o, e1,
+                       N(e1));
+    if (ngot == 5) {
+        CHECK(got[2].turns == -1 && got[3].turns == -1 && got[4].turns == -1);
+        CHECK_NEAR(got[2].center[0], 55, 1e-9);
+        CHECK_NEAR(got[3].center[0], 50, 1e-9);
+        CHECK_NEAR(got[4].center[0], 55, 1e-9);
+        CHECK_NEAR(got[1].t1 - got[1].t0, 1, 1e-9);                        /* 5 mm at 300 */
+        CHECK_NEAR(got[2].t1 - got[2].t0, 5 * GC_TEST_PI / 300 * 60, 1e-9); /* half of r 5 */
+        CHECK_NEAR(got[3].t1 - got[3].t0, 20 * GC_TEST_PI / 300 * 60, 1e-9); /* r 10 */
+    }
+    /* Haas' example G13 G91 Z-.5 I.4 K2. Q.4 D1 L4 in mm: G13 G91 Z-5. I4.
+     * K20. Q4. D2 (radius 3) L2: circles of radius 4, 8, 12, 16, 20, the tool
+     * centre 3 inside (1, 5, 9, 13, 17), counter-clockwise, alternately
+     * ending on +X and -X: the lead-in from (0,0) to (1,0) about (0.5,0),
+     * then each step a half circle from r on one side to the next r on the
+     * other (about the midpoint: (1,0) -> (-5,0) about (-2,0), (-5,0) ->
+     * (9,0) about (2,0), ...), the last circle at (17,0), the lead-out to the
+     * centre about (8.5,0); the second pass 5 mm deeper */
+    em e2[26];
+    int n = 0;
+    e2[n++] = (em){'R', 0, 0, 0};
+    for (int pass = 1; pass <= 2; pass++) {
+        double z = -5.0 * pass;
+        e2[n++] = (em){'L', 0, 0, z};
+        const double ends[5] = {1, -5, 9, -13, 17};
+        for (int c = 0; c < 5; c++) {
+            e2[n++] = (em){'A', ends[c], 0, z}; /* the half turn out to this circle */
+            e2[n++] = (em){'A', ends[c], 0, z}; /* the circle */
+        }
+        e2[n++] = (em){'A', 0, 0, z};
+    }
+    expect_motions_opt("G13 I K Q L", "G90 G00 X0 Y0 Z0\nG13 G91 Z-5. I4. K20. Q4. D2 L2 F100.\n",
+                       &o, e2, n);
+    if (ngot == n) {
+        const double step_centres[5] = {0.5, -2, 2, -2, 2};
+        for (int c = 0; c < 5; c++) {
+            CHECK_NEAR(got[2 + 2 * c].center[0], step_centres[c], 1e-9);
+            CHECK(got[2 + 2 * c].turns == 1 && got[3 + 2 * c].turns == 1);
+        }
+        CHECK_NEAR(got[12].center[0], 8.5, 1e-9);
+        CHECK_NEAR(got[11].t1 - got[11].t0, 34 * GC_TEST_PI / 100 * 60, 1e-9); /* r 17 */
+    }
+    /* Q that does not divide K - I: radii 4, 8, then 10 (D0: the centre on them) */
+    em e3[] = {{'R', 0, 0, 0},  {'L', 0, 0, -1},  {'A', 4, 0, -1}, {'A', 4, 0, -1},
+               {'A', -8, 0, -1}, {'A', -8, 0, -1}, {'A', 10, 0, -1}, {'A', 10, 0, -1},
+               {'A', 0, 0, -1}};
+    expect_motions("G12 Q uneven", "G90 G00 X0 Y0 Z0\nG12 I4. K10. Q4. Z-1. F100.\n", e3, N(e3));
+    CHECK(run_opt("G12 I5. D1 F100.\n", &o, &err) != FM_OK);
+    CHECK_STR_CONTAINS(err.message, "expected a radius larger than the tool's");
+    expect_error("G13 I5. K10. F100.\n", 1, 9, "K without Q");
+}
+
+static void test_mirror(void)
+{
+    /* G51.1 X50.: X mirrored about 50. The contour G01 X10. Y0, Y10., G02
+     * X20. Y20. R10. (centre (20,10)), G91 X10. becomes X 100 - x: (90,0),
+     * (90,10), a counter-clockwise arc to (80,20) about (80,10), (70,20);
+     * G50.1 X0 cancels and G00 X0 Y0 goes to (0,0) unmirrored */
+    em e[] = {{'R', 0, 0, 0}, {'L', 90, 0, 0}, {'L', 90, 10, 0}, {'A', 80, 20, 0}, {'L', 70, 20, 0},
+              {'R', 0, 0, 0}};
+    expect_motions("G51.1",
+                   "G90 G00 X0 Y0 Z0\nG51.1 X50.\nG01 X10. Y0 F100.\nY10.\nG02 X20. Y20. R10.\n"
+                   "G91 G01 X10.\nG90 G50.1 X0\nG00 X0 Y0\n",
+                   e, N(e));
+    if (ngot == N(e)) {
+        CHECK(got[3].turns == 1);
+        CHECK_NEAR(got[3].center[0], 80, 1e-9);
+        CHECK_NEAR(got[3].center[1], 10, 1e-9);
+    }
+    /* both axes mirrored (about (0,0)): the arc keeps its direction; the
+     * canned cycle's hole (5, 2) becomes (-5, -2) */
+    em e2[] = {{'R', 0, 0, 10}, {'R', -10, 0, 10}, {'A', -20, -10, 10}, {'R', -5, -2, 10},
+               {'R', -5, -2, 1}, {'L', -5, -2, -3}, {'R', -5, -2, 10}};
+    expect_motions("G51.1 X Y",
+                   "G90 G00 X0 Y0 Z10.\nG51.1 X0 Y0\nX10.\nG02 X20. Y10. R10. F100.\n"
+                   "G81 X5. Y2. Z-3. R1.\n",
+                   e2, N(e2));
+    if (ngot == N(e2)) CHECK(got[2].turns == -1);
+    expect_error("G51.1 Z0\n", 1, 7, "mirroring the tool axis is not supported");
+    expect_error("G51.1 X0\nG18\n", 2, 1, "plane change in G51.1 mode");
+}
+
+static void test_modal_call(void)
+{
+    /* G66 P9000 with Z (#26) R (#18) F (#9): after each move the macro
+     * goes down to R, feeds to Z and back up; its own moves call nothing;
+     * G67 ends the calls */
+    em e[] = {{'R', 0, 0, 10},  {'R', 10, 10, 10}, {'R', 10, 10, 2}, {'L', 10, 10, -5},
+              {'R', 10, 10, 10}, {'R', 20, 10, 10}, {'R', 20, 10, 2}, {'L', 20, 10, -5},
+              {'R', 20, 10, 10}, {'R', 30, 10, 10}};
+    expect_motions("G66",
+                   "O0001\nG90 G00 X0 Y0 Z10.\nG66 P9000 Z-5. R2. F100.\nX10. Y10.\nX20.\nG67\n"
+                   "X30.\nM30\n"
+                   "O9000\nG00 Z#18\nG01 Z#26 F#9\nG00 Z10.\nM99\n",
+                   e, N(e));
+    /* #4012 is 66 while the call is on */
+    em e2[] = {{'R', 66, 0, 0}, {'R', 67, 0, 0}};
+    expect_motions("#4012", "G66 P1\n#1=#4012\nG67\n#2=#4012\nG00 X#1\nX#2\nM30\nO0001\nM99\n", e2,
+                   N(e2));
+    expect_error("G66 X1.\n", 1, 1, "G66: P missing");
 }
 
 int main(void)
@@ -721,5 +930,11 @@ int main(void)
     test_scaling_dwell();
     test_same_meaning();
     test_errors();
+    test_g154();
+    test_lookahead_codes();
+    test_g95();
+    test_circular_pocket();
+    test_mirror();
+    test_modal_call();
     return test_summary("test_fanuc");
 }

@@ -17,29 +17,30 @@ gc_group gc_fanuc_g_group(int code)
     case GC_G73: case GC_G74: case GC_G76: case GC_G80: case GC_G81: case GC_G82: case GC_G83:
     case GC_G84: case GC_G85: case GC_G86: case GC_G87: case GC_G88: case GC_G89:
         return GC_GROUP_CYCLE;
-    case GC_G4: case GC_G9: case GC_G10: case GC_G11: case GC_G27: case GC_G28: case GC_G30:
-    case GC_G52: case GC_G53: case GC_G65: case GC_G92:
+    case GC_G4: case GC_G9: case GC_G10: case GC_G11: case GC_G12: case GC_G13: case GC_G27:
+    case GC_G28: case GC_G30: case GC_G52: case GC_G53: case GC_G65: case GC_G92:
         return GC_GROUP_NON_MODAL;
     case GC_G17: case GC_G18: case GC_G19: return GC_GROUP_PLANE;
     case GC_G90: case GC_G91: return GC_GROUP_DISTANCE;
-    case GC_G93: case GC_G94: return GC_GROUP_FEED_MODE;
+    case GC_G93: case GC_G94: case GC_G95: return GC_GROUP_FEED_MODE;
     case GC_G20: case GC_G21: return GC_GROUP_UNITS;
     case GC_G40: case GC_G41: case GC_G42: return GC_GROUP_CUTTER_COMP;
     case GC_G43: case GC_G43_4: case GC_G44: case GC_G49: return GC_GROUP_TOOL_LENGTH;
     case GC_G98: case GC_G99: return GC_GROUP_RETURN_MODE;
     case GC_G54: case GC_G55: case GC_G56: case GC_G57: case GC_G58: case GC_G59: case GC_G54_1:
+    case GC_G154:
         return GC_GROUP_COORD_SYSTEM;
     case GC_G61: case GC_G62: case GC_G63: case GC_G64: return GC_GROUP_PATH_MODE;
     case GC_G96: case GC_G97: return GC_GROUP_SPINDLE_MODE;
     case GC_G15: case GC_G16: return GC_GROUP_POLAR;
     case GC_G68: case GC_G69: return GC_GROUP_ROTATION;
     case GC_G50: case GC_G51: return GC_GROUP_SCALING;
-    case GC_G67: return GC_GROUP_MACRO_MODAL;
+    case GC_G66: case GC_G67: return GC_GROUP_MACRO_MODAL;
+    case GC_G50_1: case GC_G51_1: return GC_GROUP_MIRROR;
     case GC_G5: case GC_G5_1: case GC_G8: case GC_G103: case GC_G187: return GC_GROUP_LOOKAHEAD;
-    case GC_G7: case GC_G12: case GC_G13: case GC_G22: case GC_G23: case GC_G29: case GC_G31:
+    case GC_G7: case GC_G22: case GC_G23: case GC_G29: case GC_G31:
     case GC_G33: case GC_G37: case 450: case 460: case 470: case 480:
-    case GC_G50_1: case GC_G51_1: case GC_G60: case GC_G66: case GC_G95: case GC_G154:
-    case GC_G43_1: case GC_G43_2: case 121: case 131: case 71:
+    case GC_G60: case GC_G43_1: case GC_G43_2: case 121: case 131: case 71:
         return GC_GROUP_REFUSED;
     default: return GC_GROUP_UNKNOWN;
     }
@@ -49,8 +50,6 @@ static const char *refused(int code)
 {
     switch (code) {
     case GC_G7: case 71: return "cylindrical interpolation is not supported";
-    case GC_G12: case GC_G13:
-        return "Haas circular pocket milling is not supported; program the circles with G02/G03";
     case 121: case 131: return "polar coordinate interpolation is not supported";
     case GC_G22: case GC_G23: return "stored stroke check is a machine setting; remove it";
     case GC_G29: return "return from the reference point is not supported; program the move";
@@ -59,12 +58,7 @@ static const char *refused(int code)
     case GC_G37: return "automatic tool length measurement is not supported by a simulation";
     case 450: case 460: case 470: case 480:
         return "tool position offset is not supported; program the offset path";
-    case GC_G50_1: case GC_G51_1: return "programmable mirror image is not supported";
     case GC_G60: return "single direction positioning is not supported; use G00";
-    case GC_G66: return "modal macro calls are not supported; call the macro with G65 at each "
-                        "position";
-    case GC_G95: return "feed per revolution is not supported; use G94";
-    case GC_G154: return "Haas G154 work offsets are not supported; use G54.1 P1-P48";
     case GC_G43_1: case GC_G43_2: return "is not a Fanuc tool length code; use G43 or G44 H";
     default: return "is not supported";
     }
@@ -168,11 +162,14 @@ fm_status gc_fanuc_parse_block(gc_interp *g, size_t p, gc_fanuc_block *fb)
             if (fb->g65)
                 return gc_fail(g, FM_ERR_INPUT, col,
                                "%s after G65; expected G65's arguments only", name);
-            if (code == GC_G65) {
+            if (code == GC_G65 || code == GC_G66) {
+                /* G66 reads its arguments as G65 does (haas.c keeps them) */
                 if (words > 1)
                     return gc_fail(g, FM_ERR_INPUT, col,
-                                   "G65 after other words; expected G65 P<program> first");
+                                   "%s after other words; expected %s P<program> first", name,
+                                   name);
                 fb->g65 = 1;
+                fb->g66 = code == GC_G66;
                 fb->g65_col = col;
             }
             if (b->ghas[grp]) {

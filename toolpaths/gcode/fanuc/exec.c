@@ -66,6 +66,7 @@ void gc_fanuc_to_work(const gc_interp *g, const double prog[3], double work[3])
 {
     const gc_fanuc *f = FANUC(g);
     memcpy(work, prog, 3 * sizeof *work);
+    gc_fanuc_mirror_point(f, work); /* G51.1 first (haas.c), then G51, then G68 */
     if (!f->scaling && !f->rotation) return;
     if (f->scaling) scale_point(f, work);
     if (f->rotation) {
@@ -86,7 +87,6 @@ void gc_fanuc_from_work(const gc_interp *g, const double work[3], double prog[3]
 {
     const gc_fanuc *f = FANUC(g);
     memcpy(prog, work, 3 * sizeof *prog);
-    if (!f->scaling && !f->rotation) return;
     if (f->rotation) {
         int a, b, c;
         gc_plane_axes(f->rot_plane, &a, &b, &c);
@@ -102,6 +102,7 @@ void gc_fanuc_from_work(const gc_interp *g, const double work[3], double prog[3]
     if (f->scaling)
         for (int i = 0; i < 3; i++)
             prog[i] = f->scale_center[i] + (prog[i] - f->scale_center[i]) / f->scale;
+    gc_fanuc_mirror_point(f, prog);
 }
 
 /* The current point in the program frame after a coordinate change that
@@ -262,7 +263,7 @@ static fm_status exec_arc(gc_interp *g, const gc_fanuc_block *fb, int code, int 
     gc_fanuc_to_work(g, cen, wcen);
     double cab[2] = {wcen[a], wcen[bb]};
     memcpy(f->prog, end, sizeof f->prog);
-    return gc_fanuc_arc(g, wend, cab, code == GC_G2 ? -1 : 1);
+    return gc_fanuc_arc(g, wend, cab, (code == GC_G2 ? -1 : 1) * gc_fanuc_mirror_sense(g));
 }
 
 /* ---- modal state ---- */
@@ -337,14 +338,9 @@ static fm_status select_work_offset(gc_interp *g, const gc_fanuc_block *fb, int 
 {
     gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
-    if (code == GC_G54_1) {
-        long pn;
-        if (!b->has[L('p')])
-            return gc_fail(g, FM_ERR_INPUT, col, "G54.1: P missing; expected G54.1 P1 to P%d",
-                           GC_FANUC_EXT_OFFSETS);
-        fm_status st = whole_word(g, b, 'p', 1, GC_FANUC_EXT_OFFSETS, &pn);
+    if (code == GC_G54_1 || code == GC_G154) {
+        fm_status st = gc_fanuc_select_ext_offset(g, b, code, col);
         if (st) return st;
-        f->ext_cs = (int)pn;
     } else {
         f->ext_cs = 0;
         g->cs = (code - GC_G54) / 10 + 1;
@@ -360,7 +356,8 @@ static fm_status exec_g10(gc_interp *g, const gc_fanuc_block *fb, int col)
     long l, pn;
     fm_status st;
     if (!b->has[L('l')])
-        return gc_fail(g, FM_ERR_INPUT, col, "G10: L missing; expected L2 (G54-G59) or L20 (G54.1)");
+        return gc_fail(g, FM_ERR_INPUT, col,
+                       "G10: L missing; expected L2 (G54-G59) or L20 (G54.1, G154)");
     if ((st = whole_word(g, b, 'l', 0, 1000, &l))) return st;
     if (l >= 10 && l <= 13)
         return gc_fail(g, FM_ERR_INPUT, b->col[L('l')],
@@ -368,7 +365,8 @@ static fm_status exec_g10(gc_interp *g, const gc_fanuc_block *fb, int col)
                        "G10 L%ld block", l, l);
     if (l != 2 && l != 20)
         return gc_fail(g, FM_ERR_INPUT, b->col[L('l')],
-                       "G10 L%ld: expected L2 (G54-G59, P0 the external offset) or L20 (G54.1 P)",
+                       "G10 L%ld: expected L2 (G54-G59, P0 the external offset) or L20 (G54.1 P, "
+                       "G154 P)",
                        l);
     if (!b->has[L('p')])
         return gc_fail(g, FM_ERR_INPUT, col, "G10 L%ld: P missing", l);
@@ -597,6 +595,10 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
     mcodes mc;
     if ((st = scan_m(g, b, &mc))) return st;
 
+    if (fb->g66) return gc_fanuc_modal_call_set(g, fb, GC_G66, fb->g65_col);
+    if (gc_block_g(b, GC_GROUP_MACRO_MODAL, &col) == GC_G67 &&
+        (st = gc_fanuc_modal_call_set(g, fb, GC_G67, col)))
+        return st;
     if (fb->g65) {
         /* G65 P<program> L<repeats> arguments: a macro call, nothing else */
         long pn, reps = 1;
@@ -612,9 +614,7 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
         return st;
 
     /* feed mode, feed, speed, tool, tool change, spindle, coolant */
-    code = gc_block_g(b, GC_GROUP_FEED_MODE, NULL);
-    if (code == GC_G93) g->inverse_time = 1;
-    else if (code == GC_G94) g->inverse_time = 0;
+    if ((st = gc_fanuc_feed_mode(g, b))) return st;
     if (b->has[L('f')]) {
         if (b->v[L('f')] < 0)
             return gc_fail(g, FM_ERR_INPUT, b->col[L('f')], "F%g: expected a feed rate >= 0",
@@ -654,6 +654,9 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
     if (code != GC_G_NONE) {
         if (f->rotation && code / 10 != (int)f->rot_plane)
             return gc_fail(g, FM_ERR_INPUT, col, "plane change in G68 mode; cancel G68 first");
+        if ((f->mirror[0] || f->mirror[1]) && code != GC_G17)
+            return gc_fail(g, FM_ERR_INPUT, col, "plane change in G51.1 mode; cancel G51.1 "
+                           "(G50.1) first");
         g->plane = (gc_plane)(code / 10);
     }
     code = gc_block_g(b, GC_GROUP_UNITS, NULL);
@@ -709,11 +712,14 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
     int rotation_col = col;
     int scaling = gc_block_g(b, GC_GROUP_SCALING, &col);
     int scaling_col = col;
+    int mirror = gc_block_g(b, GC_GROUP_MIRROR, &col);
+    int mirror_col = col;
     /* codes whose X Y Z are not this block's end point */
     int other_uses_axes = nonmodal == GC_G4 || nonmodal == GC_G10 || nonmodal == GC_G27 ||
                           nonmodal == GC_G28 || nonmodal == GC_G30 || nonmodal == GC_G52 ||
                           nonmodal == GC_G53 || nonmodal == GC_G92 || rotation == GC_G68 ||
-                          scaling == GC_G51;
+                          scaling == GC_G51 || nonmodal == GC_G12 || nonmodal == GC_G13 ||
+                          mirror != GC_G_NONE;
     if (mcode != GC_G_NONE) {
         f->group1 = mcode / 10;
         g->motion = (gc_gcode)mcode;
@@ -755,7 +761,8 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
     if ((code != GC_G_NONE || b->has[L('d')]) && (st = gc_fanuc_comp_mode(g, fb, code, col)))
         return st;
 
-    /* scaling and rotation (their axis words are centres) */
+    /* mirror, scaling and rotation (their axis words are centres) */
+    if (mirror != GC_G_NONE && (st = gc_fanuc_mirror(g, fb, mirror, mirror_col))) return st;
     if (scaling == GC_G50) {
         f->scaling = 0;
         reprogram(g);
@@ -788,6 +795,9 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
         gc_fanuc_apply_work_offset(g);
         break;
     case GC_G53: if ((st = exec_g53(g, fb, nonmodal_col))) return st; break;
+    case GC_G12: case GC_G13:
+        if ((st = gc_fanuc_circular_pocket(g, fb, nonmodal, nonmodal_col))) return st;
+        break;
     case GC_G92: if ((st = exec_g92(g, fb, nonmodal_col))) return st; break;
     default: break;
     }
@@ -827,6 +837,9 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
         if ((st = gc_fanuc_exec_cycle(g, fb, ccode, ccol))) return st;
     }
     for (int i = 0; i < 3; i++) f->block_end[i] = g->pos[i];
+    /* G66: the macro is called after each block that moved */
+    if (will_move && !mc.call && !mc.ret && !mc.end && (st = gc_fanuc_modal_call_run(g)))
+        return st;
 
     /* calls, returns, stops */
     if (mc.call) {

@@ -45,14 +45,14 @@ static double modal_info(gc_interp *g, int group)
     case 2: return g->plane;
     case 3: return g->absolute ? 90 : 91;
     case 4: return 23;
-    case 5: return g->inverse_time ? 93 : 94;
+    case 5: return g->inverse_time ? 93 : g->per_rev ? 95 : 94;
     case 6: return g->unit == 1.0 ? 21 : 20;
     case 7: return 40;
     case 8: return g_value(f->tool_length_mode);
     case 9: return g->motion == GC_G80 || g->motion < GC_G73 ? 80 : g_value(g->motion);
     case 10: return g->retract_r ? 99 : 98;
     case 11: return f->scaling ? 51 : 50;
-    case 12: return 67;
+    case 12: return f->modal_call ? 66 : 67;
     case 13: return 97;
     case 14: return f->ext_cs ? 54.1 : 53 + g->cs;
     case 15: return 64;
@@ -68,6 +68,7 @@ fm_status gc_fanuc_get_var(gc_interp *g, long n, int col, double *out)
 {
     gc_fanuc *f = FANUC(g);
     int table, axis;
+    double *slot;
     if (n == 0) {
         *out = GC_VACANT;
     } else if (n >= 1 && n <= 33) {
@@ -122,14 +123,13 @@ fm_status gc_fanuc_get_var(gc_interp *g, long n, int col, double *out)
         *out = n <= 5083 ? g->tlo[n - 5081] : 0.0;
     } else if (offset_var(n, &table, &axis)) {
         *out = axis < 3 ? g->params[n] : 0.0;
-    } else if (n >= 7001 && n <= 7000 + 20 * GC_FANUC_EXT_OFFSETS) {
-        long k = n - 7001;
-        *out = k % 20 < 3 ? f->ext_offsets[k / 20][k % 20] : 0.0;
+    } else if (gc_fanuc_ext_offset_var(f, n, &slot)) {
+        *out = slot ? *slot : 0.0;
     } else {
         return bad_var(g, n, col,
                        "not a variable this simulation has; expected #0, #1-#33, #100-#999, "
                        "#2001-#2200, #3000-#3004, #3901-#3902, #4001-#4120, #5001-#5086, "
-                       "#5201-#5326 or #7001-#7960");
+                       "#5201-#5326, #7001-#7960 or #14001-#15980");
     }
     return FM_OK;
 }
@@ -158,6 +158,7 @@ fm_status gc_fanuc_set_var(gc_interp *g, long n, double v, int col)
 {
     gc_fanuc *f = FANUC(g);
     int table, axis;
+    double *slot;
     (void)table;
     if (n == 0) return bad_var(g, n, col, "#0 is always vacant; it cannot be assigned");
     if (n >= 1 && n <= 33) {
@@ -183,10 +184,9 @@ fm_status gc_fanuc_set_var(gc_interp *g, long n, double v, int col)
             g->params[n] = isnan(v) ? 0.0 : v;
             gc_fanuc_apply_work_offset(g);
         }
-    } else if (n >= 7001 && n <= 7000 + 20 * GC_FANUC_EXT_OFFSETS) {
-        long k = n - 7001;
-        if (k % 20 < 3) {
-            f->ext_offsets[k / 20][k % 20] = isnan(v) ? 0.0 : v;
+    } else if (gc_fanuc_ext_offset_var(f, n, &slot)) {
+        if (slot) {
+            *slot = isnan(v) ? 0.0 : v;
             gc_fanuc_apply_work_offset(g);
         }
     } else {

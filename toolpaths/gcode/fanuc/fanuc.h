@@ -11,7 +11,10 @@
  *              and rounding rules of addresses
  *   exec.c     executing a block: modal state, offsets, G68/G51/G16, lines,
  *              arcs, dwells, G28/G30/G53
- *   cycle.c    canned cycles G73 G74 G76 G81-G89 */
+ *   cycle.c    canned cycles G73 G74 G76 G81-G89
+ *   haas.c     what Haas adds and CAM posts write: G154 P1-P99 work offsets
+ *              (#14001..), G12/G13 circular pockets, G95 feed per revolution,
+ *              G50.1/G51.1 mirror image, G66/G67 modal macro calls */
 #ifndef FM_GCODE_FANUC_H
 #define FM_GCODE_FANUC_H
 
@@ -24,7 +27,8 @@
 #define GC_FANUC_LOCALS 34     /* #1 .. #33 */
 #define GC_FANUC_COMMON_LO 100 /* #100 .. #999 */
 #define GC_FANUC_COMMON_HI 999
-#define GC_FANUC_EXT_OFFSETS 48 /* G54.1 P1 .. P48 */
+#define GC_FANUC_EXT_OFFSETS 99 /* Haas G154 P1 .. P99; G54.1 P1 .. P48 are the same table */
+#define GC_FANUC_G54_1_OFFSETS 48 /* G54.1 P1 .. P48 (Fanuc's 48 sets; #7001-#7960) */
 #define GC_FANUC_MAX_TEXTS 64  /* the program and the subprogram files it loads */
 
 /* A vacant (null) variable is stored as NaN: no computed value is NaN, since
@@ -86,7 +90,9 @@ typedef struct gc_fanuc {
     /* variables (GC_VACANT when vacant) */
     double locals[GC_FANUC_LEVELS][GC_FANUC_LOCALS];
     double common[GC_FANUC_COMMON_HI + 1 - GC_FANUC_COMMON_LO];
-    double ext_offsets[GC_FANUC_EXT_OFFSETS][3]; /* #7001.. (20 per P), program units */
+    /* G54.1 P / G154 P: #7001.. (P1-P48) and #14001.. (P1-P99), 20 per P,
+     * program units */
+    double ext_offsets[GC_FANUC_EXT_OFFSETS][3];
     double timer_base_ms, timer_base_h;          /* #3001, #3002 set by the program */
     double sys3003, sys3004, parts[2];           /* #3003 #3004 #3901 #3902 */
 
@@ -98,7 +104,7 @@ typedef struct gc_fanuc {
     int d;               /* modal D (read only by #4107) */
     int last_m;          /* #4113 */
     long sequence;       /* #4114 */
-    int ext_cs;          /* G54.1 P number in use, 0 for G54-G59 */
+    int ext_cs;          /* G54.1 or G154 P number in use, 0 for G54-G59 */
     double local_offset[3]; /* G52, program units */
     double prog[3];      /* the programmed point: before polar, scaling and rotation */
     int polar;           /* G16 */
@@ -116,6 +122,16 @@ typedef struct gc_fanuc {
     double block_end[3]; /* #5001-#5003: where the previous block ended */
 
     int motion_col;      /* column of the block's motion, for compensation's errors */
+
+    /* Haas and the codes CAM posts write (haas.c) */
+    int css;             /* G96 constant surface speed (S is not rpm: G95 is refused) */
+    int mirror[3];       /* G51.1: the axis is mirrored */
+    double mirror_center[3]; /* program frame, program units */
+    int modal_call;      /* G66 on */
+    long modal_program, modal_repeats;
+    int modal_col;
+    int modal_level;     /* the local level of the G66 block: only its moves call */
+    double modal_args[GC_FANUC_LOCALS];
 
     /* the current block */
     int in_address;      /* evaluating an address: ROUND rounds to its increment */
@@ -165,7 +181,8 @@ double gc_fanuc_round(double v);
 
 typedef struct gc_fanuc_block {
     unsigned char form[26];  /* gc_number_form of each word */
-    int g65;             /* G65 on the line: every word after it is an argument */
+    int g65;             /* G65 or G66 on the line: every word after it is an argument */
+    int g66;             /* it was G66 */
     int g65_col;
     double args[GC_FANUC_LOCALS]; /* G65 arguments (argument specification I) */
     gc_block b;          /* last: only its head up to the assignments is cleared per line */
@@ -204,5 +221,28 @@ fm_status gc_fanuc_dwell(gc_interp *g, double seconds);
 
 /* ---- cycle.c ---- */
 fm_status gc_fanuc_exec_cycle(gc_interp *g, const gc_fanuc_block *fb, int code, int col);
+
+/* ---- fanuc/haas.c ---- */
+
+/* #7001-#7960 (G54.1 P1-P48) and #14001-#15966 (G154 P1-P99): 1 if n is
+ * one of them; *slot is its value, or NULL for an axis past Z (read 0,
+ * written nowhere). */
+int gc_fanuc_ext_offset_var(gc_fanuc *f, long n, double **slot);
+/* G54.1 P1-P48 or G154 P1-P99 of the block into f->ext_cs. */
+fm_status gc_fanuc_select_ext_offset(gc_interp *g, const gc_block *b, int code, int col);
+/* G12/G13 circular pocket (Haas). */
+fm_status gc_fanuc_circular_pocket(gc_interp *g, const gc_fanuc_block *fb, int code, int col);
+/* G93/G94/G95 and G96/G97 of the block (G95 with G96 is refused). */
+fm_status gc_fanuc_feed_mode(gc_interp *g, const gc_block *b);
+/* G50.1/G51.1 of the block. */
+fm_status gc_fanuc_mirror(gc_interp *g, const gc_fanuc_block *fb, int code, int col);
+/* Mirror a program-frame point (its own inverse). */
+void gc_fanuc_mirror_point(const gc_fanuc *f, double p[3]);
+/* -1 when an odd number of the plane's axes is mirrored (G02 <-> G03), else 1. */
+int gc_fanuc_mirror_sense(const gc_interp *g);
+/* G66 (store the call) and G67 of the block. */
+fm_status gc_fanuc_modal_call_set(gc_interp *g, const gc_fanuc_block *fb, int code, int col);
+/* After a block that moved: the G66 call, if one is on at this level. */
+fm_status gc_fanuc_modal_call_run(gc_interp *g);
 
 #endif

@@ -81,7 +81,8 @@ typedef enum gc_group {
     GC_GROUP_MACRO_MODAL = 18,   /* G66 G67 */
     GC_GROUP_LOOKAHEAD = 19,     /* G05 G05.1 G08, Haas G103 G187: no effect on the path */
     GC_GROUP_CYCLE = 20,         /* G73 G74 G76 G80-G89 (Fanuc's group 09; LinuxCNC: motion) */
-    GC_GROUP_COUNT = 21,
+    GC_GROUP_MIRROR = 21,        /* G50.1 G51.1 (Fanuc's group 22) */
+    GC_GROUP_COUNT = 22,
     GC_GROUP_REFUSED = 99        /* codes LinuxCNC knows that this interpreter refuses */
 } gc_group;
 
@@ -237,7 +238,8 @@ typedef struct gc_interp {
     gc_plane plane;
     int absolute, arc_absolute;
     int inverse_time;
-    double feed;        /* G94: program units/min; G93: 1/min */
+    int per_rev;        /* G95: F is program units per spindle revolution */
+    double feed;        /* G94: program units/min; G93: 1/min; G95: units/rev */
     double speed;
     int spindle_dir, coolant;
     int tool, selected_tool;

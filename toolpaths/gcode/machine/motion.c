@@ -77,7 +77,19 @@ fm_status gc_check_feed(gc_interp *g, const char *what, int col)
         return gc_fail(g, FM_ERR_INPUT, col,
                        "%s: feed rate is zero; expected an F word > 0 before or in this block",
                        what);
+    /* per revolution, the feed rate is F x S: a stopped spindle would not move */
+    if (g->per_rev && (g->spindle_dir == 0 || !(g->speed > 0)))
+        return gc_fail(g, FM_ERR_INPUT, col,
+                       "%s: feed per revolution (G95) with the spindle %s; expected M03/M04 "
+                       "with S > 0 before this block, or G94", what,
+                       g->spindle_dir == 0 ? "stopped" : "at S0");
     return FM_OK;
+}
+
+/* The modal feed in program units per minute (G94, G95; not G93). */
+static double feed_per_minute(const gc_interp *g)
+{
+    return g->per_rev ? g->feed * g->speed : g->feed;
 }
 
 double gc_feed_seconds(gc_interp *g, double len_mm, double *feed_mm)
@@ -87,7 +99,7 @@ double gc_feed_seconds(gc_interp *g, double len_mm, double *feed_mm)
         *feed_mm = sec > 0 ? len_mm / sec * 60.0 : 0;
         return sec;
     }
-    *feed_mm = g->feed * g->unit;
+    *feed_mm = feed_per_minute(g) * g->unit;
     return len_mm / *feed_mm * 60.0;
 }
 
@@ -107,8 +119,8 @@ fm_status gc_move_line(gc_interp *g, int rapid, const double to[3])
         sec = fmax(len, turn) / g->opt.rapid_rate * 60.0;
     } else if (len == 0 && turn > 0 && !g->inverse_time) {
         /* only rotary axes move: F is degrees per minute (LinuxCNC) */
-        sec = turn / g->feed * 60.0;
-        m.feed = g->feed;
+        m.feed = feed_per_minute(g);
+        sec = turn / m.feed * 60.0;
     } else {
         sec = gc_feed_seconds(g, len, &m.feed);
     }
@@ -332,7 +344,7 @@ double gc_arc_sweep(gc_plane plane, const double start[3], const double end[3],
  * minute; in inverse time, the programmed length over the block's time. */
 static double queued_feed(const gc_interp *g, double programmed_len)
 {
-    return g->inverse_time ? g->feed * programmed_len : g->feed;
+    return g->inverse_time ? g->feed * programmed_len : feed_per_minute(g);
 }
 
 fm_status gc_exec_arc(gc_interp *g, const gc_block *b, int code, int col)
@@ -420,11 +432,13 @@ fm_status gc_emit_comp_move(gc_interp *g, const gc_comp_move *m)
 {
     /* the motion carries the state it was programmed with */
     double feed = g->feed, speed = g->speed;
-    int inverse = g->inverse_time, dir = g->spindle_dir, coolant = g->coolant;
+    int inverse = g->inverse_time, per_rev = g->per_rev, dir = g->spindle_dir;
+    int coolant = g->coolant;
     int lineno = g->lineno;
     long block = g->cur_block;
-    g->feed = m->snap.feed;
+    g->feed = m->snap.feed; /* per minute (queued_feed) */
     g->inverse_time = 0;
+    g->per_rev = 0;
     g->speed = m->snap.speed;
     g->spindle_dir = m->snap.spindle_dir;
     g->coolant = m->snap.coolant;
@@ -441,6 +455,7 @@ fm_status gc_emit_comp_move(gc_interp *g, const gc_comp_move *m)
     }
     g->feed = feed;
     g->inverse_time = inverse;
+    g->per_rev = per_rev;
     g->speed = speed;
     g->spindle_dir = dir;
     g->coolant = coolant;

@@ -1,0 +1,278 @@
+/* haas.c: codes Haas adds to Fanuc's, and Fanuc's own that CAM posts and
+ * shop programs write, kept apart from the block executor (exec.c) that
+ * calls them: G154 P1-P99 extended work offsets (one table with G54.1
+ * P1-P48, read and written as #7001.. and #14001..), G95 feed per
+ * revolution, G50.1/G51.1 programmable mirror image, G66/G67 modal macro
+ * calls, and Haas' G12/G13 circular pocket milling as the machine's lines
+ * and arcs. docs/gcode.md ("The Fanuc/Haas dialect") says what each does
+ * and where the manuals leave it open. */
+#include "fanuc.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+/* ---- G54.1 P / G154 P ---- */
+
+int gc_fanuc_ext_offset_var(gc_fanuc *f, long n, double **slot)
+{
+    /* 20 numbers per offset, X Y Z first: #7001 is G54.1 P1 X (Fanuc, 48
+     * sets), #14001 is G154 P1 X (Haas; Fanuc's 300-set option numbers the
+     * same way), so that #14021 is P2 X and #15961 is P99 X */
+    long k;
+    if (n >= 7001 && n <= 7000 + 20 * GC_FANUC_G54_1_OFFSETS) k = n - 7001;
+    else if (n >= 14001 && n <= 14000 + 20 * GC_FANUC_EXT_OFFSETS) k = n - 14001;
+    else return 0;
+    *slot = k % 20 < 3 ? &f->ext_offsets[k / 20][k % 20] : NULL;
+    return 1;
+}
+
+fm_status gc_fanuc_select_ext_offset(gc_interp *g, const gc_block *b, int code, int col)
+{
+    int max = code == GC_G154 ? GC_FANUC_EXT_OFFSETS : GC_FANUC_G54_1_OFFSETS;
+    const char *name = code == GC_G154 ? "G154" : "G54.1";
+    if (!HAS(b, 'p'))
+        return gc_fail(g, FM_ERR_INPUT, col, "%s: P missing; expected %s P1 to P%d", name, name,
+                       max);
+    double v = VAL(b, 'p');
+    if (floor(v) != v || v < 1 || v > max)
+        return gc_fail(g, FM_ERR_INPUT, COL(b, 'p'), "P%g: expected a whole number from 1 to %d",
+                       v, max);
+    FANUC(g)->ext_cs = (int)v;
+    return FM_OK;
+}
+
+/* ---- feed modes ---- */
+
+fm_status gc_fanuc_feed_mode(gc_interp *g, const gc_block *b)
+{
+    gc_fanuc *f = FANUC(g);
+    int css_col = 0, col = 0;
+    int css = gc_block_g(b, GC_GROUP_SPINDLE_MODE, &css_col);
+    if (css == GC_G96) f->css = 1;
+    else if (css == GC_G97) f->css = 0;
+    int code = gc_block_g(b, GC_GROUP_FEED_MODE, &col);
+    if (code != GC_G_NONE) {
+        g->inverse_time = code == GC_G93;
+        g->per_rev = code == GC_G95;
+    }
+    if (g->per_rev && f->css)
+        return gc_fail(g, FM_ERR_INPUT, col ? col : css_col,
+                       "G95 feed per revolution with G96 constant surface speed: the spindle "
+                       "speed would follow the cutting diameter, which is not simulated; "
+                       "expected G97 S<rpm>");
+    return FM_OK;
+}
+
+/* ---- G50.1 / G51.1 ---- */
+
+static const char axis_letter[3] = {'x', 'y', 'z'};
+
+void gc_fanuc_mirror_point(const gc_fanuc *f, double p[3])
+{
+    for (int i = 0; i < 3; i++)
+        if (f->mirror[i]) p[i] = 2 * f->mirror_center[i] - p[i];
+}
+
+int gc_fanuc_mirror_sense(const gc_interp *g)
+{
+    const gc_fanuc *f = FANUC(g);
+    int a, b, c;
+    gc_plane_axes(g->plane, &a, &b, &c);
+    return (f->mirror[a] ^ f->mirror[b]) ? -1 : 1;
+}
+
+fm_status gc_fanuc_mirror(gc_interp *g, const gc_fanuc_block *fb, int code, int col)
+{
+    gc_fanuc *f = FANUC(g);
+    const gc_block *b = &fb->b;
+    int any = 0;
+    for (int i = 0; i < 3; i++) any |= b->has[L(axis_letter[i])];
+    if (code == GC_G50_1) {
+        /* the axes given are cancelled (their values are ignored, as Fanuc);
+         * G50.1 alone cancels every axis */
+        for (int i = 0; i < 3; i++)
+            if (!any || b->has[L(axis_letter[i])]) f->mirror[i] = 0;
+    } else {
+        if (!any)
+            return gc_fail(g, FM_ERR_INPUT, col,
+                           "G51.1: no axis; expected X and/or Y, the position of the mirror axis");
+        if (b->has[L('z')])
+            return gc_fail(g, FM_ERR_INPUT, b->col[L('z')],
+                           "G51.1 Z: mirroring the tool axis is not supported; expected X and/or "
+                           "Y");
+        if (g->plane != GC_PLANE_XY)
+            return gc_fail(g, FM_ERR_INPUT, col,
+                           "G51.1 in G%d: mirror image is supported in G17 only", g->plane);
+        if (f->scaling || f->rotation)
+            return gc_fail(g, FM_ERR_INPUT, col,
+                           "G51.1 in G51 or G68 mode: Fanuc mirrors first; give G51.1 before G51 "
+                           "and G68");
+        for (int i = 0; i < 2; i++) {
+            char l = axis_letter[i];
+            if (!b->has[L(l)]) continue;
+            double v = gc_fanuc_length(g, fb, l);
+            f->mirror_center[i] = g->absolute ? v : f->prog[i] + v;
+            f->mirror[i] = 1;
+        }
+    }
+    /* the tool stays where it is: its programmed point is seen through the
+     * new mirror */
+    gc_fanuc_from_work(g, g->pos, f->prog);
+    return FM_OK;
+}
+
+/* ---- G66 / G67 ---- */
+
+fm_status gc_fanuc_modal_call_set(gc_interp *g, const gc_fanuc_block *fb, int code, int col)
+{
+    gc_fanuc *f = FANUC(g);
+    const gc_block *b = &fb->b;
+    if (code == GC_G67) {
+        f->modal_call = 0;
+        return FM_OK;
+    }
+    if (!b->has[L('p')])
+        return gc_fail(g, FM_ERR_INPUT, col, "G66: P missing; expected G66 P<program>");
+    double p = b->v[L('p')], l = b->has[L('l')] ? b->v[L('l')] : 1;
+    if (floor(p) != p || p < 0 || p > 99999999)
+        return gc_fail(g, FM_ERR_INPUT, b->col[L('p')],
+                       "P%g: expected a whole number from 0 to 99999999", p);
+    if (floor(l) != l || l < 0 || l > 999999999)
+        return gc_fail(g, FM_ERR_INPUT, b->col[L('l')],
+                       "L%g: expected a whole number from 0 to 999999999", l);
+    f->modal_call = 1;
+    f->modal_program = (long)p;
+    f->modal_repeats = (long)l;
+    f->modal_col = col;
+    f->modal_level = f->level;
+    memcpy(f->modal_args, fb->args, sizeof f->modal_args);
+    return FM_OK;
+}
+
+fm_status gc_fanuc_modal_call_run(gc_interp *g)
+{
+    gc_fanuc *f = FANUC(g);
+    /* the macro's own moves (a level deeper) do not call it again */
+    if (!f->modal_call || f->level != f->modal_level || g->stop) return FM_OK;
+    return gc_fanuc_call(g, GC_CALL_G65, f->modal_program, f->modal_repeats, f->modal_args,
+                         f->modal_col);
+}
+
+/* ---- G12 / G13 ---- */
+
+/* An arc of the pocket in the program frame, direction ccw (before any
+ * mirror), about cen, to end. */
+static fm_status pocket_arc(gc_interp *g, const double end[3], const double cen[3], int ccw)
+{
+    gc_fanuc *f = FANUC(g);
+    double wend[3], wcen[3];
+    gc_fanuc_to_work(g, end, wend);
+    gc_fanuc_to_work(g, cen, wcen);
+    double cab[2] = {wcen[0], wcen[1]};
+    memcpy(f->prog, end, sizeof f->prog);
+    return gc_move_arc(g, wend, cab, (ccw ? 1 : -1) * gc_fanuc_mirror_sense(g));
+}
+
+/* From radius r0 on one side of the centre (side = +1: +X, -1: -X) to
+ * radius r1 on the other side: a half circle whose centre is on the X
+ * line through the pocket's centre (r0 = 0: the lead-in from the centre,
+ * r1 = 0: the lead-out back to it). */
+static fm_status half_turn(gc_interp *g, const double c[2], double z, double r0, double r1,
+                           int side, int ccw)
+{
+    double end[3] = {c[0] - side * r1, c[1], z};
+    double cen[3] = {c[0] + side * (r0 - r1) / 2, c[1], z};
+    return pocket_arc(g, end, cen, ccw);
+}
+
+fm_status gc_fanuc_circular_pocket(gc_interp *g, const gc_fanuc_block *fb, int code, int col)
+{
+    gc_fanuc *f = FANUC(g);
+    const gc_block *b = &fb->b;
+    const char *name = code == GC_G12 ? "G12 (circular pocket)" : "G13 (circular pocket)";
+    int ccw = code == GC_G13;
+    fm_status st;
+    if (g->plane != GC_PLANE_XY)
+        return gc_fail(g, FM_ERR_INPUT, col, "%s: circular pockets are in G17 only (Haas)", name);
+    if (f->scaling)
+        return gc_fail(g, FM_ERR_INPUT, col, "%s in G51 scaling mode is not supported; cancel G51 "
+                       "first", name);
+    if (g->inverse_time)
+        return gc_fail(g, FM_ERR_INPUT, col, "%s needs G94 or G95, not inverse time G93", name);
+    if (!b->has[L('i')])
+        return gc_fail(g, FM_ERR_INPUT, col,
+                       "%s: I missing; expected I, the radius of the first (or only) circle", name);
+    if (b->has[L('k')] != b->has[L('q')])
+        return gc_fail(g, FM_ERR_INPUT, b->has[L('k')] ? b->col[L('k')] : b->col[L('q')],
+                       "%s: %c without %c; expected K (finished radius) and Q (step) together, or "
+                       "I alone", name, b->has[L('k')] ? 'K' : 'Q', b->has[L('k')] ? 'Q' : 'K');
+    long reps = 1;
+    if (b->has[L('l')]) {
+        double v = b->v[L('l')];
+        if (floor(v) != v || v < 1 || v > 9999)
+            return gc_fail(g, FM_ERR_INPUT, b->col[L('l')],
+                           "%s L%g: expected a whole number of passes from 1 to 9999", name, v);
+        reps = (long)v;
+    }
+    /* D: the tool's radius from the table (D0: the tool centre follows the
+     * circles) */
+    double rt = 0;
+    if (f->d) {
+        if ((st = gc_check_tool(g, f->d, b->has[L('d')] ? b->col[L('d')] : col, "D"))) return st;
+        rt = gc_tool_diameter_mm(g, f->d) / 2 / g->unit;
+    }
+    double first = gc_fanuc_length(g, fb, 'i');
+    double last = b->has[L('k')] ? gc_fanuc_length(g, fb, 'k') : first;
+    double step = b->has[L('q')] ? gc_fanuc_length(g, fb, 'q') : 0;
+    if (!(first > rt))
+        return gc_fail(g, FM_ERR_INPUT, b->col[L('i')],
+                       "%s I%g: expected a radius larger than the tool's (%g, D%d)", name, first,
+                       rt, f->d);
+    if (b->has[L('k')] && !(last >= first))
+        return gc_fail(g, FM_ERR_INPUT, b->col[L('k')],
+                       "%s K%g: expected the finished radius K >= I (%g)", name, last, first);
+    if (b->has[L('q')] && !(step > 0))
+        return gc_fail(g, FM_ERR_INPUT, b->col[L('q')], "%s Q%g: expected a step Q > 0", name,
+                       step);
+    if (b->has[L('q')] && (last - first) / step > 100000)
+        return gc_fail(g, FM_ERR_LIMIT, b->col[L('q')], "%s: more than 100000 circles", name);
+    if ((st = gc_check_feed(g, name, col))) return st;
+
+    /* the centre: X Y of the block (G90/G91), reached at the current
+     * height; Z: the depth of the first pass, each L pass deeper by the
+     * same increment in G91 */
+    double target[3];
+    gc_fanuc_target(g, fb, target);
+    double c[2] = {target[0], target[1]};
+    double z0 = f->prog[2];
+    double dz = b->has[L('z')] ? target[2] - z0 : 0;
+    if (c[0] != f->prog[0] || c[1] != f->prog[1]) {
+        double to[3] = {c[0], c[1], z0};
+        if ((st = gc_fanuc_move(g, 1, to))) return st;
+    }
+    for (long rep = 0; rep < reps && !g->stop; rep++) {
+        double z = b->has[L('z')] ? (g->absolute ? target[2] : z0 + (rep + 1) * dz) : z0;
+        if (z != f->prog[2]) {
+            double to[3] = {c[0], c[1], z};
+            if ((st = gc_fanuc_move(g, 0, to))) return st;
+        }
+        /* circles from I out to K in steps of Q, each a full turn, joined
+         * by half turns; the tool centre runs the tool's radius inside */
+        double r = 0;
+        int side = -1; /* the lead-in ends on +X */
+        for (long n = 0;; n++) {
+            double next = first + n * step;
+            if (!b->has[L('q')] || next > last - 1e-9 * (1 + fabs(last))) next = last;
+            next -= rt;
+            if ((st = half_turn(g, c, z, r, next, side, ccw))) return st;
+            side = -side;
+            double at[3] = {c[0] + side * next, c[1], z}, cen[3] = {c[0], c[1], z};
+            if ((st = pocket_arc(g, at, cen, ccw))) return st;
+            r = next;
+            if (next >= last - rt) break;
+        }
+        if ((st = half_turn(g, c, z, r, 0, side, ccw))) return st;
+    }
+    return FM_OK;
+}
