@@ -913,6 +913,54 @@ static void test_modal_call(void)
     expect_error("G66 X1.\n", 1, 1, "G66: P missing");
 }
 
+/* Comments handed to fm_gcode_options.comment: "line|text" joined by '\n'. */
+static void keep_comment(void *user, int line, const char *text, size_t len)
+{
+    char *buf = user;
+    size_t n = strlen(buf);
+    snprintf(buf + n, 1024 - n, "%d|%.*s\n", line, (int)len, text);
+}
+
+static void test_comments(void)
+{
+    /* a CAM post's header: each comment as written, with its line, in both
+     * dialects; a line run twice (the M98 body) hands its comment over twice */
+    const char *both = "%\n(T1 D=6. CR=0. - ZMIN=-5. - FLAT END MILL)\n(T2  D=10. (x\n"
+                       "G90 G00 X1. (MSG, hi) ; rest; of line\nM30\n%\n";
+    const char *expect = "2|T1 D=6. CR=0. - ZMIN=-5. - FLAT END MILL\n";
+    for (int d = 0; d < 2; d++) {
+        char buf[1024] = "";
+        fm_gcode_options o = fanuc();
+        o.dialect = d ? FM_GCODE_FANUC : FM_GCODE_LINUXCNC;
+        o.comment = keep_comment;
+        o.comment_user = buf;
+        fm_error err;
+        /* line 3 has an unclosed comment: the error comes after line 2's */
+        CHECK(run_opt(both, &o, &err) != FM_OK);
+        CHECK(err.line == 3);
+        CHECK(strcmp(buf, expect) == 0);
+        buf[0] = '\0';
+        const char *ok = "%\n(T1 D=6. CR=0. - ZMIN=-5. - FLAT END MILL)\n"
+                         "G90 G00 X1. (MSG, hi) ; rest; of line\nM30\n%\n";
+        CHECK(run_opt(ok, &o, &err) == FM_OK);
+        CHECK(strcmp(buf, "2|T1 D=6. CR=0. - ZMIN=-5. - FLAT END MILL\n3|MSG, hi\n"
+                          "3| rest; of line\n") == 0);
+        if (strcmp(buf, "2|T1 D=6. CR=0. - ZMIN=-5. - FLAT END MILL\n3|MSG, hi\n"
+                        "3| rest; of line\n"))
+            fprintf(stderr, "  comments (%s): %s", d ? "fanuc" : "linuxcnc", buf);
+    }
+    char buf[1024] = "";
+    fm_gcode_options o = fanuc();
+    o.comment = keep_comment;
+    o.comment_user = buf;
+    fm_error err;
+    CHECK(run_opt("O0001 (MAIN)\nM98 P10 L2\nM30\nO0010 (SUB)\nG00 X1. (IN SUB)\nM99\n", &o, &err) ==
+          FM_OK);
+    /* the O line of the subprogram is read at each call */
+    CHECK(strcmp(buf, "1|MAIN\n4|SUB\n5|IN SUB\n4|SUB\n5|IN SUB\n") == 0);
+    if (strcmp(buf, "1|MAIN\n4|SUB\n5|IN SUB\n4|SUB\n5|IN SUB\n")) fprintf(stderr, "%s", buf);
+}
+
 int main(void)
 {
     test_reading();
@@ -936,5 +984,6 @@ int main(void)
     test_circular_pocket();
     test_mirror();
     test_modal_call();
+    test_comments();
     return test_summary("test_fanuc");
 }

@@ -40,6 +40,14 @@ typedef struct fm_gcode_options {
      * (msg, ...) comments, in program order (NULL: dropped). */
     void (*message)(void *user, int line, const char *text);
     void *message_user;
+    /* Every comment of each line the interpreter reads, as written (the
+     * text between '(' and ')', or after ';'), with its line number, in
+     * program order and in both dialects: CAM posts list the tools there,
+     * "T1 D=6. CR=0. - ZMIN=-5. - FLAT END MILL". A line read again (a
+     * loop, a repeated call) hands its comments over again. The text is not
+     * NUL-terminated and is valid during the call only. NULL: dropped. */
+    void (*comment)(void *user, int line, const char *text, size_t len);
+    void *comment_user;
     /* G38.2-G38.5: where the probe trips along `move` (a feed line, machine
      * mm; the tool tip is move->start/end + tip_offset). toward_contact: 1
      * stops at the first contact (G38.2/G38.3), 0 at the first loss of it

@@ -1,6 +1,7 @@
 /* line.c: what every dialect reads a line with: a source line normalized
  * (lower case, no spaces or tabs, comments removed, each character's source
- * column kept for errors; (debug,...) and (msg,...) comments noted), the
+ * column kept for errors; (debug,...) and (msg,...) comments noted, every
+ * comment handed to fm_gcode_options.comment), the
  * error helper that names file:line:column, G-code names for messages, and
  * questions about a block's words. */
 #include "machine.h"
@@ -81,6 +82,8 @@ fm_status gc_normalize(gc_interp *g, size_t idx, gc_line *out, int report)
             if (c == ')') {
                 in_comment = 0;
                 size_t skip, clen = i - comment_at;
+                if (report && g->opt.comment)
+                    g->opt.comment(g->opt.comment_user, g->lineno, t + comment_at, clen);
                 int kind = message_kind(t + comment_at, clen, &skip);
                 if (kind) {
                     out->msg_kind = kind;
@@ -100,7 +103,14 @@ fm_status gc_normalize(gc_interp *g, size_t idx, gc_line *out, int report)
             comment_at = i + 1;
             continue;
         }
-        if (c == ';') break;
+        if (c == ';') {
+            if (report && g->opt.comment) {
+                size_t e = len;
+                while (e > i + 1 && (t[e - 1] == '\n' || t[e - 1] == '\r')) e--;
+                g->opt.comment(g->opt.comment_user, g->lineno, t + i + 1, e - i - 1);
+            }
+            break;
+        }
         if (c == ' ' || c == '\t') continue;
         if (c >= 'A' && c <= 'Z') c = (unsigned char)(c - 'A' + 'a');
         out->s[n] = (char)c;
