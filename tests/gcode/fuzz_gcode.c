@@ -77,6 +77,14 @@ static const fm_machine *pick_machine(size_t size)
     return pick ? &machines[pick - 1] : NULL;
 }
 
+static void drop_comment(void *user, int line, const char *text, size_t len)
+{
+    (void)user;
+    (void)line;
+    (void)text;
+    (void)len;
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     static fm_tool_spec tools[2];
@@ -92,6 +100,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     opt.max_program_bytes = 1 << 20;
     opt.tools = (size & 1) ? &table : NULL;
     opt.message = drop_message;
+    opt.comment = drop_comment;
     opt.probe = (size & 2) ? half_probe : NULL;
     opt.subroutine_path = "tests/gcode/programs/subs";
     opt.machine = pick_machine(size);
