@@ -889,6 +889,13 @@ static void test_mirror(void)
                    "G81 X5. Y2. Z-3. R1.\n",
                    e2, N(e2));
     if (ngot == N(e2)) CHECK(got[2].turns == -1);
+    /* G51.1 given before G68 reflects what the rotation makes (Fanuc: a
+     * rotation in mirror mode turns the other way): X10. turned 90 degrees
+     * is (0, 10), reflected about Y0 (0, -10) */
+    em e3[] = {{'R', 0, 0, 0}, {'L', 0, -10, 0}};
+    expect_motions("G51.1 G68", "G90 G00 X0 Y0 Z0\nG51.1 Y0\nG68 X0 Y0 R90.\nG01 X10. F100.\n",
+                   e3, N(e3));
+    expect_error("G68 X0 Y0 R90.\nG51.1 Y0\n", 2, 1, "Fanuc mirrors first");
     expect_error("G51.1 Z0\n", 1, 7, "mirroring the tool axis is not supported");
     expect_error("G51.1 X0\nG18\n", 2, 1, "plane change in G51.1 mode");
 }

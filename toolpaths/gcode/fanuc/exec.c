@@ -66,8 +66,6 @@ void gc_fanuc_to_work(const gc_interp *g, const double prog[3], double work[3])
 {
     const gc_fanuc *f = FANUC(g);
     memcpy(work, prog, 3 * sizeof *work);
-    gc_fanuc_mirror_point(f, work); /* G51.1 first (haas.c), then G51, then G68 */
-    if (!f->scaling && !f->rotation) return;
     if (f->scaling) scale_point(f, work);
     if (f->rotation) {
         int a, b, c;
@@ -81,12 +79,16 @@ void gc_fanuc_to_work(const gc_interp *g, const double prog[3], double work[3])
         work[a] = ca + f->rot_cos * da - f->rot_sin * db;
         work[b] = cb + f->rot_sin * da + f->rot_cos * db;
     }
+    /* G51.1 reflects all the rest (haas.c): given first, it mirrors what the
+     * program's own G51 and G68 make, so a G68 turns the other way */
+    gc_fanuc_mirror_point(f, work);
 }
 
 void gc_fanuc_from_work(const gc_interp *g, const double work[3], double prog[3])
 {
     const gc_fanuc *f = FANUC(g);
     memcpy(prog, work, 3 * sizeof *prog);
+    gc_fanuc_mirror_point(f, prog);
     if (f->rotation) {
         int a, b, c;
         gc_plane_axes(f->rot_plane, &a, &b, &c);
@@ -102,7 +104,6 @@ void gc_fanuc_from_work(const gc_interp *g, const double work[3], double prog[3]
     if (f->scaling)
         for (int i = 0; i < 3; i++)
             prog[i] = f->scale_center[i] + (prog[i] - f->scale_center[i]) / f->scale;
-    gc_fanuc_mirror_point(f, prog);
 }
 
 /* The current point in the program frame after a coordinate change that
