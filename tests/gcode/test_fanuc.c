@@ -896,6 +896,7 @@ static void test_mirror(void)
     expect_motions("G51.1 G68", "G90 G00 X0 Y0 Z0\nG51.1 Y0\nG68 X0 Y0 R90.\nG01 X10. F100.\n",
                    e3, N(e3));
     expect_error("G68 X0 Y0 R90.\nG51.1 Y0\n", 2, 1, "Fanuc mirrors first");
+    expect_error("G51.1 Y0\nG92 X0 Y0\n", 2, 1, "G92 in G68, G51 or G51.1 mode");
     expect_error("G51.1 Z0\n", 1, 7, "mirroring the tool axis is not supported");
     expect_error("G51.1 X0\nG18\n", 2, 1, "plane change in G51.1 mode");
 }

@@ -390,8 +390,8 @@ static fm_status exec_g92(gc_interp *g, const gc_fanuc_block *fb, int col)
     const gc_block *b = &fb->b;
     if (!has_plane_word(b))
         return gc_fail(g, FM_ERR_INPUT, col, "G92: no axis words; expected X, Y or Z values");
-    if (FANUC(g)->rotation || FANUC(g)->scaling)
-        return gc_fail(g, FM_ERR_INPUT, col, "G92 in G68 or G51 mode; cancel them first");
+    if (FANUC(g)->rotation || FANUC(g)->scaling || FANUC(g)->mirror[0] || FANUC(g)->mirror[1])
+        return gc_fail(g, FM_ERR_INPUT, col, "G92 in G68, G51 or G51.1 mode; cancel them first");
     for (int i = 0; i < 3; i++) {
         char c = axis_letter[i];
         if (!b->has[L(c)]) continue;
