@@ -723,6 +723,10 @@ static void test_g154(void)
                    "G154 P21\nG00 X0 Y0 Z0\n#1=#14401\n#2=#14002\n#3=#7002\nG00 X#1 Y[#2+#3]\n"
                    "G91 G10 L20 P21 X5.\nG90 G00 X0 Y0\n#15961=7.\nG154 P99\nG00 X0 Y0 Z0\n",
                    e, N(e));
+    /* #4014 (the work offset group): 154 in G154, 54.1 in G54.1, 54 in G54 */
+    em e4[] = {{'R', 154, 0, 0}, {'R', 154, 54.1, 0}, {'R', 154, 54.1, 54}};
+    expect_motions("#4014", "G154 P2\n#1=#4014\nG54.1 P2\n#2=#4014\nG54\n#3=#4014\n"
+                            "G00 X#1\nY#2\nZ#3\n", e4, N(e4));
     expect_error("G154 P100\n", 1, 6, "expected a whole number from 1 to 99");
     expect_error("G154\n", 1, 1, "G154: P missing");
     expect_error("G10 L20 P100 X1.\n", 1, 9, "expected a whole number from 1 to 99");

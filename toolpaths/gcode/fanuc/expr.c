@@ -54,7 +54,7 @@ static double modal_info(gc_interp *g, int group)
     case 11: return f->scaling ? 51 : 50;
     case 12: return f->modal_call ? 66 : 67;
     case 13: return 97;
-    case 14: return f->ext_cs ? 54.1 : 53 + g->cs;
+    case 14: return f->ext_cs ? (f->ext_g154 ? 154 : 54.1) : 53 + g->cs;
     case 15: return 64;
     case 16: return f->rotation ? 68 : 69;
     case 17: return f->polar ? 16 : 15;

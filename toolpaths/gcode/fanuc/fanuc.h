@@ -105,6 +105,7 @@ typedef struct gc_fanuc {
     int last_m;          /* #4113 */
     long sequence;       /* #4114 */
     int ext_cs;          /* G54.1 or G154 P number in use, 0 for G54-G59 */
+    int ext_g154;        /* it was selected with G154 (#4014 reads 154) */
     double local_offset[3]; /* G52, program units */
     double prog[3];      /* the programmed point: before polar, scaling and rotation */
     int polar;           /* G16 */

@@ -39,6 +39,7 @@ fm_status gc_fanuc_select_ext_offset(gc_interp *g, const gc_block *b, int code, 
         return gc_fail(g, FM_ERR_INPUT, COL(b, 'p'), "P%g: expected a whole number from 1 to %d",
                        v, max);
     FANUC(g)->ext_cs = (int)v;
+    FANUC(g)->ext_g154 = code == GC_G154;
     return FM_OK;
 }
 
