@@ -5,7 +5,10 @@
  * through the job runner in the Fanuc dialect. The removed volume must equal
  * the closed form computed here from the geometry (within 0.5% at 0.1 mm
  * voxels, the tolerance test_simulate uses). A forgotten tool length offset
- * would put the tips 75 or 90 mm lower, so the volume also proves G43 H. */
+ * would put the tips 75 or 90 mm lower, so the volume also proves G43 H.
+ * Two more programs: a Fusion-style contour with G41/G42 and Haas' G12/G13
+ * circular pockets (G154, G95, G51.1 on the way), each against its closed
+ * form. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -148,6 +151,70 @@ static void test_fusion_haas(const fm_tool_table *tools)
     fm_stock_free(result.stock);
 }
 
+/* Haas' own codes as a shop writes them (tool comment header, G154 P1 set
+ * by G10 L20, G187, G95 feed per revolution, G12/G13 circular pockets with
+ * I K Q D L in G91, G51.1 mirror image): two pockets of radius K = 20 and
+ * 3 x 2 mm deep, the first at G154 P1's (15, 25) = machine (25, 30), the
+ * second programmed at the same place mirrored about X40: work (65, 25) =
+ * machine (75, 30). The tool centre runs circles of radius 1, 6, 11 and 15
+ * (I6, 11, 16, K20 less the tool's 5), each within a tool diameter of the
+ * last, so each pocket is the whole cylinder: pi 20^2 6. */
+static const char *haas_program =
+    "%\n"
+    "O01235 (HAAS POCKETS)\n"
+    "(T1 D=10. CR=0. - ZMIN=-6. - FLAT END MILL)\n"
+    "N10 G90 G94 G17\n"
+    "N15 G21\n"
+    "N20 G10 L20 P1 X10. Y5. Z0\n"
+    "N25 T1 M06\n"
+    "N30 S5000 M03\n"
+    "N35 G154 P1\n"
+    "N40 G00 X15. Y25.\n"
+    "N45 G43 H01 Z5.\n"
+    "N50 G187 P3\n"
+    "N55 G01 Z0 F300.\n"
+    "N60 G95 G13 G91 Z-2. I6. K20. Q5. D1 L3 F0.08\n"
+    "N65 G90 G94 G00 Z5.\n"
+    "N70 G51.1 X40.\n"
+    "N75 G00 X15. Y25.\n"
+    "N80 G01 Z0 F300.\n"
+    "N85 G12 G91 Z-2. I6. K20. Q5. D1 L3 F400.\n"
+    "N90 G90 G00 Z5.\n"
+    "N95 G50.1 X0\n"
+    "N100 G00 Z50. M05\n"
+    "N105 M30\n"
+    "%\n";
+
+static void test_haas_pockets(const fm_tool_table *tools)
+{
+    double exact = 2 * PI * 20 * 20 * 6;
+    fm_job_spec spec;
+    fm_job_spec_default(&spec);
+    spec.program_text = haas_program;
+    spec.program_length = strlen(haas_program);
+    spec.program_name = "O01235.nc";
+    spec.stock_spec = "box:0,0,-30,100,60,0";
+    spec.tools = tools;
+    spec.stock.voxel_mm = 0.1;
+    spec.dialect = "fanuc";
+    spec.reference_points[0][2] = 200; /* the tool starts 200 mm above Z0 */
+    fm_job_result result;
+    fm_error err;
+    char buf[700];
+    fm_status st = fm_job_run(&spec, NULL, &result, &err);
+    CHECK(st == FM_OK);
+    if (st) {
+        fprintf(stderr, "Haas pockets: %s\n", fm_error_format(&err, buf, sizeof buf));
+        return;
+    }
+    double v = result.removed_volume_mm3;
+    double rel = fabs(v - exact) / exact;
+    printf("Haas G154 G95 G12/G13 G51.1 pockets, voxel 0.10: removed %.3f mm3, closed form "
+           "%.3f mm3, error %.3f%%, %ld motions\n", v, exact, 100 * rel, result.motions);
+    CHECK(rel <= 0.005);
+    fm_stock_free(result.stock);
+}
+
 int main(void)
 {
     fm_tool_table tools;
@@ -205,6 +272,7 @@ int main(void)
     CHECK(fm_job_run(&spec, NULL, &result, &err) == FM_ERR_INPUT);
     CHECK_STR_CONTAINS(err.message, "expected linuxcnc or fanuc");
     test_fusion_haas(&tools);
+    test_haas_pockets(&tools);
     fm_tool_table_free(&tools);
     return test_summary("test_fanuc_job");
 }
