@@ -922,6 +922,24 @@ static void test_modal_call(void)
     em e2[] = {{'R', 66, 0, 0}, {'R', 67, 0, 0}};
     expect_motions("#4012", "G66 P1\n#1=#4012\nG67\n#2=#4012\nG00 X#1\nX#2\nM30\nO0001\nM99\n", e2,
                    N(e2));
+    /* nesting: a G66 given in the called macro makes the macro's own moves
+     * call the inner macro (Fanuc calls nested modal calls from the last
+     * given), whose moves call nothing; its G67 leaves the outer G66 on */
+    em e3[] = {{'R', 0, 0, 10}, {'R', 10, 0, 10}, {'R', 10, 1, 10}, {'R', 10, 1, 9},
+               {'R', 10, 2, 9}, {'R', 20, 2, 9}, {'R', 20, 3, 9}, {'R', 20, 3, 8},
+               {'R', 20, 4, 8}, {'R', 50, 4, 8}};
+    expect_motions("G66 nested",
+                   "O0001\nG90 G00 X0 Y0 Z10.\nG66 P9000\nX10.\nX20.\nG67\nX50.\nM30\n"
+                   "O9000\nG66 P9100\nG91 G00 Y1.\nG67\nY1.\nG90\nM99\n"
+                   "O9100\nG91 G00 Z-1.\nM99\n",
+                   e3, N(e3));
+    /* a G66 given in a macro ends with its return: a later macro at that
+     * level does not call it */
+    em e4[] = {{'R', 5, 0, 0}, {'R', 6, 0, 0}};
+    expect_motions("G66 ends with its macro",
+                   "G65 P9200\nG00 X5.\nG65 P9300\nM30\nO9200\nG66 P9100\nM99\n"
+                   "O9300\nG91 G00 X1.\nG90\nM99\nO9100\nG00 Z-1.\nM99\n",
+                   e4, N(e4));
     expect_error("G66 X1.\n", 1, 1, "G66: P missing");
 }
 

@@ -52,7 +52,7 @@ static double modal_info(gc_interp *g, int group)
     case 9: return g->motion == GC_G80 || g->motion < GC_G73 ? 80 : g_value(g->motion);
     case 10: return g->retract_r ? 99 : 98;
     case 11: return f->scaling ? 51 : 50;
-    case 12: return f->modal_call ? 66 : 67;
+    case 12: return gc_fanuc_modal_call_on(f) ? 66 : 67;
     case 13: return 97;
     case 14: return f->ext_cs ? (f->ext_g154 ? 154 : 54.1) : 53 + g->cs;
     case 15: return 64;

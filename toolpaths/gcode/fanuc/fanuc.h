@@ -128,11 +128,16 @@ typedef struct gc_fanuc {
     int css;             /* G96 constant surface speed (S is not rpm: G95 is refused) */
     int mirror[3];       /* G51.1: the axis is mirrored */
     double mirror_center[3]; /* program frame, program units */
-    int modal_call;      /* G66 on */
-    long modal_program, modal_repeats;
-    int modal_col;
-    int modal_level;     /* the local level of the G66 block: only its moves call */
-    double modal_args[GC_FANUC_LOCALS];
+    /* G66 modal calls, one per level of locals (the level of the G66
+     * block): a move at that level calls it, so a G66 given in the called
+     * macro nests (its moves call the inner macro); the macro's return ends
+     * the G66 it gave */
+    struct gc_fanuc_modal_call {
+        int on;
+        long program, repeats;
+        int col;
+        double args[GC_FANUC_LOCALS];
+    } modal[GC_FANUC_LEVELS];
 
     /* the current block */
     int in_address;      /* evaluating an address: ROUND rounds to its increment */
@@ -241,9 +246,12 @@ fm_status gc_fanuc_mirror(gc_interp *g, const gc_fanuc_block *fb, int code, int 
 void gc_fanuc_mirror_point(const gc_fanuc *f, double p[3]);
 /* -1 when an odd number of the plane's axes is mirrored (G02 <-> G03), else 1. */
 int gc_fanuc_mirror_sense(const gc_interp *g);
-/* G66 (store the call) and G67 of the block. */
+/* G66 (store the call at this level) and G67 of the block (cancel this
+ * level's, or else the most recent). */
 fm_status gc_fanuc_modal_call_set(gc_interp *g, const gc_fanuc_block *fb, int code, int col);
 /* After a block that moved: the G66 call, if one is on at this level. */
 fm_status gc_fanuc_modal_call_run(gc_interp *g);
+/* 1 if a G66 is on at this level or below (#4012). */
+int gc_fanuc_modal_call_on(const gc_fanuc *f);
 
 #endif

@@ -130,7 +130,13 @@ fm_status gc_fanuc_modal_call_set(gc_interp *g, const gc_fanuc_block *fb, int co
     gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     if (code == GC_G67) {
-        f->modal_call = 0;
+        /* this level's G66, or else the most recent one (Fanuc cancels
+         * nested modal calls in reverse order) */
+        for (int l = f->level; l >= 0; l--)
+            if (f->modal[l].on) {
+                f->modal[l].on = 0;
+                break;
+            }
         return FM_OK;
     }
     if (!b->has[L('p')])
@@ -142,12 +148,12 @@ fm_status gc_fanuc_modal_call_set(gc_interp *g, const gc_fanuc_block *fb, int co
     if (floor(l) != l || l < 0 || l > 999999999)
         return gc_fail(g, FM_ERR_INPUT, b->col[L('l')],
                        "L%g: expected a whole number from 0 to 999999999", l);
-    f->modal_call = 1;
-    f->modal_program = (long)p;
-    f->modal_repeats = (long)l;
-    f->modal_col = col;
-    f->modal_level = f->level;
-    memcpy(f->modal_args, fb->args, sizeof f->modal_args);
+    struct gc_fanuc_modal_call *mc = &f->modal[f->level];
+    mc->on = 1;
+    mc->program = (long)p;
+    mc->repeats = (long)l;
+    mc->col = col;
+    memcpy(mc->args, fb->args, sizeof mc->args);
     return FM_OK;
 }
 
@@ -155,9 +161,16 @@ fm_status gc_fanuc_modal_call_run(gc_interp *g)
 {
     gc_fanuc *f = FANUC(g);
     /* the macro's own moves (a level deeper) do not call it again */
-    if (!f->modal_call || f->level != f->modal_level || g->stop) return FM_OK;
-    return gc_fanuc_call(g, GC_CALL_G65, f->modal_program, f->modal_repeats, f->modal_args,
-                         f->modal_col);
+    const struct gc_fanuc_modal_call *mc = &f->modal[f->level];
+    if (!mc->on || g->stop) return FM_OK;
+    return gc_fanuc_call(g, GC_CALL_G65, mc->program, mc->repeats, mc->args, mc->col);
+}
+
+int gc_fanuc_modal_call_on(const gc_fanuc *f)
+{
+    for (int l = 0; l <= f->level; l++)
+        if (f->modal[l].on) return 1;
+    return 0;
 }
 
 /* ---- G12 / G13 ---- */

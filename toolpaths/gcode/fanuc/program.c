@@ -381,7 +381,7 @@ fm_status gc_fanuc_return(gc_interp *g, int has_p, long p, int col)
         return FM_OK;
     }
     f->nframes--;
-    if (fr->kind == GC_CALL_G65) f->level--;
+    if (fr->kind == GC_CALL_G65) f->modal[f->level--].on = 0; /* its G66 ends with it */
     else f->sub_depth--;
     f->cur_program = fr->caller_program;
     use_text(g, f->programs[f->cur_program].text);
