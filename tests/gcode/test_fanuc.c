@@ -867,6 +867,50 @@ static void test_circular_pocket(void)
     expect_error("G13 I5. K10. F100.\n", 1, 9, "K without Q");
 }
 
+/* G41 in G51.1 X0: the compensated contour is the reflection of the
+ * contour cut without the mirror (G41 acts as G42 there: the tool stays on
+ * the reflected side), each end and centre x -> -x, each arc reversed. */
+static void test_mirror_comp(void)
+{
+    static fm_tool_spec tools[1];
+    static fm_tool_table table = {1, tools};
+    tools[0].number = 1;
+    tools[0].diameter = 10;
+    fm_gcode_options o = fanuc();
+    o.tools = &table;
+    const char *body = "G01 F500.\nG41 D1 X0 Y-10.\nY20.\nX30.\nG02 X40. Y10. R10.\nG01 Y-10.\n"
+                       "X0\nG40 X-20. Y-20.\n";
+    char plain[512], mirrored[512];
+    snprintf(plain, sizeof plain, "G90 G00 X-20. Y-20. Z0\n%s", body);
+    snprintf(mirrored, sizeof mirrored, "G51.1 X0\nG90 G00 X-20. Y-20. Z0\n%s", body);
+    static fm_motion first[64];
+    fm_error err;
+    CHECK(run_opt(plain, &o, &err) == FM_OK);
+    int n = ngot < 64 ? ngot : 64;
+    memcpy(first, got, (size_t)n * sizeof *first);
+    CHECK(run_opt(mirrored, &o, &err) == FM_OK);
+    CHECK(ngot == n && n >= 8);
+    for (int i = 0; i < n && i < ngot; i++) {
+        const fm_motion *a = &first[i], *m = &got[i];
+        int ok = a->kind == m->kind && fabs(a->end[0] + m->end[0]) < 1e-9 &&
+                 fabs(a->end[1] - m->end[1]) < 1e-9 && fabs(a->end[2] - m->end[2]) < 1e-9;
+        if (a->kind == FM_MOTION_ARC)
+            ok = ok && a->turns == -m->turns && fabs(a->center[0] + m->center[0]) < 1e-9 &&
+                 fabs(a->center[1] - m->center[1]) < 1e-9;
+        CHECK(ok);
+        if (!ok)
+            fprintf(stderr, "  G51.1 G41: motion %d is %.4f %.4f, unmirrored %.4f %.4f\n", i,
+                    m->end[0], m->end[1], a->end[0], a->end[1]);
+    }
+    /* G51.1 and G12 refused while compensating (line 3, column 1) */
+    CHECK(run_opt("G90 G00 X0 Y0\nG01 G41 D1 X10. F100.\nG51.1 X0\n", &o, &err) != FM_OK);
+    CHECK(err.line == 3 && err.column == 1);
+    CHECK_STR_CONTAINS(err.message, "G51.1 with cutter radius compensation on");
+    CHECK(run_opt("G90 G00 X0 Y0\nG01 G41 D1 X10. F100.\nG12 I15.\n", &o, &err) != FM_OK);
+    CHECK(err.line == 3 && err.column == 1);
+    CHECK_STR_CONTAINS(err.message, "the cycle compensates by its D");
+}
+
 static void test_mirror(void)
 {
     /* G51.1 X50.: X mirrored about 50. The contour G01 X10. Y0, Y10., G02
@@ -902,6 +946,7 @@ static void test_mirror(void)
     expect_error("G68 X0 Y0 R90.\nG51.1 Y0\n", 2, 1, "Fanuc mirrors first");
     expect_error("G51.1 Y0\nG92 X0 Y0\n", 2, 1, "G92 in G68, G51 or G51.1 mode");
     expect_error("G51.1 Z0\n", 1, 7, "mirroring the tool axis is not supported");
+    test_mirror_comp();
     expect_error("G51.1 X0\nG18\n", 2, 1, "plane change in G51.1 mode");
 }
 

@@ -71,7 +71,9 @@ fm_status gc_fanuc_comp_mode(gc_interp *g, const gc_fanuc_block *fb, int code, i
     if (code == GC_G41 || code == GC_G42) {
         if (g->plane != GC_PLANE_XY && g->plane != GC_PLANE_XZ && g->plane != GC_PLANE_YZ)
             return gc_fail(g, FM_ERR_INPUT, col, "cutter radius compensation without a plane");
-        return gc_comp_c_start(g, code == GC_G41, radius, col);
+        /* a mirror of one plane axis (G51.1) turns G41 into G42 (haas.c) */
+        int left = (code == GC_G41) != (gc_fanuc_mirror_sense(g) < 0);
+        return gc_comp_c_start(g, left, radius, col);
     }
     /* a D word alone in offset mode: the new radius from the next element */
     if (b->has[L('d')] && gc_comp_c_on(g)) return gc_comp_c_radius(g, radius, dcol);

@@ -89,6 +89,10 @@ fm_status gc_fanuc_mirror(gc_interp *g, const gc_fanuc_block *fb, int code, int 
     const gc_block *b = &fb->b;
     int any = 0;
     for (int i = 0; i < 3; i++) any |= b->has[L(axis_letter[i])];
+    if (gc_comp_c_routing(g))
+        return gc_fail(g, FM_ERR_INPUT, col,
+                       "%s with cutter radius compensation on; expected G40 and its cancel move "
+                       "first", code == GC_G50_1 ? "G50.1" : "G51.1");
     if (code == GC_G50_1) {
         /* the axes given are cancelled (their values are ignored, as Fanuc);
          * G50.1 alone cancels every axis */
@@ -209,6 +213,10 @@ fm_status gc_fanuc_circular_pocket(gc_interp *g, const gc_fanuc_block *fb, int c
     fm_status st;
     if (g->plane != GC_PLANE_XY)
         return gc_fail(g, FM_ERR_INPUT, col, "%s: circular pockets are in G17 only (Haas)", name);
+    if (gc_comp_c_routing(g))
+        return gc_fail(g, FM_ERR_INPUT, col,
+                       "%s with cutter radius compensation on (the cycle compensates by its D); "
+                       "expected G40 and its cancel move first", name);
     if (f->scaling)
         return gc_fail(g, FM_ERR_INPUT, col, "%s in G51 scaling mode is not supported; cancel G51 "
                        "first", name);
