@@ -70,8 +70,7 @@ static const char *program =
     "%\n";
 
 /* A program in the shape Fusion 360's Haas post writes (header comments,
- * G90 G94 G17, G21, G53 G0 Z0., T1 M6, S M3, G54.1 P1 (Haas writes G154 P1,
- * the same offset), G43 Z H1, G187 P3, M8,
+ * G90 G94 G17, G21, G53 G0 Z0., T1 M6, S M3, G154 P1, G43 Z H1, G187 P3, M8,
  * a contour with a G41 D1 start-up line and tangent lead-in arc, a G40
  * lead-out, G53 G0 Z0., M1, M30) around a 40 x 20 boss, 5 deep, in a block
  * 8 mm wider on every side. The first line sets P1's offset as an operator
@@ -98,7 +97,7 @@ static const char *fusion_program =
     "(2D CONTOUR1)\n"
     "N25 T1 M6\n"
     "N30 S8000 M3\n"
-    "N35 G54.1 P1\n"
+    "N35 G154 P1\n"
     "N40 G0 X-10. Y-25.\n"
     "N45 G43 Z15. H1\n"
     "N50 G187 P3\n"
