@@ -792,6 +792,13 @@ static void test_g95(void)
         CHECK_NEAR(got[3].end[2], -10, 1e-9);
         CHECK_NEAR(got[3].t1 - got[3].t0, 3.6, 1e-9);
     }
+    /* in G20: F0.01 in/rev at S1000 is 10 in/min = 254 mm/min: 1 in in 6 s */
+    CHECK(run("G20 G90 G00 X0 Y0 Z0\nS1000 M03\nG95 G01 X1. F0.01\n", &err) == FM_OK);
+    CHECK(ngot == 2);
+    if (ngot == 2) {
+        CHECK_NEAR(got[1].feed, 254, 1e-9);
+        CHECK_NEAR(got[1].t1 - got[1].t0, 6, 1e-9);
+    }
     expect_error("S0 M03\nG95 G01 X1. F0.1\n", 2, 5, "feed per revolution (G95) with the spindle "
                  "at S0");
     expect_error("G96 S200 M03\nG95 G01 X1. F0.1\n", 2, 1, "G95 feed per revolution with G96");
@@ -856,6 +863,36 @@ static void test_circular_pocket(void)
         }
         CHECK_NEAR(got[12].center[0], 8.5, 1e-9);
         CHECK_NEAR(got[11].t1 - got[11].t0, 34 * GC_TEST_PI / 100 * 60, 1e-9); /* r 17 */
+    }
+    /* Haas' manual's own example, in inches: G13 G91 Z-.5 I.4 K2. Q.4 D1 L4
+     * F20. with a 0.5 in end mill (radius .25): circles .4 .8 1.2 1.6 2.0,
+     * the tool centre on .15 .55 .95 1.35 1.75 in, alternately on +X and -X;
+     * four passes 0.5 in deeper each, the last at Z-2. in; the last circle
+     * of each pass, 2 pi 1.75 in at 20 in/min, takes 2 pi 1.75 / 20 min */
+    static fm_tool_spec half_inch[1];
+    static fm_tool_table half_inch_table = {1, half_inch};
+    half_inch[0].number = 1;
+    half_inch[0].diameter = 12.7;
+    fm_gcode_options oi = fanuc();
+    oi.tools = &half_inch_table;
+    em e5[49];
+    int n5 = 0;
+    e5[n5++] = (em){'R', 0, 0, 0};
+    for (int pass = 1; pass <= 4; pass++) {
+        double z = -0.5 * pass * 25.4;
+        e5[n5++] = (em){'L', 0, 0, z};
+        const double ends[5] = {0.15, -0.55, 0.95, -1.35, 1.75};
+        for (int c = 0; c < 5; c++) {
+            e5[n5++] = (em){'A', ends[c] * 25.4, 0, z};
+            e5[n5++] = (em){'A', ends[c] * 25.4, 0, z};
+        }
+        e5[n5++] = (em){'A', 0, 0, z};
+    }
+    expect_motions_opt("Haas G13 example (inch)",
+                       "G20 G90 G00 X0 Y0 Z0\nG13 G91 Z-.5 I.4 K2. Q.4 D1 L4 F20.\n", &oi, e5, n5);
+    if (ngot == n5) {
+        CHECK_NEAR(got[11].t1 - got[11].t0, 2 * GC_TEST_PI * 1.75 / 20 * 60, 1e-9);
+        CHECK_NEAR(got[11].feed, 20 * 25.4, 1e-9);
     }
     /* Q that does not divide K - I: radii 4, 8, then 10 (D0: the centre on them) */
     em e3[] = {{'R', 0, 0, 0},  {'L', 0, 0, -1},  {'A', 4, 0, -1}, {'A', 4, 0, -1},
