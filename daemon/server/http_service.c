@@ -3,22 +3,17 @@
  * call reads what the workers published, under the job's lock, and copies
  * it out; the full mesh is assembled from the published chunk meshes, so a
  * download never touches the grid being cut. */
-#include <limits.h>
-#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <unistd.h>
 
 #include "http_service.h"
+#include "job_record.h"
 #include "jobs_check.h"
-#include "jobs_internal.h"
+#include "publish.h"
 #include "sweep/sweep.h"
-#include "toolpaths/gcode/gcode.h"
-#include "toolpaths/tooltable/tooltable.h"
-#include "toolpaths/traj/traj.h"
 
 static fm_status not_found(const char *id, fm_error *err)
 {
@@ -52,76 +47,18 @@ static fm_status svc_status(void *ctx, const char *id, json_t **out, fm_error *e
 
 static fm_status svc_list(void *ctx, json_t **out, fm_error *err)
 {
-    (void)err;
-    fm_jobs *jobs = ctx;
-    /* References first, statuses after: never hold the table lock while
-     * taking a job's lock for long. */
-    pthread_mutex_lock(&jobs->lock);
-    size_t n = jobs->count;
-    job **copy = malloc((n ? n : 1) * sizeof *copy);
-    if (copy)
-        for (size_t i = 0; i < n; i++) {
-            copy[i] = jobs->table[i];
-            copy[i]->refs++;
-        }
-    pthread_mutex_unlock(&jobs->lock);
-    if (!copy) return fm_error_set_reason(err, FM_ERR_LIMIT, "out_of_memory", "out of memory");
-    json_t *list = json_array();
-    for (size_t i = 0; i < n; i++) {
-        json_array_append_new(list, fm_publish_status_json(copy[i]));
-        fm_jobs_put(jobs, copy[i]);
-    }
-    free(copy);
-    *out = json_pack("{s:o}", "jobs", list);
-    return FM_OK;
+    *out = fm_jobs_status_list(ctx);
+    return *out ? FM_OK
+                : fm_error_set_reason(err, FM_ERR_LIMIT, "out_of_memory", "out of memory");
 }
 
 static fm_status svc_report(void *ctx, const char *id, json_t **out, fm_error *err)
 {
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
-    pthread_mutex_lock(&j->lock);
-    fm_status rc = FM_OK;
-    if (j->report) {
-        *out = json_deep_copy(j->report);
-        json_object_set_new(*out, "id", json_string(j->id));
-        json_object_set_new(*out, "state", json_string(fm_job_state_name(j->state)));
-    } else if (j->state == FM_JOB_FAILED) {
-        *out = json_pack("{s:s, s:s, s:O?}", "id", j->id, "state", "failed", "error", j->error);
-    } else {
-        rc = fm_error_set_reason(err, FM_ERR_INPUT, "not_finished",
-                                 "job %s is %s; its report exists once it is done", j->id,
-                                 fm_job_state_name(j->state));
-    }
-    pthread_mutex_unlock(&j->lock);
+    fm_status rc = fm_publish_report_json(j, out, err);
     fm_jobs_put(ctx, j);
     return rc;
-}
-
-static void chunk_name(const job_chunk *c, char *out, size_t size)
-{
-    snprintf(out, size, "%d_%d_%d", c->index[0], c->index[1], c->index[2]);
-}
-
-/* The version of c that showed it at program time at_s (the last one
- * published at or before it), or NULL if it was first published later. */
-static const chunk_version *version_at(const job_chunk *c, double at_s)
-{
-    const chunk_version *found = NULL;
-    for (size_t v = 0; v < c->version_count && c->versions[v].time_s <= at_s + 1e-9; v++)
-        found = &c->versions[v];
-    return found;
-}
-
-static json_t *chunk_json(const job_chunk *c, const chunk_version *v)
-{
-    char name[48];
-    chunk_name(c, name, sizeof name);
-    return json_pack("{s:s, s:[i,i,i], s:I, s:f, s:I, s:I, s:[f,f,f], s:[f,f,f]}", "id", name,
-                     "index", c->index[0], c->index[1], c->index[2], "version",
-                     (json_int_t)v->version, "time_s", v->time_s, "triangles",
-                     (json_int_t)v->triangles, "bytes", (json_int_t)v->drc_size, "lo", c->lo[0],
-                     c->lo[1], c->lo[2], "hi", c->hi[0], c->hi[1], c->hi[2]);
 }
 
 static fm_status svc_chunks(void *ctx, const char *id, uint64_t since, double at_s, json_t **out,
@@ -130,45 +67,9 @@ static fm_status svc_chunks(void *ctx, const char *id, uint64_t since, double at
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
     fm_status rc = fm_publish_ensure_meshes(j, err);
-    if (rc) {
-        fm_jobs_put(ctx, j);
-        return rc;
-    }
-    json_t *list = json_array();
-    pthread_mutex_lock(&j->lock);
-    if (at_s >= 0 && (j->history_from_s < 0 || at_s < j->history_from_s - 1e-9)) {
-        rc = j->history_from_s < 0
-                 ? fm_error_set_reason(err, FM_ERR_INPUT, "no_mesh",
-                                       "job %s has published no mesh yet", j->id)
-                 : fm_error_set_reason(
-                       err, FM_ERR_INPUT, "history_dropped",
-                       "job %s: the meshes before program time %.3f s are not kept (the daemon "
-                       "keeps %.3g MB of mesh history per job; an uncut stock of more than a million "
-                       "triangles is first published after its first cuts; or it was restarted since)",
-                       j->id, j->history_from_s,
-                       (double)j->jobs->cfg.mesh_history_bytes / 1048576.0);
-        pthread_mutex_unlock(&j->lock);
-        json_decref(list);
-        fm_jobs_put(ctx, j);
-        return rc;
-    }
-    uint64_t newest = 0;
-    for (size_t i = 0; i < j->chunk_count; i++) {
-        const job_chunk *c = &j->chunks[i];
-        const chunk_version *v = at_s >= 0 ? version_at(c, at_s) : job_chunk_current(c);
-        if (!v || (at_s < 0 && v->version <= since)) continue;
-        if (v->version > newest) newest = v->version;
-        json_array_append_new(list, chunk_json(c, v));
-    }
-    *out = json_pack("{s:s, s:I, s:f, s:f, s:I, s:I, s:o}", "id", j->id, "version",
-                     (json_int_t)(at_s >= 0 ? newest : j->mesh_version), "program_time_s",
-                     j->mesh_time_s, "history_from_s", j->history_from_s, "history_bytes",
-                     (json_int_t)j->history_bytes, "since", (json_int_t)since, "chunks", list);
-    if (*out && at_s >= 0) json_object_set_new(*out, "at", json_real(at_s));
-    pthread_mutex_unlock(&j->lock);
+    if (rc == FM_OK) rc = fm_publish_chunk_list(j, since, at_s, out, err);
     fm_jobs_put(ctx, j);
-    return *out ? FM_OK
-                : fm_error_set_reason(err, FM_ERR_LIMIT, "out_of_memory", "out of memory");
+    return rc;
 }
 
 static fm_status svc_chunk(void *ctx, const char *id, const char *name, uint64_t version,
@@ -177,44 +78,8 @@ static fm_status svc_chunk(void *ctx, const char *id, const char *name, uint64_t
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
     fm_status rc = fm_publish_ensure_meshes(j, err);
-    if (rc) {
-        fm_jobs_put(ctx, j);
-        return rc;
-    }
-    rc = fm_error_set_reason(err, FM_ERR_INPUT, "not_found", "job %s has no chunk %.64s", id,
-                             name);
-    pthread_mutex_lock(&j->lock);
-    for (size_t i = 0; i < j->chunk_count; i++) {
-        char n[48];
-        chunk_name(&j->chunks[i], n, sizeof n);
-        if (strcmp(n, name) != 0) continue;
-        const job_chunk *c = &j->chunks[i];
-        const chunk_version *v = version ? NULL : job_chunk_current(c);
-        for (size_t k = 0; !v && k < c->version_count; k++)
-            if (c->versions[k].version == version) v = &c->versions[k];
-        if (!v) {
-            rc = version < c->versions[0].version
-                     ? fm_error_set_reason(err, FM_ERR_INPUT, "history_dropped",
-                                           "version %llu of chunk %s is no longer kept (mesh "
-                                           "history bound); list the chunks again",
-                                           (unsigned long long)version, n)
-                     : fm_error_set_reason(err, FM_ERR_INPUT, "not_found",
-                                           "chunk %s has no version %llu", n,
-                                           (unsigned long long)version);
-            break;
-        }
-        out->size = v->drc_size;
-        out->data = malloc(out->size ? out->size : 1);
-        if (!out->data) {
-            rc = fm_error_set_reason(err, FM_ERR_LIMIT, "out_of_memory", "out of memory");
-            break;
-        }
-        if (out->size) memcpy(out->data, v->drc, out->size);
-        out->content_type = "application/octet-stream";
-        rc = FM_OK;
-        break;
-    }
-    pthread_mutex_unlock(&j->lock);
+    if (rc == FM_OK) rc = fm_publish_chunk_bytes(j, name, version, &out->data, &out->size, err);
+    if (rc == FM_OK) out->content_type = "application/octet-stream";
     fm_jobs_put(ctx, j);
     return rc;
 }
@@ -238,17 +103,10 @@ static fm_status svc_mesh(void *ctx, const char *id, const char *format, fm_http
         return rc;
     }
     fm_error ferr;
-    pthread_mutex_lock(&j->lock);
-    /* the chunks' colours (options.color) go into the whole mesh too */
-    unsigned attrs = FM_MESH_NORMALS;
-    for (size_t i = 0; i < j->chunk_count; i++)
-        if (j->chunks[i].mesh && j->chunks[i].mesh->colors) attrs |= FM_MESH_COLORS;
-    fm_mesh *mesh = fm_mesh_new(0, 0, attrs, NULL, &ferr);
-    fm_status st = mesh ? FM_OK : FM_ERR_LIMIT;
-    for (size_t i = 0; st == FM_OK && i < j->chunk_count; i++)
-        if (j->chunks[i].mesh) st = fm_mesh_append(mesh, j->chunks[i].mesh, &ferr);
-    pthread_mutex_unlock(&j->lock);
+    fm_error_clear(&ferr);
+    fm_mesh *mesh = fm_publish_mesh_copy(j, &ferr);
     fm_jobs_put(ctx, j);
+    fm_status st = mesh ? FM_OK : FM_ERR_LIMIT;
     /* The chunk meshes share their boundary vertices bit for bit: welding
      * gives the whole-grid mesh (mesh.h). */
     if (st == FM_OK) st = fm_mesh_weld(mesh, &ferr);
@@ -285,7 +143,7 @@ static fm_status svc_stock_path(void *ctx, const char *id, char *path, size_t si
 {
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
-    snprintf(path, size, "%s/stock.vdb", j->dir);
+    fm_job_file_path(j, "stock.vdb", path, size);
     fm_jobs_put(ctx, j);
     if (access(path, R_OK) != 0)
         return fm_error_set_reason(err, FM_ERR_INPUT, "no_snapshot",
@@ -298,7 +156,7 @@ static fm_status svc_deviation_path(void *ctx, const char *id, int mesh, char *p
 {
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
-    snprintf(path, size, "%s/%s", j->dir, mesh ? "deviation.drc" : "deviation.json");
+    fm_job_file_path(j, mesh ? "deviation.drc" : "deviation.json", path, size);
     fm_jobs_put(ctx, j);
     if (access(path, R_OK) != 0)
         return fm_error_set_reason(err, FM_ERR_INPUT, "no_deviation",
@@ -312,34 +170,7 @@ static int svc_events(void *ctx, const char *id, uint64_t after, int timeout_ms,
     *finished = 0;
     job *j = fm_jobs_get(ctx, id);
     if (!j) return -1;
-    struct timespec until;
-    clock_gettime(CLOCK_REALTIME, &until);
-    until.tv_sec += timeout_ms / 1000;
-    until.tv_nsec += (long)(timeout_ms % 1000) * 1000000L;
-    if (until.tv_nsec >= 1000000000L) {
-        until.tv_sec++;
-        until.tv_nsec -= 1000000000L;
-    }
-    pthread_mutex_lock(&j->lock);
-    while (j->next_event - 1 <= after && !j->ended) {
-        if (pthread_cond_timedwait(&j->cond, &j->lock, &until) != 0) break;
-    }
-    /* Events older than the ring are gone: start from the oldest kept. */
-    uint64_t first = after + 1;
-    if (j->next_event > JOB_EVENT_RING && first < j->next_event - JOB_EVENT_RING)
-        first = j->next_event - JOB_EVENT_RING;
-    int n = 0;
-    for (uint64_t e = first; e < j->next_event && n < cap; e++) {
-        const job_event *ev = &j->ring[e % JOB_EVENT_RING];
-        out[n].id = ev->id;
-        snprintf(out[n].type, sizeof out[n].type, "%s", ev->type);
-        out[n].data = strdup(ev->data ? ev->data : "{}");
-        if (!out[n].data) break;
-        n++;
-    }
-    uint64_t last = n ? out[n - 1].id : after;
-    *finished = j->ended && last + 1 >= j->next_event;
-    pthread_mutex_unlock(&j->lock);
+    int n = fm_publish_events_wait(j, after, timeout_ms, out, cap, finished);
     fm_jobs_put(ctx, j);
     return n;
 }
@@ -474,7 +305,7 @@ static fm_status svc_toolpath(void *ctx, const char *id, fm_http_blob *out, fm_e
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
     /* The document is immutable: no lock needed while we hold a reference. */
-    const fm_job_spec *spec = &j->doc->spec;
+    const fm_job_spec *spec = &fm_job_document(j)->spec;
     int is_gcode = spec->program_kind == FM_PROGRAM_GCODE;
     fm_error ferr;
     fm_error_clear(&ferr);
@@ -523,8 +354,8 @@ static fm_status svc_check(void *ctx, json_t *request, json_t **out, fm_error *e
 {
     fm_jobs *jobs = ctx;
     const fm_job_doc_rules rules = fm_jobs_doc_rules(jobs, 0);
-    return fm_jobs_check_request(jobs->state_dir, jobs->cfg.job_memory_bytes, &rules, request, out,
-                                 err);
+    const fm_jobs_config *cfg = fm_jobs_config_of(jobs);
+    return fm_jobs_check_request(cfg->state_dir, cfg->job_memory_bytes, &rules, request, out, err);
 }
 
 void fm_jobs_http_service(fm_jobs *jobs, fm_http_service *out)

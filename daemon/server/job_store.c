@@ -13,8 +13,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "jobs_internal.h"
+#include "job_store.h"
 #include "log.h"
+#include "publish.h"
 #include "store.h"
 
 #define JOB_SPEC_MAX_BYTES ((size_t)1 << 30)
@@ -81,11 +82,11 @@ fm_status fm_job_store_write_models(fm_job_doc *doc, const char *dir, fm_error *
     return st;
 }
 
-fm_status fm_job_store_create(fm_jobs *jobs, const char *id, double created, fm_job_doc *doc,
-                              fm_error *err)
+fm_status fm_job_store_create(const char *jobs_dir, const char *id, double created,
+                              fm_job_doc *doc, fm_error *err)
 {
     char dir[JOB_DIR_MAX];
-    snprintf(dir, sizeof dir, "%s/%.40s", jobs->jobs_dir, id);
+    snprintf(dir, sizeof dir, "%.1200s/%.40s", jobs_dir, id);
     json_t *stored = json_pack("{s:s, s:f, s:O}", "id", id, "created", created, "job", doc->json);
     /* Durable before acknowledged: the folder, the models, the spec (temp,
      * fsync, rename, fsync folder; last, so that a folder without it was
@@ -95,7 +96,7 @@ fm_status fm_job_store_create(fm_jobs *jobs, const char *id, double created, fm_
                                                         dir, strerror(errno));
     if (st == FM_OK) st = fm_job_store_write_models(doc, dir, err);
     if (st == FM_OK) st = write_json(dir, "spec.json", stored, err);
-    if (st == FM_OK) st = fm_store_fsync_dir(jobs->jobs_dir, err);
+    if (st == FM_OK) st = fm_store_fsync_dir(jobs_dir, err);
     json_decref(stored);
     if (st != FM_OK) fm_store_remove_dir(dir, NULL);
     return st;
@@ -133,14 +134,14 @@ fm_stock *fm_job_store_load_snapshot(job *j, const fm_stock_options *opt, long *
     return NULL;
 }
 
-fm_status fm_job_store_mark_deleted(fm_jobs *jobs, job *j, fm_error *err)
+fm_status fm_job_store_mark_deleted(const char *jobs_dir, job *j, fm_error *err)
 {
     char gone[PATH_MAX];
     snprintf(gone, sizeof gone, "%s.deleted", j->dir);
     if (rename(j->dir, gone) != 0)
         return fm_error_set(err, FM_ERR_IO, "cannot delete job %s: %s", j->id, strerror(errno));
     fm_error ferr;
-    fm_store_fsync_dir(jobs->jobs_dir, &ferr);
+    fm_store_fsync_dir(jobs_dir, &ferr);
     return FM_OK;
 }
 
@@ -152,10 +153,11 @@ void fm_job_store_remove_deleted(job *j)
     fm_store_remove_dir(gone, &err);
 }
 
-static void load_job(fm_jobs *jobs, const char *id)
+/* 1 if a record was handed to the loader's adopt. */
+static int load_job(const fm_job_store_loader *loader, const char *id)
 {
     char dir[JOB_DIR_MAX], path[PATH_MAX];
-    snprintf(dir, sizeof dir, "%s/%.40s", jobs->jobs_dir, id);
+    snprintf(dir, sizeof dir, "%.1200s/%.40s", loader->jobs_dir, id);
     snprintf(path, sizeof path, "%s/spec.json", dir);
     char *text;
     size_t size;
@@ -166,29 +168,29 @@ static void load_job(fm_jobs *jobs, const char *id)
         fm_log(FM_LOG_WARN, "job %s: no stored spec (%s); removing the unacknowledged folder", id,
                err.message);
         fm_store_remove_dir(dir, &err);
-        return;
+        return 0;
     }
     json_error_t jerr;
     json_t *stored = json_loadb(text, size, 0, &jerr);
     free(text);
     /* What the daemon stored it validated; read back with the rules of its
      * own documents (a live job's stock may be a configured file). */
-    const fm_job_doc_rules stored_rules = fm_jobs_doc_rules(jobs, 1);
     fm_job_doc *doc = NULL;
     fm_error derr;
     fm_error_clear(&derr);
-    if (fm_job_doc_from_json(json_object_get(stored, "job"), &stored_rules, &doc, &derr) != FM_OK ||
+    if (fm_job_doc_from_json(json_object_get(stored, "job"), &loader->rules, &doc, &derr) != FM_OK ||
         fm_job_store_write_models(doc, dir, &derr) != FM_OK) {
         fm_log(FM_LOG_ERROR, "job %s: its stored spec is unreadable (%s); left in place", id,
                derr.message);
         fm_job_doc_free(doc);
         json_decref(stored);
-        return;
+        return 0;
     }
-    job *j = fm_jobs_record_new(id, jobs->jobs_dir, doc,
-                                json_number_value(json_object_get(stored, "created")));
+    job *j = fm_job_record_new(id, loader->jobs_dir, doc,
+                               json_number_value(json_object_get(stored, "created")),
+                               loader->history_limit, loader->stopping);
     json_decref(stored);
-    if (!j) return;
+    if (!j) return 0;
     snprintf(path, sizeof path, "%s/result.json", dir);
     if (fm_store_read(path, JOB_SPEC_MAX_BYTES, &text, &size, &err) == FM_OK) {
         json_t *result = json_loadb(text, size, 0, &jerr);
@@ -205,29 +207,26 @@ static void load_job(fm_jobs *jobs, const char *id)
             }
             fm_publish_event(j, "end", json_pack("{s:s}", "state", fm_job_state_name(j->state)));
             json_decref(result);
-            pthread_mutex_lock(&jobs->lock);
-            fm_jobs_table_add(jobs, j);
-            pthread_mutex_unlock(&jobs->lock);
-            return;
+            loader->adopt(loader->user, j);
+            return 1;
         }
         json_decref(result);
     }
     fm_log(FM_LOG_INFO, "job %s: unfinished; queued to resume", id);
-    pthread_mutex_lock(&jobs->lock);
-    fm_jobs_table_add(jobs, j);
-    pthread_mutex_unlock(&jobs->lock);
+    loader->adopt(loader->user, j);
+    return 1;
 }
 
-void fm_job_store_load_all(fm_jobs *jobs)
+void fm_job_store_load_all(const fm_job_store_loader *loader)
 {
-    DIR *d = opendir(jobs->jobs_dir);
+    DIR *d = opendir(loader->jobs_dir);
     if (!d) return;
     struct dirent *e;
     while ((e = readdir(d))) {
         if (e->d_name[0] == '.') continue;
         size_t n = strlen(e->d_name);
         char path[PATH_MAX];
-        snprintf(path, sizeof path, "%s/%s", jobs->jobs_dir, e->d_name);
+        snprintf(path, sizeof path, "%s/%s", loader->jobs_dir, e->d_name);
         if (n > 8 && !strcmp(e->d_name + n - 8, ".deleted")) {
             fm_error err;
             fm_store_remove_dir(path, &err); /* a delete the daemon did not finish */
@@ -237,23 +236,19 @@ void fm_job_store_load_all(fm_jobs *jobs)
         fm_error err;
         size_t removed = 0;
         fm_stock_snapshot_cleanup(path, &removed, &err);
-        load_job(jobs, e->d_name);
+        load_job(loader, e->d_name);
     }
     closedir(d);
 }
 
-int fm_job_store_load_one(fm_jobs *jobs, const char *id)
+int fm_job_store_load_one(const fm_job_store_loader *loader, const char *id)
 {
     char path[PATH_MAX];
     struct stat st;
-    snprintf(path, sizeof path, "%s/%.40s", jobs->jobs_dir, id);
+    snprintf(path, sizeof path, "%s/%.40s", loader->jobs_dir, id);
     if (stat(path, &st) != 0 || !S_ISDIR(st.st_mode)) return 0;
     fm_error err;
     size_t removed = 0;
     fm_stock_snapshot_cleanup(path, &removed, &err);
-    load_job(jobs, id);
-    job *j = fm_jobs_get(jobs, id);
-    if (!j) return 0;
-    fm_jobs_put(jobs, j);
-    return 1;
+    return load_job(loader, id);
 }

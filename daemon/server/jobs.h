@@ -11,6 +11,7 @@
 #include <stdint.h>
 
 #include "core/core.h"
+#include "job_view.h"
 #include "runner/job_doc.h"
 
 typedef struct fm_jobs fm_jobs;
@@ -38,39 +39,6 @@ typedef struct fm_jobs_config {
     const char *subroutine_path;
 } fm_jobs_config;
 
-typedef enum fm_job_state {
-    FM_JOB_QUEUED = 0,
-    FM_JOB_RUNNING,
-    FM_JOB_DONE,
-    FM_JOB_FAILED,
-    FM_JOB_CANCELLED
-} fm_job_state;
-
-const char *fm_job_state_name(fm_job_state state);
-
-/* A plain copy of a job's published status. */
-typedef struct fm_job_view {
-    char id[32];
-    fm_job_state state;
-    int paused;
-    double progress;
-    int line;
-    long block;
-    int tool;
-    double position[3];
-    double program_time_s;
-    double removed_mm3;
-    double stock_mm3;
-    double removal_rate_mm3_s;
-    int finding_count;
-    int error_finding_count; /* findings of severity "error": the collision alarm */
-    int first_finding_line;
-    int error_code; /* fm_status of a failed job, 0 if none */
-    /* The budget warning (fm_job_progress.voxels_uncertain, uncertain_line):
-     * counted since the job last started (a resumed job counts anew). */
-    size_t voxels_uncertain;
-    int uncertain_line;
-} fm_job_view;
 
 /* Open the state folder (created if missing), load every stored job (done
  * ones with their results; unfinished ones queued, to resume from their
@@ -125,6 +93,17 @@ int fm_jobs_busy(fm_jobs *jobs);
  * like a shutdown, it keeps its snapshot, writes no result and is held. */
 void fm_jobs_release(fm_jobs *jobs, const char *id);
 
+
+/* A job by id, with a reference for the caller (NULL if unknown or
+ * deleted): its record (job_record.h) is read through publish.h. Every
+ * fm_jobs_get is paired with one fm_jobs_put. */
+struct job;
+struct job *fm_jobs_get(fm_jobs *jobs, const char *id);
+void fm_jobs_put(fm_jobs *jobs, struct job *j);
+/* Every job's status (publish.h) in creation order: {"jobs": [...]}. */
+json_t *fm_jobs_status_list(fm_jobs *jobs);
+/* The configuration the manager was opened with (state_dir its copy). */
+const fm_jobs_config *fm_jobs_config_of(const fm_jobs *jobs);
 
 /* For Modbus: jobs in creation order (slot 1 = the oldest kept job). */
 int fm_jobs_view_slot(fm_jobs *jobs, int slot, fm_job_view *out);

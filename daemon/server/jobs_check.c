@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "jobs_internal.h"
+#include "job_store.h"
 #include "runner/check_pass.h"
 #include "runner/findings_json.h"
 #include "runner/job_doc.h"

@@ -17,7 +17,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "jobs_internal.h"
+#include "live.h"
 #include "log.h"
 #include "store.h"
 #include "toolpaths/tooltable/tooltable.h"
@@ -62,7 +62,7 @@ static job_live *live_new(void)
     return L;
 }
 
-void fm_live_free(job_live *L)
+static void live_free(job_live *L)
 {
     if (!L) return;
     if (L->journal_fd >= 0) close(L->journal_fd);
@@ -147,9 +147,9 @@ static int live_next(void *user, fm_motion *out, int *more)
         pthread_mutex_lock(&j->lock);
         int from_replay = L->replay_next < L->replay_count;
         while (!from_replay && !L->count && !L->ending && !atomic_load(&j->cancel_requested) &&
-               !atomic_load(&j->jobs->stopping))
+               !atomic_load(j->stopping))
             pthread_cond_wait(&j->cond, &j->lock);
-        if (!from_replay && (atomic_load(&j->cancel_requested) || atomic_load(&j->jobs->stopping))) {
+        if (!from_replay && (atomic_load(&j->cancel_requested) || atomic_load(j->stopping))) {
             pthread_mutex_unlock(&j->lock);
             return -1; /* cancelled, deleted or stopping: the runner stops */
         }
@@ -203,6 +203,7 @@ static fm_status live_setup(job *j, fm_error *err)
 {
     if (!j->live && !(j->live = live_new()))
         return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    j->live_free = live_free;
     job_live *L = j->live;
     L->feed = j->doc->live_feed > 0 ? j->doc->live_feed : 1000;
     fm_status st = FM_OK;
@@ -226,7 +227,20 @@ fm_status fm_live_prepare(job *j, fm_job_motion_source *src, fm_error *err)
     return st;
 }
 
-fm_status fm_live_attach(fm_jobs *jobs, job *j, fm_error *err)
+void fm_live_session_init(fm_live_session *s)
+{
+    pthread_mutex_init(&s->lock, NULL);
+    s->job = NULL;
+}
+
+void fm_live_session_destroy(fm_live_session *s)
+{
+    fm_job_unref(s->job);
+    s->job = NULL;
+    pthread_mutex_destroy(&s->lock);
+}
+
+fm_status fm_live_attach(fm_live_session *s, job *j, fm_error *err)
 {
     /* The live state exists before the job is the live job: a position the
      * controller writes right after "live on" is queued and journaled, not
@@ -235,34 +249,39 @@ fm_status fm_live_attach(fm_jobs *jobs, job *j, fm_error *err)
     fm_status st = live_setup(j, err);
     pthread_mutex_unlock(&j->lock);
     if (st != FM_OK) return st;
-    pthread_mutex_lock(&jobs->live_lock);
-    job *old = jobs->live_job;
-    pthread_mutex_lock(&jobs->lock);
-    j->refs++; /* the live session's */
-    pthread_mutex_unlock(&jobs->lock);
-    jobs->live_job = j;
-    pthread_mutex_unlock(&jobs->live_lock);
-    if (old) fm_jobs_put(jobs, old);
+    pthread_mutex_lock(&s->lock);
+    job *old = s->job;
+    fm_job_ref(j); /* the live session's */
+    s->job = j;
+    pthread_mutex_unlock(&s->lock);
+    fm_job_unref(old);
     return FM_OK;
 }
 
-void fm_live_detach(fm_jobs *jobs, job *j)
+void fm_live_detach(fm_live_session *s, job *j)
 {
-    pthread_mutex_lock(&jobs->live_lock);
-    int attached = jobs->live_job == j;
-    if (attached) jobs->live_job = NULL;
-    pthread_mutex_unlock(&jobs->live_lock);
-    if (attached) fm_jobs_put(jobs, j);
+    pthread_mutex_lock(&s->lock);
+    int attached = s->job == j;
+    if (attached) s->job = NULL;
+    pthread_mutex_unlock(&s->lock);
+    if (attached) fm_job_unref(j);
+}
+
+int fm_live_active(fm_live_session *s)
+{
+    pthread_mutex_lock(&s->lock);
+    int on = s->job != NULL;
+    pthread_mutex_unlock(&s->lock);
+    return on;
 }
 
 /* --------------------------------------------------------- live mode -- */
 
-/* The live job's document: the configured stock and tools, or the
- * selected job's. Parsed by the one parser of job documents. */
-static fm_status live_document(fm_jobs *jobs, int from_slot, fm_job_doc **out, fm_error *err)
+fm_status fm_live_document(const fm_live_config *cfg, const job *src, const fm_job_doc_rules *rules,
+                           fm_job_doc **out, fm_error *err)
 {
-    const char *stock = jobs->cfg.live_stock && jobs->cfg.live_stock[0] ? jobs->cfg.live_stock : NULL;
-    const char *tools = jobs->cfg.live_tools && jobs->cfg.live_tools[0] ? jobs->cfg.live_tools : NULL;
+    const char *stock = cfg->stock && cfg->stock[0] ? cfg->stock : NULL;
+    const char *tools = cfg->tools && cfg->tools[0] ? cfg->tools : NULL;
     char stock_spec[1024] = "";
     json_t *tools_json = NULL;
     if (stock) snprintf(stock_spec, sizeof stock_spec, "%s", stock);
@@ -282,13 +301,6 @@ static fm_status live_document(fm_jobs *jobs, int from_slot, fm_job_doc **out, f
     }
     if (!stock || !tools) {
         /* The selected job's stock and tools. */
-        job *src = NULL;
-        pthread_mutex_lock(&jobs->lock);
-        if (from_slot >= 1 && (size_t)from_slot <= jobs->count) {
-            src = jobs->table[from_slot - 1];
-            src->refs++;
-        }
-        pthread_mutex_unlock(&jobs->lock);
         int ok = src != NULL;
         if (ok && !stock) {
             /* The job's stock spec, or the file its inline model was
@@ -299,7 +311,6 @@ static fm_status live_document(fm_jobs *jobs, int from_slot, fm_job_doc **out, f
             if (ok) snprintf(stock_spec, sizeof stock_spec, "%s", s);
         }
         if (ok && !tools) tools_json = json_incref(json_object_get(src->doc->json, "tools"));
-        if (src) fm_jobs_put(jobs, src);
         if (!ok) {
             json_decref(tools_json);
             return fm_error_set(err, FM_ERR_INPUT,
@@ -307,43 +318,19 @@ static fm_status live_document(fm_jobs *jobs, int from_slot, fm_job_doc **out, f
         }
     }
     json_t *spec = json_pack("{s:s, s:f, s:o, s:{s:{s:f}}, s:{s:s}}", "stock", stock_spec,
-                             "voxel", jobs->cfg.live_voxel > 0 ? jobs->cfg.live_voxel : 0.25,
-                             "tools", tools_json, "program", "live", "feed",
-                             jobs->cfg.live_feed > 0 ? jobs->cfg.live_feed : 1000, "options",
-                             "name", "live");
+                             "voxel", cfg->voxel > 0 ? cfg->voxel : 0.25, "tools", tools_json,
+                             "program", "live", "feed", cfg->feed > 0 ? cfg->feed : 1000,
+                             "options", "name", "live");
     if (!spec) return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
-    const fm_job_doc_rules own = fm_jobs_doc_rules(jobs, 1);
-    fm_status st = fm_job_doc_from_json(spec, &own, out, err);
+    fm_status st = fm_job_doc_from_json(spec, rules, out, err);
     json_decref(spec);
     return st;
 }
 
-fm_status fm_jobs_live_start(fm_jobs *jobs, int from_slot, fm_error *err)
+fm_status fm_live_position(fm_live_session *s, const double xyz[3], int tool, fm_error *err)
 {
-    pthread_mutex_lock(&jobs->live_lock);
-    int on = jobs->live_job != NULL;
-    pthread_mutex_unlock(&jobs->live_lock);
-    if (on) return FM_OK; /* already on (also after a restart resumed it) */
-    fm_job_doc *doc = NULL;
-    fm_status st = live_document(jobs, from_slot, &doc, err);
-    if (st != FM_OK) {
-        fm_log(FM_LOG_WARN, "live mode refused: %s", err->message);
-        return st;
-    }
-    char id[32];
-    st = fm_jobs_submit_live(jobs, doc, id, sizeof id, err);
-    if (st != FM_OK) {
-        fm_log(FM_LOG_WARN, "live mode refused: %s", err->message);
-        return st;
-    }
-    fm_log(FM_LOG_INFO, "job %s: live job created", id);
-    return FM_OK;
-}
-
-fm_status fm_jobs_live_position(fm_jobs *jobs, const double xyz[3], int tool, fm_error *err)
-{
-    pthread_mutex_lock(&jobs->live_lock);
-    job *j = jobs->live_job;
+    pthread_mutex_lock(&s->lock);
+    job *j = s->job;
     fm_status rc = FM_OK;
     if (!j) {
         rc = fm_error_set(err, FM_ERR_INPUT, "live mode is off");
@@ -365,33 +352,23 @@ fm_status fm_jobs_live_position(fm_jobs *jobs, const double xyz[3], int tool, fm
         }
         pthread_mutex_unlock(&j->lock);
     }
-    pthread_mutex_unlock(&jobs->live_lock);
+    pthread_mutex_unlock(&s->lock);
     return rc;
 }
 
-fm_status fm_jobs_live_stop(fm_jobs *jobs, fm_error *err)
+void fm_live_stop(fm_live_session *s)
 {
-    (void)err;
     /* The Modbus thread does not wait for the queued moves to be cut: the
      * job is told to end and its thread finishes on its own. */
-    pthread_mutex_lock(&jobs->live_lock);
-    job *j = jobs->live_job;
-    jobs->live_job = NULL;
-    pthread_mutex_unlock(&jobs->live_lock);
-    if (!j) return FM_OK;
+    pthread_mutex_lock(&s->lock);
+    job *j = s->job;
+    s->job = NULL;
+    pthread_mutex_unlock(&s->lock);
+    if (!j) return;
     pthread_mutex_lock(&j->lock);
     if (j->live) j->live->ending = 1;
     pthread_cond_broadcast(&j->cond);
     pthread_mutex_unlock(&j->lock);
     fm_log(FM_LOG_INFO, "job %s: live mode off", j->id);
-    fm_jobs_put(jobs, j); /* the live session's reference */
-    return FM_OK;
-}
-
-int fm_jobs_live_active(fm_jobs *jobs)
-{
-    pthread_mutex_lock(&jobs->live_lock);
-    int on = jobs->live_job != NULL;
-    pthread_mutex_unlock(&jobs->live_lock);
-    return on;
+    fm_job_unref(j); /* the live session's reference */
 }

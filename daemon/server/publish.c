@@ -13,7 +13,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "jobs_internal.h"
+#include "publish.h"
+#include "http/http_server.h"
 #include "log.h"
 #include "store.h"
 
@@ -183,20 +184,6 @@ static double process_cpu_s(void)
     struct timespec ts;
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
     return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
-
-void fm_publish_chunks_free(job *j)
-{
-    for (size_t i = 0; i < j->chunk_count; i++) {
-        fm_mesh_free(j->chunks[i].mesh);
-        fm_mesh_chunk_cache_free(j->chunks[i].cache);
-        for (size_t v = 0; v < j->chunks[i].version_count; v++) free(j->chunks[i].versions[v].drc);
-        free(j->chunks[i].versions);
-    }
-    free(j->chunks);
-    j->chunks = NULL;
-    j->chunk_count = j->chunk_cap = 0;
-    j->history_bytes = 0;
 }
 
 void fm_publish_chunks_drop_caches(job *j)
@@ -437,7 +424,7 @@ static void publish_chunks(job *j, fm_stock *stock, double program_time_s, int c
         j->chunks[k].cache = c->cache;
         json_array_append_new(ids, json_string(name));
     }
-    history_trim(j, j->jobs->cfg.mesh_history_bytes);
+    history_trim(j, j->history_limit);
     j->mesh_version = version;
     j->mesh_time_s = program_time_s;
     fm_publish_event(j, "chunks", json_pack("{s:I, s:f, s:o}", "version", (json_int_t)version,
@@ -545,4 +532,181 @@ fm_status fm_publish_deviation(job *j, fm_stock *stock, const fm_design *design,
     st = fm_store_write_atomic(j->dir, "deviation.json", text, strlen(text), err);
     free(text);
     return st;
+}
+
+/* ------------------------------------------------------------ readers -- */
+
+fm_status fm_publish_report_json(job *j, json_t **out, fm_error *err)
+{
+    pthread_mutex_lock(&j->lock);
+    fm_status rc = FM_OK;
+    if (j->report) {
+        *out = json_deep_copy(j->report);
+        json_object_set_new(*out, "id", json_string(j->id));
+        json_object_set_new(*out, "state", json_string(fm_job_state_name(j->state)));
+    } else if (j->state == FM_JOB_FAILED) {
+        *out = json_pack("{s:s, s:s, s:O?}", "id", j->id, "state", "failed", "error", j->error);
+    } else {
+        rc = fm_error_set_reason(err, FM_ERR_INPUT, "not_finished",
+                                 "job %s is %s; its report exists once it is done", j->id,
+                                 fm_job_state_name(j->state));
+    }
+    pthread_mutex_unlock(&j->lock);
+    return rc;
+}
+
+static void chunk_name(const job_chunk *c, char *out, size_t size)
+{
+    snprintf(out, size, "%d_%d_%d", c->index[0], c->index[1], c->index[2]);
+}
+
+/* The version of c that showed it at program time at_s (the last one
+ * published at or before it), or NULL if it was first published later. */
+static const chunk_version *version_at(const job_chunk *c, double at_s)
+{
+    const chunk_version *found = NULL;
+    for (size_t v = 0; v < c->version_count && c->versions[v].time_s <= at_s + 1e-9; v++)
+        found = &c->versions[v];
+    return found;
+}
+
+static json_t *chunk_json(const job_chunk *c, const chunk_version *v)
+{
+    char name[48];
+    chunk_name(c, name, sizeof name);
+    return json_pack("{s:s, s:[i,i,i], s:I, s:f, s:I, s:I, s:[f,f,f], s:[f,f,f]}", "id", name,
+                     "index", c->index[0], c->index[1], c->index[2], "version",
+                     (json_int_t)v->version, "time_s", v->time_s, "triangles",
+                     (json_int_t)v->triangles, "bytes", (json_int_t)v->drc_size, "lo", c->lo[0],
+                     c->lo[1], c->lo[2], "hi", c->hi[0], c->hi[1], c->hi[2]);
+}
+
+fm_status fm_publish_chunk_list(job *j, uint64_t since, double at_s, json_t **out,
+                                fm_error *err)
+{
+    fm_status rc;
+    json_t *list = json_array();
+    pthread_mutex_lock(&j->lock);
+    if (at_s >= 0 && (j->history_from_s < 0 || at_s < j->history_from_s - 1e-9)) {
+        rc = j->history_from_s < 0
+                 ? fm_error_set_reason(err, FM_ERR_INPUT, "no_mesh",
+                                       "job %s has published no mesh yet", j->id)
+                 : fm_error_set_reason(
+                       err, FM_ERR_INPUT, "history_dropped",
+                       "job %s: the meshes before program time %.3f s are not kept (the daemon "
+                       "keeps %.3g MB of mesh history per job; an uncut stock of more than a million "
+                       "triangles is first published after its first cuts; or it was restarted since)",
+                       j->id, j->history_from_s, (double)j->history_limit / 1048576.0);
+        pthread_mutex_unlock(&j->lock);
+        json_decref(list);
+        return rc;
+    }
+    uint64_t newest = 0;
+    for (size_t i = 0; i < j->chunk_count; i++) {
+        const job_chunk *c = &j->chunks[i];
+        const chunk_version *v = at_s >= 0 ? version_at(c, at_s) : job_chunk_current(c);
+        if (!v || (at_s < 0 && v->version <= since)) continue;
+        if (v->version > newest) newest = v->version;
+        json_array_append_new(list, chunk_json(c, v));
+    }
+    *out = json_pack("{s:s, s:I, s:f, s:f, s:I, s:I, s:o}", "id", j->id, "version",
+                     (json_int_t)(at_s >= 0 ? newest : j->mesh_version), "program_time_s",
+                     j->mesh_time_s, "history_from_s", j->history_from_s, "history_bytes",
+                     (json_int_t)j->history_bytes, "since", (json_int_t)since, "chunks", list);
+    if (*out && at_s >= 0) json_object_set_new(*out, "at", json_real(at_s));
+    pthread_mutex_unlock(&j->lock);
+    return *out ? FM_OK
+                : fm_error_set_reason(err, FM_ERR_LIMIT, "out_of_memory", "out of memory");
+}
+
+fm_status fm_publish_chunk_bytes(job *j, const char *name, uint64_t version, uint8_t **data,
+                                 size_t *size, fm_error *err)
+{
+    fm_status rc = fm_error_set_reason(err, FM_ERR_INPUT, "not_found", "job %s has no chunk %.64s",
+                                       j->id, name);
+    pthread_mutex_lock(&j->lock);
+    for (size_t i = 0; i < j->chunk_count; i++) {
+        char n[48];
+        chunk_name(&j->chunks[i], n, sizeof n);
+        if (strcmp(n, name) != 0) continue;
+        const job_chunk *c = &j->chunks[i];
+        const chunk_version *v = version ? NULL : job_chunk_current(c);
+        for (size_t k = 0; !v && k < c->version_count; k++)
+            if (c->versions[k].version == version) v = &c->versions[k];
+        if (!v) {
+            rc = version < c->versions[0].version
+                     ? fm_error_set_reason(err, FM_ERR_INPUT, "history_dropped",
+                                           "version %llu of chunk %s is no longer kept (mesh "
+                                           "history bound); list the chunks again",
+                                           (unsigned long long)version, n)
+                     : fm_error_set_reason(err, FM_ERR_INPUT, "not_found",
+                                           "chunk %s has no version %llu", n,
+                                           (unsigned long long)version);
+            break;
+        }
+        *size = v->drc_size;
+        *data = malloc(*size ? *size : 1);
+        if (!*data) {
+            rc = fm_error_set_reason(err, FM_ERR_LIMIT, "out_of_memory", "out of memory");
+            break;
+        }
+        if (*size) memcpy(*data, v->drc, *size);
+        rc = FM_OK;
+        break;
+    }
+    pthread_mutex_unlock(&j->lock);
+    return rc;
+}
+
+fm_mesh *fm_publish_mesh_copy(job *j, fm_error *err)
+{
+    pthread_mutex_lock(&j->lock);
+    /* the chunks' colours (options.color) go into the whole mesh too */
+    unsigned attrs = FM_MESH_NORMALS;
+    for (size_t i = 0; i < j->chunk_count; i++)
+        if (j->chunks[i].mesh && j->chunks[i].mesh->colors) attrs |= FM_MESH_COLORS;
+    fm_mesh *mesh = fm_mesh_new(0, 0, attrs, NULL, err);
+    fm_status st = mesh ? FM_OK : FM_ERR_LIMIT;
+    for (size_t i = 0; st == FM_OK && i < j->chunk_count; i++)
+        if (j->chunks[i].mesh) st = fm_mesh_append(mesh, j->chunks[i].mesh, err);
+    pthread_mutex_unlock(&j->lock);
+    if (st != FM_OK) {
+        fm_mesh_free(mesh);
+        return NULL;
+    }
+    return mesh;
+}
+
+int fm_publish_events_wait(job *j, uint64_t after, int timeout_ms, fm_http_event *out, int cap,
+                           int *finished)
+{
+    struct timespec until;
+    clock_gettime(CLOCK_REALTIME, &until);
+    until.tv_sec += timeout_ms / 1000;
+    until.tv_nsec += (long)(timeout_ms % 1000) * 1000000L;
+    if (until.tv_nsec >= 1000000000L) {
+        until.tv_sec++;
+        until.tv_nsec -= 1000000000L;
+    }
+    pthread_mutex_lock(&j->lock);
+    while (j->next_event - 1 <= after && !j->ended) {
+        if (pthread_cond_timedwait(&j->cond, &j->lock, &until) != 0) break;
+    }
+    /* Events older than the ring are gone: start from the oldest kept. */
+    uint64_t first = after + 1;
+    if (j->next_event > JOB_EVENT_RING && first < j->next_event - JOB_EVENT_RING)
+        first = j->next_event - JOB_EVENT_RING;
+    int n = 0;
+    for (uint64_t e = first; e < j->next_event && n < cap; e++) {
+        const job_event *ev = &j->ring[e % JOB_EVENT_RING];
+        out[n].id = ev->id;
+        snprintf(out[n].type, sizeof out[n].type, "%s", ev->type);
+        out[n].data = strdup(ev->data ? ev->data : "{}");
+        if (!out[n].data) break;
+        n++;
+    }
+    uint64_t last = n ? out[n - 1].id : after;
+    *finished = j->ended && last + 1 >= j->next_event;
+    pthread_mutex_unlock(&j->lock);
+    return n;
 }

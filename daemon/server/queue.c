@@ -7,39 +7,93 @@
  * caught up with the machine), and holds the job while it is paused. Live
  * jobs take the same path on a thread of their own (fm_queue_run_now), so
  * that a controller never waits behind the queue. */
-#include <errno.h>
+#include "queue.h"
+
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
-#include "jobs_check.h"
-#include "jobs_internal.h"
+#include "job_store.h"
+#include "live.h"
 #include "log.h"
+#include "publish.h"
 #include "runner/findings_json.h"
 #include "runner/report_json.h"
 
 /* A thread running one job outside the queue (live jobs). */
 typedef struct own_thread {
     pthread_t thread;
-    fm_jobs *jobs;
+    fm_queue *q;
     job *j;              /* a reference, dropped when the run ends */
     atomic_int done;
     struct own_thread *next;
 } own_thread;
 
-void fm_queue_push(fm_jobs *jobs, job *j)
+struct fm_queue {
+    fm_queue_config cfg;
+    fm_queue_hooks hooks;
+    /* lock guards the list, the workers and the own threads; cond wakes
+     * the workers. */
+    pthread_mutex_t lock;
+    pthread_cond_t cond;
+    job *head, *tail;
+    atomic_int stopping;
+    pthread_t *workers;
+    int worker_count;
+    own_thread *own_threads;
+};
+
+fm_queue *fm_queue_new(const fm_queue_config *cfg, const fm_queue_hooks *hooks, fm_error *err)
 {
+    fm_queue *q = calloc(1, sizeof *q);
+    if (!q) {
+        fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+        return NULL;
+    }
+    q->cfg = *cfg;
+    q->hooks = *hooks;
+    pthread_mutex_init(&q->lock, NULL);
+    pthread_cond_init(&q->cond, NULL);
+    atomic_init(&q->stopping, 0);
+    return q;
+}
+
+void fm_queue_free(fm_queue *q)
+{
+    if (!q) return;
+    pthread_mutex_destroy(&q->lock);
+    pthread_cond_destroy(&q->cond);
+    free(q);
+}
+
+void fm_queue_push(fm_queue *q, job *j)
+{
+    fm_job_ref(j); /* the queue's */
+    pthread_mutex_lock(&q->lock);
     j->next_queued = NULL;
-    j->refs++; /* the queue's */
-    if (jobs->queue_tail) jobs->queue_tail->next_queued = j;
-    else jobs->queue_head = j;
-    jobs->queue_tail = j;
-    pthread_cond_signal(&jobs->queue_cond);
+    if (q->tail) q->tail->next_queued = j;
+    else q->head = j;
+    q->tail = j;
+    pthread_cond_signal(&q->cond);
+    pthread_mutex_unlock(&q->lock);
+}
+
+void fm_queue_stop(fm_queue *q)
+{
+    pthread_mutex_lock(&q->lock);
+    atomic_store(&q->stopping, 1);
+    pthread_cond_broadcast(&q->cond);
+    pthread_mutex_unlock(&q->lock);
+}
+
+const atomic_int *fm_queue_stopping(const fm_queue *q)
+{
+    return &q->stopping;
 }
 
 typedef struct run_ctx {
-    fm_jobs *jobs;
+    fm_queue *q;
     job *j;
     double last_snapshot, last_publish;
     publish_pace pace;
@@ -56,22 +110,22 @@ static int on_progress(void *user, const fm_job_progress *p)
     fm_publish_progress(j, p, &rc->pace);
     pthread_mutex_lock(&j->lock);
     /* Paused (Modbus): wait here, between cuts, until resumed. */
-    while (j->paused && !atomic_load(&j->cancel_requested) && !atomic_load(&rc->jobs->stopping) &&
+    while (j->paused && !atomic_load(&j->cancel_requested) && !atomic_load(&rc->q->stopping) &&
            !atomic_load(&j->released))
         pthread_cond_wait(&j->cond, &j->lock);
     pthread_mutex_unlock(&j->lock);
 
     if (atomic_load(&j->cancel_requested)) return 1;
-    if (atomic_load(&rc->jobs->stopping) || atomic_load(&j->released)) {
+    if (atomic_load(&rc->q->stopping) || atomic_load(&j->released)) {
         rc->stopped_for_shutdown = 1;
         return 1;
     }
-    if (now - rc->last_snapshot >= rc->jobs->cfg.snapshot_interval_s) {
+    if (now - rc->last_snapshot >= rc->q->cfg.snapshot_interval_s) {
         fm_job_store_save_snapshot(j, p->stock, p->resume_from);
         rc->last_snapshot = fm_jobs_mono_s();
     }
     /* A live job publishes as soon as it has caught up with the machine. */
-    if (p->idle || now - rc->last_publish >= rc->jobs->cfg.publish_interval_s) {
+    if (p->idle || now - rc->last_publish >= rc->q->cfg.publish_interval_s) {
         fm_publish_chunks(j, p->stock, p->program_time);
         rc->last_publish = fm_jobs_mono_s();
     }
@@ -114,7 +168,7 @@ static json_t *error_json(const fm_error *err)
                      err->column > 0 ? json_integer(err->column) : json_null(), "file", err->file);
 }
 
-void fm_queue_finish(fm_jobs *jobs, job *j, fm_job_state state, const char *what)
+void fm_queue_finish(fm_queue *q, job *j, fm_job_state state, const char *what)
 {
     pthread_mutex_lock(&j->lock);
     j->state = state;
@@ -126,7 +180,7 @@ void fm_queue_finish(fm_jobs *jobs, job *j, fm_job_state state, const char *what
     fm_publish_event(j, "end", json_pack("{s:s, s:O?}", "state", fm_job_state_name(state), "error", j->error));
     pthread_mutex_unlock(&j->lock);
     fm_log(state == FM_JOB_FAILED ? FM_LOG_WARN : FM_LOG_INFO, "job %s: %s", j->id, what);
-    fm_jobs_notify_end(jobs, j);
+    if (q->hooks.ended) q->hooks.ended(q->hooks.user, j);
 }
 
 /* The check opened a finding: published at once (status, `finding` event,
@@ -143,14 +197,14 @@ static void on_finding(void *user, const fm_check *check, size_t index)
     json_decref(all);
 }
 
-static void run_job(fm_jobs *jobs, job *j)
+static void run_job(fm_queue *q, job *j)
 {
     /* The run spec as the document made it; the daemon adds its budget and
      * threads. j->doc is immutable while the job is known. */
     fm_job_spec spec = j->doc->spec;
     fm_error err;
     fm_error_clear(&err);
-    run_ctx rc = {.jobs = jobs, .j = j, .pace = {.last_line = -1}};
+    run_ctx rc = {.q = q, .j = j, .pace = {.last_line = -1}};
     int unfinished = 0; /* stopped by shutdown: resumes at the next start */
     rc.last_snapshot = rc.last_publish = fm_jobs_mono_s();
 
@@ -159,8 +213,8 @@ static void run_job(fm_jobs *jobs, job *j)
     fm_publish_event(j, "state", json_pack("{s:s}", "state", "running"));
     pthread_mutex_unlock(&j->lock);
 
-    spec.stock.memory_budget = fm_jobs_memory_budget(jobs, j->doc);
-    if (!j->doc->threads_given) spec.stock.threads = jobs->cfg.threads_per_job;
+    spec.stock.memory_budget = fm_job_memory_budget(q->cfg.job_memory_bytes, j->doc);
+    if (!j->doc->threads_given) spec.stock.threads = q->cfg.threads_per_job;
     fm_status st = FM_OK;
     int live = spec.program_kind == FM_PROGRAM_LIVE;
     fm_job_motion_source source;
@@ -213,13 +267,13 @@ static void run_job(fm_jobs *jobs, job *j)
         char buf[1024];
         char what[1200];
         snprintf(what, sizeof what, "failed: %s", fm_error_format(&err, buf, sizeof buf));
-        fm_queue_finish(jobs, j, FM_JOB_FAILED, what);
+        fm_queue_finish(q, j, FM_JOB_FAILED, what);
         goto done;
     }
     pthread_mutex_lock(&j->lock);
     j->initial_mm3 = result.initial_volume_mm3;
     pthread_mutex_unlock(&j->lock);
-    if (result.stopped && (rc.stopped_for_shutdown || atomic_load(&jobs->stopping)) &&
+    if (result.stopped && (rc.stopped_for_shutdown || atomic_load(&q->stopping)) &&
         !atomic_load(&j->cancel_requested)) {
         /* Stopping: keep the work done, resume at the next start. */
         fm_job_store_save_snapshot(j, result.stock, rc.resume_from);
@@ -234,9 +288,7 @@ static void run_job(fm_jobs *jobs, job *j)
         unfinished = 1;
         goto done;
     }
-    pthread_mutex_lock(&jobs->lock);
-    int deleted = j->deleted;
-    pthread_mutex_unlock(&jobs->lock);
+    int deleted = atomic_load(&j->deleted);
     if (deleted) {
         fm_stock_free(result.stock);
         result.stock = NULL;
@@ -267,110 +319,110 @@ static void run_job(fm_jobs *jobs, job *j)
     fm_stock_free(result.stock);
     result.stock = NULL;
     if (result.stopped) {
-        fm_queue_finish(jobs, j, FM_JOB_CANCELLED, "cancelled");
+        fm_queue_finish(q, j, FM_JOB_CANCELLED, "cancelled");
     } else {
         char what[256];
         snprintf(what, sizeof what, "done: %ld motions, removed %.1f mm3 in %.2f s",
                  result.motions, result.removed_volume_mm3, result.wall_time_s);
-        fm_queue_finish(jobs, j, FM_JOB_DONE, what);
+        fm_queue_finish(q, j, FM_JOB_DONE, what);
     }
 done:
     fm_job_result_release(&result);
-    if (live && !unfinished) fm_live_detach(jobs, j);
+    if (q->hooks.run_over) q->hooks.run_over(q->hooks.user, j, unfinished);
 }
 
 static void *worker_main(void *arg)
 {
-    fm_jobs *jobs = arg;
-    pthread_mutex_lock(&jobs->lock);
+    fm_queue *q = arg;
+    pthread_mutex_lock(&q->lock);
     for (;;) {
-        while (!jobs->stopping && !jobs->queue_head)
-            pthread_cond_wait(&jobs->queue_cond, &jobs->lock);
-        if (jobs->stopping) break;
-        job *j = jobs->queue_head;
-        jobs->queue_head = j->next_queued;
-        if (!jobs->queue_head) jobs->queue_tail = NULL;
-        int skip = j->deleted;
-        pthread_mutex_unlock(&jobs->lock);
+        while (!atomic_load(&q->stopping) && !q->head) pthread_cond_wait(&q->cond, &q->lock);
+        if (atomic_load(&q->stopping)) break;
+        job *j = q->head;
+        q->head = j->next_queued;
+        if (!q->head) q->tail = NULL;
+        pthread_mutex_unlock(&q->lock);
+        int skip = atomic_load(&j->deleted);
         pthread_mutex_lock(&j->lock);
         skip = skip || j->state >= FM_JOB_DONE; /* cancelled while queued */
         pthread_mutex_unlock(&j->lock);
         skip = skip || atomic_load(&j->released); /* its queue gave it to another daemon */
         if (!skip && atomic_load(&j->cancel_requested)) {
-            fm_queue_finish(jobs, j, FM_JOB_CANCELLED, "cancelled before it started");
+            fm_queue_finish(q, j, FM_JOB_CANCELLED, "cancelled before it started");
         } else if (!skip) {
-            run_job(jobs, j);
+            run_job(q, j);
         }
-        fm_jobs_put(jobs, j); /* the queue's reference */
-        pthread_mutex_lock(&jobs->lock);
+        fm_job_unref(j); /* the queue's reference */
+        pthread_mutex_lock(&q->lock);
     }
-    pthread_mutex_unlock(&jobs->lock);
+    pthread_mutex_unlock(&q->lock);
     return NULL;
 }
 
-fm_status fm_queue_start_workers(fm_jobs *jobs, int count, fm_error *err)
+fm_status fm_queue_start_workers(fm_queue *q, int count, fm_error *err)
 {
-    jobs->workers = calloc((size_t)(count > 0 ? count : 1), sizeof *jobs->workers);
-    for (int i = 0; jobs->workers && i < count; i++)
-        if (pthread_create(&jobs->workers[i], NULL, worker_main, jobs) == 0) jobs->worker_count++;
-    if (jobs->worker_count == 0)
+    q->workers = calloc((size_t)(count > 0 ? count : 1), sizeof *q->workers);
+    for (int i = 0; q->workers && i < count; i++)
+        if (pthread_create(&q->workers[i], NULL, worker_main, q) == 0) q->worker_count++;
+    if (q->worker_count == 0)
         return fm_error_set(err, FM_ERR_INTERNAL, "cannot start worker threads");
     return FM_OK;
 }
 
-void fm_queue_join_workers(fm_jobs *jobs)
+void fm_queue_join_workers(fm_queue *q)
 {
-    for (int i = 0; i < jobs->worker_count; i++) pthread_join(jobs->workers[i], NULL);
-    jobs->worker_count = 0;
-    free(jobs->workers);
-    jobs->workers = NULL;
+    for (int i = 0; i < q->worker_count; i++) pthread_join(q->workers[i], NULL);
+    q->worker_count = 0;
+    free(q->workers);
+    q->workers = NULL;
 }
 
-void fm_queue_drain(fm_jobs *jobs)
+void fm_queue_drain(fm_queue *q)
 {
-    for (job *j = jobs->queue_head; j;) {
+    pthread_mutex_lock(&q->lock);
+    job *j = q->head;
+    q->head = q->tail = NULL;
+    pthread_mutex_unlock(&q->lock);
+    while (j) {
         job *next = j->next_queued;
-        j->refs--;
+        fm_job_unref(j);
         j = next;
     }
-    jobs->queue_head = jobs->queue_tail = NULL;
 }
 
 static void *own_main(void *arg)
 {
     own_thread *t = arg;
-    run_job(t->jobs, t->j);
-    fm_jobs_put(t->jobs, t->j);
+    run_job(t->q, t->j);
+    fm_job_unref(t->j);
     atomic_store(&t->done, 1);
     return NULL;
 }
 
-fm_status fm_queue_run_now(fm_jobs *jobs, job *j, fm_error *err)
+fm_status fm_queue_run_now(fm_queue *q, job *j, fm_error *err)
 {
-    fm_queue_join_own(jobs, 0); /* threads of live jobs that have ended */
+    fm_queue_join_own(q, 0); /* threads of live jobs that have ended */
     own_thread *t = calloc(1, sizeof *t);
     if (!t) return fm_error_set_reason(err, FM_ERR_LIMIT, "busy", "out of memory");
-    t->jobs = jobs;
+    t->q = q;
     t->j = j;
-    pthread_mutex_lock(&jobs->lock);
-    j->refs++; /* the thread's */
-    pthread_mutex_unlock(&jobs->lock);
+    fm_job_ref(j); /* the thread's */
     if (pthread_create(&t->thread, NULL, own_main, t) != 0) {
-        fm_jobs_put(jobs, j);
+        fm_job_unref(j);
         free(t);
         return fm_error_set_reason(err, FM_ERR_LIMIT, "busy", "cannot start a thread");
     }
-    pthread_mutex_lock(&jobs->lock);
-    t->next = jobs->own_threads;
-    jobs->own_threads = t;
-    pthread_mutex_unlock(&jobs->lock);
+    pthread_mutex_lock(&q->lock);
+    t->next = q->own_threads;
+    q->own_threads = t;
+    pthread_mutex_unlock(&q->lock);
     return FM_OK;
 }
 
-void fm_queue_join_own(fm_jobs *jobs, int all)
+void fm_queue_join_own(fm_queue *q, int all)
 {
-    pthread_mutex_lock(&jobs->lock);
-    own_thread **link = &jobs->own_threads, *gone = NULL;
+    pthread_mutex_lock(&q->lock);
+    own_thread **link = &q->own_threads, *gone = NULL;
     while (*link) {
         own_thread *t = *link;
         if (all || atomic_load(&t->done)) {
@@ -381,7 +433,7 @@ void fm_queue_join_own(fm_jobs *jobs, int all)
             link = &t->next;
         }
     }
-    pthread_mutex_unlock(&jobs->lock);
+    pthread_mutex_unlock(&q->lock);
     while (gone) {
         own_thread *next = gone->next;
         pthread_join(gone->thread, NULL);

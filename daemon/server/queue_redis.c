@@ -33,7 +33,6 @@
 #include <string.h>
 #include <time.h>
 
-#include "jobs_internal.h"
 #include "log.h"
 
 #define QR_POLL_S 0.1
