@@ -62,7 +62,8 @@ const findingGroup = new THREE.Group();
 const deviationGroup = new THREE.Group();
 deviationGroup.visible = false;
 // The workpiece frame: on a machine whose rotary axes turn the table, the
-// stock, its toolpath and findings turn with it during replay (tablePlacement);
+// stock, its toolpath and findings turn with it during replay (placementAt:
+// the daemon's placements);
 // the tool marker stays in the machine frame.
 const workpiece = new THREE.Group();
 workpiece.matrixAutoUpdate = false;
@@ -408,31 +409,43 @@ function showPathUpTo(t) {
   invalidate();
 }
 
-// Where the table axes put the workpiece at joint values [a, b, c] (degrees):
-// x_machine = M x, M = T_1 T_2 ... T_n from the base (the daemon's
-// fm_machine_table_transform), T_i a right-handed turn about axis i's line.
-function tablePlacement(joints) {
+// Where the table puts the workpiece at point k of the toolpath: the daemon's
+// placement there (the toolpath document's "placements", 12 numbers a point:
+// x_machine = R x + t, R row-major, from fm_machine_table_transform), as a
+// matrix; identity without a table.
+function placementAt(k) {
   const M = new THREE.Matrix4();
-  const table = S.toolpath && S.toolpath.machine && S.toolpath.machine.table;
-  if (!table || !joints) return M;
-  for (const ax of table) {
-    const th = joints['abc'.indexOf(ax.axis)] * Math.PI / 180;
-    const [bx, by, bz] = ax.through;
-    M.multiply(new THREE.Matrix4().makeTranslation(bx, by, bz))
-      .multiply(new THREE.Matrix4().makeRotationAxis(new THREE.Vector3(...ax.around).normalize(), th))
-      .multiply(new THREE.Matrix4().makeTranslation(-bx, -by, -bz));
-  }
+  const Q = S.toolpath && S.toolpath.placements;
+  if (!Q || 12 * k + 11 >= Q.length) return M;
+  const q = Q.slice(12 * k, 12 * k + 12);
+  M.set(q[0], q[1], q[2], q[9], q[3], q[4], q[5], q[10], q[6], q[7], q[8], q[11], 0, 0, 0, 1);
   return M;
 }
 
-function placeWorkpiece(joints) {
-  workpiece.matrix.copy(tablePlacement(joints));
+// Between two points of a motion (at most 5 degrees of any joint apart) the
+// table turns on: the turn between their placements taken a fraction r of
+// the way (a spherical interpolation, exact for a turn about one axis), the
+// translation in proportion.
+function placementBetween(ka, kb, r) {
+  const A = placementAt(ka);
+  if (kb === ka || r <= 0) return A;
+  const B = placementAt(kb);
+  const pa = new THREE.Vector3(), qa = new THREE.Quaternion(), sa = new THREE.Vector3();
+  const pb = new THREE.Vector3(), qb = new THREE.Quaternion(), sb = new THREE.Vector3();
+  A.decompose(pa, qa, sa);
+  B.decompose(pb, qb, sb);
+  return new THREE.Matrix4().compose(pa.lerp(pb, r), qa.slerp(qb, r), new THREE.Vector3(1, 1, 1));
+}
+
+function placeWorkpiece(placement, joints) {
+  workpiece.matrix.copy(placement || new THREE.Matrix4());
   workpiece.matrixWorldNeedsUpdate = true;
   S.joints = joints || null;
 }
 
-// The motion at program time t, the tool tip there (workpiece frame) and the
-// joints (degrees, when the motion carries them: they move linearly in time).
+// The motion at program time t, the tool tip there (workpiece frame), the
+// joints (degrees, when the motion carries them: they move linearly in time)
+// and the table's placement of the workpiece there (null without a table).
 function poseAt(t) {
   const tp = S.toolpath;
   if (!tp || !tp.motions.length) return null;
@@ -448,7 +461,8 @@ function poseAt(t) {
   const pos = [0, 1, 2].map((k) => P[a + k] + (P[b + k] - P[a + k]) * r);
   const m = M[lo];
   const joints = m.length >= 13 ? [0, 1, 2].map((k) => m[7 + k] + (m[10 + k] - m[7 + k]) * f) : null;
-  return { line, tool, pos, joints };
+  const placement = tp.placements ? placementBetween(first + i, first + Math.min(i + 1, count - 1), r) : null;
+  return { line, tool, pos, joints, placement };
 }
 
 // --------------------------------------------------------------- program --
@@ -637,7 +651,7 @@ function showStatus(st) {
       setScrub(t);
       // the table where the program has turned it by now
       const pose = poseAt(t);
-      if (pose && pose.joints) placeWorkpiece(pose.joints);
+      if (pose && pose.placement) placeWorkpiece(pose.placement, pose.joints);
     }
     if (Array.isArray(j.position)) showPosition(j.position, j.tool);
     if (j.line) setLine(j.line);
@@ -670,7 +684,7 @@ function applyReplay() {
   setScrub(t);
   const pose = poseAt(t);
   if (pose) {
-    placeWorkpiece(pose.joints);
+    placeWorkpiece(pose.placement, pose.joints);
     showPosition(pose.pos, pose.tool);
     setLine(pose.line);
   }

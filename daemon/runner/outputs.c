@@ -1,6 +1,6 @@
 /* outputs.c: the final stock to files, by extension: .vdb snapshots through
- * lib/stock, meshes and pictures through lib/mesh, and the toolpath
- * polylines drawn over pictures. */
+ * lib/stock, meshes and pictures through lib/mesh, with the toolpath's
+ * polylines (toolpath.c) drawn over pictures. */
 #include "outputs.h"
 
 #include "job.h"
@@ -10,120 +10,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-
-#define OUT_PI 3.14159265358979323846
-/* Arcs and rotary moves are drawn with a chord every 5 degrees at most. */
-#define OUT_ARC_STEP (OUT_PI / 36)
-#define OUT_PARAM_SAMPLES 32
-
-typedef struct polyline {
-    size_t first, count; /* into points */
-    int rapid;
-} polyline;
-
-struct fm_toolpath {
-    double *points;
-    size_t count, capacity, max_points;
-    polyline *lines;
-    size_t line_count, line_capacity;
-    int truncated;
-    int have_last;
-    double last[3];
-};
-
-fm_toolpath *fm_toolpath_new(size_t max_points)
-{
-    fm_toolpath *p = calloc(1, sizeof *p);
-    if (p) p->max_points = max_points ? max_points : 4000000;
-    return p;
-}
-
-void fm_toolpath_free(fm_toolpath *path)
-{
-    if (!path) return;
-    free(path->points);
-    free(path->lines);
-    free(path);
-}
-
-int fm_toolpath_truncated(const fm_toolpath *path)
-{
-    return path && path->truncated;
-}
-
-static int push_point(fm_toolpath *p, const double xyz[3])
-{
-    if (p->count >= p->max_points) {
-        p->truncated = 1;
-        return 0;
-    }
-    if (p->count == p->capacity) {
-        size_t cap = p->capacity ? p->capacity * 2 : 1024;
-        double *pts = realloc(p->points, cap * 3 * sizeof *pts);
-        if (!pts) {
-            p->truncated = 1;
-            return 0;
-        }
-        p->points = pts;
-        p->capacity = cap;
-    }
-    memcpy(p->points + 3 * p->count, xyz, 3 * sizeof *xyz);
-    p->count++;
-    return 1;
-}
-
-/* Start a new polyline unless the last one has the same kind and ends
- * where this motion starts. */
-static int begin_line(fm_toolpath *p, int rapid, const double start[3])
-{
-    if (p->line_count > 0) {
-        polyline *l = &p->lines[p->line_count - 1];
-        if (l->rapid == rapid && p->have_last && start[0] == p->last[0] &&
-            start[1] == p->last[1] && start[2] == p->last[2])
-            return 1;
-    }
-    if (p->line_count == p->line_capacity) {
-        size_t cap = p->line_capacity ? p->line_capacity * 2 : 256;
-        polyline *lines = realloc(p->lines, cap * sizeof *lines);
-        if (!lines) {
-            p->truncated = 1;
-            return 0;
-        }
-        p->lines = lines;
-        p->line_capacity = cap;
-    }
-    polyline *l = &p->lines[p->line_count++];
-    l->first = p->count;
-    l->count = 0;
-    l->rapid = rapid;
-    if (!push_point(p, start)) return 0;
-    l->count = 1;
-    return 1;
-}
-
-static void add_point(fm_toolpath *p, const double xyz[3])
-{
-    if (!push_point(p, xyz)) return;
-    p->lines[p->line_count - 1].count++;
-    memcpy(p->last, xyz, sizeof p->last);
-    p->have_last = 1;
-}
-
-/* Every motion kind through lib/sweep's motion geometry: the tool tip in
- * the workpiece frame at OUT_ARC_STEP of arc or of any rotary joint per
- * piece, parametric paths in OUT_PARAM_SAMPLES pieces, lines whole. */
-void fm_toolpath_add(fm_toolpath *path, const fm_motion *m)
-{
-    if (!path || path->truncated || m->kind == FM_MOTION_DWELL) return;
-    double tip[3], axis[3];
-    fm_motion_pose_at(m, 0, tip, axis);
-    if (!begin_line(path, m->kind == FM_MOTION_RAPID, tip)) return;
-    int pieces = fm_motion_pieces(m, OUT_ARC_STEP, OUT_PARAM_SAMPLES, 100000);
-    for (int i = 1; i <= pieces; i++) {
-        fm_motion_pose_at(m, (double)i / pieces, tip, axis);
-        add_point(path, tip);
-    }
-}
 
 /* ------------------------------------------------------------ writing -- */
 
@@ -172,18 +58,8 @@ static fm_status write_png(const fm_mesh *mesh, const char *path, const fm_outpu
         ro.legend = &legend;
     }
     fm_render_polyline *lines = NULL;
-    const fm_toolpath *tp = opt->toolpath;
-    if (tp && tp->line_count) {
-        lines = calloc(tp->line_count, sizeof *lines);
-        if (!lines) return fm_error_set(err, FM_ERR_LIMIT, "out of memory for the toolpath overlay");
-        for (size_t i = 0; i < tp->line_count; i++) {
-            lines[i].points = tp->points + 3 * tp->lines[i].first;
-            lines[i].count = tp->lines[i].count;
-            lines[i].rapid = tp->lines[i].rapid;
-        }
-        ro.paths = lines;
-        ro.path_count = tp->line_count;
-    }
+    if (fm_toolpath_polylines(opt->toolpath, &lines, &ro.path_count, err) != FM_OK) return err->code;
+    ro.paths = lines;
     ro.rotation = opt->rotation;
     fm_status st = fm_render_png(mesh, &ro, path, err);
     free(lines);

@@ -11,15 +11,7 @@
 #include "mesh/mesh.h"
 #include "stock/stock.h"
 #include "sweep/motion.h"
-
-/* The toolpath as polylines (rapids and feeds apart), collected from the
- * motion stream; arcs and parametric segments are tessellated. Past
- * max_points points further motions are dropped (fm_toolpath_truncated). */
-typedef struct fm_toolpath fm_toolpath;
-fm_toolpath *fm_toolpath_new(size_t max_points);
-void fm_toolpath_free(fm_toolpath *path);
-void fm_toolpath_add(fm_toolpath *path, const fm_motion *motion);
-int fm_toolpath_truncated(const fm_toolpath *path);
+#include "toolpath.h"
 
 /* Where the workpiece stands on the machine at a chosen program time, found
  * from the motion stream: set machine and time_s, zero the rest, and feed

@@ -3,7 +3,6 @@
  * call reads what the workers published, under the job's lock, and copies
  * it out; the full mesh is assembled from the published chunk meshes, so a
  * download never touches the grid being cut. */
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,7 +12,7 @@
 #include "job_record.h"
 #include "jobs_check.h"
 #include "publish.h"
-#include "sweep/sweep.h"
+#include "runner/toolpath.h"
 
 static fm_status not_found(const char *id, fm_error *err)
 {
@@ -179,144 +178,45 @@ static int svc_events(void *ctx, const char *id, uint64_t after, int timeout_ms,
 
 /* GET /v1/jobs/{id}/toolpath: the job's program interpreted again (the same
  * front end, tool table and rapid rate as the run, without touching any
- * stock) into a compact polyline of tool tip positions for the viewer:
- *   {"id", "kind": "gcode" | "trajectory", "program": TEXT, "motions":
- *    [[kind, line, t0, t1, tool, first, count], ...], "points": [x, y, z, ...],
- *    "truncated": bool, "error": null | TEXT}
- * kind 0 rapid, 1 feed line, 2 arc, 3 parametric, 4 dwell; a motion's points
- * are points[first .. first + count - 1] (start included). Arcs are split
- * every 5 degrees, parametric segments into 32 pieces. */
+ * stock) into the runner's toolpath (runner/toolpath.h: its motions, points
+ * and, on a rotary-table machine, the table's placement at every point),
+ * with the job's id, the kind of program, its text and the error that
+ * stopped it, if any:
+ *   {..., "id", "kind": "gcode" | "trajectory" | "live", "program": TEXT,
+ *    "error": null | TEXT}  (docs/api.md) */
 
 #define TOOLPATH_MAX_POINTS 500000
-#ifndef M_PI
-#define M_PI 3.14159265358979323846
-#endif
+#define TOOLPATH_FORM "{%s,\"id\":\"%s\",\"kind\":\"%s\",\"program\":%s,\"error\":%s}\n"
 
-typedef struct tp_buf {
-    char *text;
-    size_t len, cap;
-    int failed;
-} tp_buf;
-
-static void tp_printf(tp_buf *b, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 2, 3)))
-#endif
-    ;
-static void tp_printf(tp_buf *b, const char *fmt, ...)
+static int toolpath_sink(void *user, const fm_motion *m)
 {
-    if (b->failed) return;
-    for (;;) {
-        va_list ap;
-        va_start(ap, fmt);
-        /* NULL + 0 is undefined in C (clang's UBSan stops there): the
-         * first call, before any allocation, only measures. */
-        int n = vsnprintf(b->text ? b->text + b->len : NULL, b->cap - b->len, fmt, ap);
-        va_end(ap);
-        if (n < 0) {
-            b->failed = 1;
-            return;
-        }
-        if ((size_t)n < b->cap - b->len) {
-            b->len += (size_t)n;
-            return;
-        }
-        size_t cap = b->cap * 2 + (size_t)n + 1;
-        char *t = realloc(b->text, cap);
-        if (!t) {
-            b->failed = 1;
-            return;
-        }
-        b->text = t;
-        b->cap = cap;
-    }
-}
-
-typedef struct tp_ctx {
-    tp_buf motions, points;
-    long point_count, motion_count;
-    int truncated;
-} tp_ctx;
-
-static void tp_point(tp_ctx *c, const double p[3])
-{
-    tp_printf(&c->points, "%s%.3f,%.3f,%.3f", c->point_count ? "," : "", p[0], p[1], p[2]);
-    c->point_count++;
-}
-
-static int tp_sink(void *user, const fm_motion *m)
-{
-    tp_ctx *c = user;
-    if (c->point_count > TOOLPATH_MAX_POINTS) {
-        c->truncated = 1;
-        return 1;
-    }
-    long first = c->point_count;
-    double p[3], axis[3];
-    int kind = m->kind == FM_MOTION_RAPID ? 0
-               : m->kind == FM_MOTION_LINE ? 1
-               : m->kind == FM_MOTION_ARC  ? 2
-               : m->kind == FM_MOTION_PARAM ? 3
-                                           : 4;
-    /* lib/sweep's motion geometry: the tool tip in the workpiece frame,
-     * arcs and rotary moves every 5 degrees, parametric paths in 32 pieces */
-    if (kind == 4) {
-        fm_motion_pose_at(m, 0, p, axis);
-        tp_point(c, p);
-    } else {
-        int n = fm_motion_pieces(m, 5.0 * M_PI / 180.0, 32, 20000);
-        if (kind == 2 && n < 2) n = 2;
-        for (int i = 0; i <= n; i++) {
-            fm_motion_pose_at(m, (double)i / n, p, axis);
-            tp_point(c, p);
-        }
-    }
-    tp_printf(&c->motions, "%s[%d,%d,%.4f,%.4f,%d,%ld,%ld", c->motion_count ? "," : "", kind,
-              m->line, m->t0, m->t1, m->tool, first, c->point_count - first);
-    /* on a rotary machine the joints at both ends, for the viewer's table */
-    if (m->machine && m->machine->rotary_count)
-        tp_printf(&c->motions, ",%.6f,%.6f,%.6f,%.6f,%.6f,%.6f", m->rotary_start[0], m->rotary_start[1],
-                  m->rotary_start[2], m->rotary_end[0], m->rotary_end[1], m->rotary_end[2]);
-    tp_printf(&c->motions, "]");
-    c->motion_count++;
-    return c->motions.failed || c->points.failed;
-}
-
-/* The opening of the document with "machine": {"table": [{"axis", "around",
- * "through"}, ...]} (the axes that turn the workpiece, in chain order from
- * the base) when the job's machine has any, so the viewer can turn the
- * workpiece as fm_machine_table_transform does. */
-static void tp_machine(tp_buf *b, const fm_machine *mc)
-{
-    tp_printf(b, "{");
-    int n = 0;
-    for (int i = 0; mc && i < mc->rotary_count; i++) {
-        const fm_rotary_axis *ax = &mc->rotary[i];
-        if (ax->carries != FM_ROTARY_TABLE) continue;
-        tp_printf(b, "%s{\"axis\":\"%c\",\"around\":[%.9g,%.9g,%.9g],\"through\":[%.9g,%.9g,%.9g]}",
-                  n++ ? "," : "\"machine\":{\"table\":[", 'a' + ax->letter, ax->around[0], ax->around[1],
-                  ax->around[2], ax->through[0], ax->through[1], ax->through[2]);
-    }
-    if (n) tp_printf(b, "]},");
+    fm_toolpath_add(user, m);
+    return fm_toolpath_truncated(user);
 }
 
 static fm_status svc_toolpath(void *ctx, const char *id, fm_http_blob *out, fm_error *err)
 {
     job *j = fm_jobs_get(ctx, id);
     if (!j) return not_found(id, err);
-    /* The document is immutable: no lock needed while we hold a reference. */
+    /* The document is immutable while we hold a reference. */
     const fm_job_spec *spec = &fm_job_document(j)->spec;
-    int is_gcode = spec->program_kind == FM_PROGRAM_GCODE;
+    fm_toolpath *path = fm_toolpath_new(TOOLPATH_MAX_POINTS);
+    if (!path) {
+        fm_jobs_put(ctx, j);
+        return fm_error_set_reason(err, FM_ERR_LIMIT, "out_of_memory", "out of memory");
+    }
     fm_error ferr;
     fm_error_clear(&ferr);
-    tp_ctx c;
-    memset(&c, 0, sizeof c);
-    fm_status st = spec->program_kind == FM_PROGRAM_LIVE ? FM_OK
-                                                          : fm_job_interpret(spec, tp_sink, &c, &ferr);
+    fm_status st = spec->program_kind == FM_PROGRAM_LIVE
+                       ? FM_OK
+                       : fm_job_interpret(spec, toolpath_sink, path, &ferr);
     json_t *prog = json_stringn(spec->program_text ? spec->program_text : "", spec->program_length);
-    const char *kind = is_gcode ? "gcode"
+    const char *kind = spec->program_kind == FM_PROGRAM_GCODE  ? "gcode"
                        : spec->program_kind == FM_PROGRAM_LIVE ? "live"
                                                                : "trajectory";
+    size_t members_len = 0;
+    char *members = fm_toolpath_json_members(path, spec->machine, &members_len);
+    fm_toolpath_free(path);
     fm_jobs_put(ctx, j);
     char *prog_json = prog ? json_dumps(prog, JSON_ENCODE_ANY) : NULL;
     json_decref(prog);
@@ -324,25 +224,20 @@ static fm_status svc_toolpath(void *ctx, const char *id, fm_http_blob *out, fm_e
     json_t *emsg = st == FM_OK ? json_null() : json_string(fm_error_format(&ferr, msg, sizeof msg));
     char *err_json = json_dumps(emsg, JSON_ENCODE_ANY);
     json_decref(emsg);
-
-    tp_buf b = {0};
-    tp_machine(&b, spec->machine);
-    tp_printf(&b, "\"id\":\"%s\",\"kind\":\"%s\",\"program\":%s,\"motions\":[%s],\"points\":[%s],"
-                  "\"truncated\":%s,\"error\":%s}\n",
-              id, kind, prog_json ? prog_json : "\"\"",
-              c.motions.text ? c.motions.text : "", c.points.text ? c.points.text : "",
-              c.truncated ? "true" : "false", err_json ? err_json : "null");
+    char *text = NULL;
+    int n = -1;
+    if (members && prog_json && err_json) {
+        n = snprintf(NULL, 0, TOOLPATH_FORM, members, id, kind, prog_json, err_json);
+        text = n >= 0 ? malloc((size_t)n + 1) : NULL;
+        if (text) snprintf(text, (size_t)n + 1, TOOLPATH_FORM, members, id, kind, prog_json, err_json);
+        else n = -1;
+    }
+    free(members);
     free(prog_json);
     free(err_json);
-    int failed = b.failed || c.motions.failed || c.points.failed;
-    free(c.motions.text);
-    free(c.points.text);
-    if (failed) {
-        free(b.text);
-        return fm_error_set_reason(err, FM_ERR_LIMIT, "out_of_memory", "out of memory");
-    }
-    out->data = (uint8_t *)b.text;
-    out->size = b.len;
+    if (n < 0) return fm_error_set_reason(err, FM_ERR_LIMIT, "out_of_memory", "out of memory");
+    out->data = (uint8_t *)text;
+    out->size = (size_t)n;
     out->content_type = "application/json";
     return FM_OK;
 }

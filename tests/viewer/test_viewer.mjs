@@ -420,6 +420,67 @@ async function main() {
     ok(turn.table && turn.table.table && turn.table.table.length === 1, 'the toolpath names the table axis');
     ok(turn.t > 0.5 && turn.t < 5.5 && worst < 1e-6, `the workpiece stands at Rz(${deg.toFixed(1)}) (worst ${worst.toExponential(1)})`);
 
+    // The table's placement comes from the daemon (issue 33): the toolpath
+    // document carries it at every point ("placements", fm_machine_table_
+    // transform), and the page places the workpiece with it. An indexer
+    // (examples/indexer_machine.json's A axis: about X through the origin)
+    // turns 90 degrees (at 60 degrees a second): by the closed form Rx(theta),
+    // the workpiece point (0, 10, 0) stands at (0, 10 cos theta, 10 sin
+    // theta) on the machine, (0, 0, 10) once the turn is done.
+    const indexJob = {
+      stock: 'box:-5,-5,-5,5,5,5',
+      voxel: 0.5,
+      tools: JSON.parse(fs.readFileSync(path.join(ROOT, 'deploy/demo/tools.json'), 'utf8')),
+      program: { gcode: 'G21 G90 G94\nT1 M6\nG0 Z20\nG1 A90 F3600\nG0 X5\nM2\n' },
+      machine: JSON.parse(fs.readFileSync(path.join(ROOT, 'examples/indexer_machine.json'), 'utf8')),
+      options: { name: 'viewer-indexer-test' },
+    };
+    delete indexJob.machine.components; // the headstock model is not needed here
+    const rIndex = await fetch(`${url}/v1/jobs`, {
+      method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(indexJob),
+    });
+    ok(rIndex.status === 202, `indexer job accepted (HTTP ${rIndex.status})`);
+    const idIndex = (await rIndex.json()).id;
+    const docIndex = await (await fetch(`${url}/v1/jobs/${idIndex}/toolpath`)).json();
+    const turnMotion = docIndex.motions.find((m) => m[1] === 4); // line 4: G1 A90
+    const PIndex = docIndex.placements || [];
+    ok(turnMotion && PIndex.length === 4 * docIndex.points.length,
+      `the toolpath document has a placement for each of its ${docIndex.points.length / 3} points`);
+    if (turnMotion) {
+      // the placement at the end of the turn: Rx(90) = [1 0 0; 0 0 -1; 0 1 0], no translation
+      const k = turnMotion[5] + turnMotion[6] - 1;
+      const got = PIndex.slice(12 * k, 12 * k + 12);
+      const want90 = [1, 0, 0, 0, 0, -1, 0, 1, 0, 0, 0, 0];
+      const worstDoc = Math.max(...want90.map((v, i) => Math.abs(v - got[i])));
+      ok(worstDoc < 1e-6, `the document's placement after A90 is Rx(90) (worst ${worstDoc.toExponential(1)})`);
+    }
+    await page.evaluate((jid) => window.frepmillViewer.open(jid), idIndex);
+    await page.waitForFunction(() => window.frepmillViewer.idle() && window.frepmillViewer.state.toolpath
+      && window.frepmillViewer.state.jobState === 'done', null, { timeout: 60000 * WAIT });
+    const placed = await page.evaluate(() => {
+      const s = document.getElementById('scrub');
+      const at = (v) => {
+        s.value = v;
+        s.dispatchEvent(new Event('input'));
+        return { t: window.frepmillViewer.state.replayT, m: window.frepmillViewer.workpieceMatrix() };
+      };
+      return { total: window.frepmillViewer.state.totalT, mid: at(300), end: at(1000) };
+    });
+    // column-major matrix m applied to the point (0, 10, 0)
+    const apply = (m, p) => [0, 1, 2].map((r) => m[r] * p[0] + m[4 + r] * p[1] + m[8 + r] * p[2] + m[12 + r]);
+    const far = (a, b) => Math.max(...a.map((v, i) => Math.abs(v - b[i])));
+    // the turn's times are the document's (after the rapid to Z20); A moves
+    // linearly in time within it (docs/api.md)
+    const tStart = turnMotion ? turnMotion[2] : 0, tEnd = turnMotion ? turnMotion[3] : 1;
+    const th = 90 * Math.min(Math.max((placed.mid.t - tStart) / (tEnd - tStart), 0), 1) * Math.PI / 180;
+    const midWant = [0, 10 * Math.cos(th), 10 * Math.sin(th)];
+    const midGot = apply(placed.mid.m, [0, 10, 0]);
+    console.log(`indexer at t=${placed.mid.t.toFixed(3)} s (turn from ${tStart.toFixed(3)} s): A ${(th * 180 / Math.PI).toFixed(2)} deg, (0,10,0) -> ${midGot.map((v) => v.toFixed(4)).join(' ')}`);
+    ok(placed.mid.t > tStart && placed.mid.t < tEnd && far(midGot, midWant) < 1e-6,
+      `in the turn the page puts (0, 10, 0) at (0, 10 cos A, 10 sin A) (off by ${far(midGot, midWant).toExponential(1)})`);
+    const endGot = apply(placed.end.m, [0, 10, 0]);
+    ok(far(endGot, [0, 0, 10]) < 1e-6, `after A90 the page puts (0, 10, 0) at (0, 0, 10) (got ${endGot.map((v) => v.toFixed(4)).join(' ')})`);
+
     // The deviation colour mode (issue 16). The demo job has no design: no
     // deviation, and the mode stays off.
     const noDev = await fetch(`${url}/v1/jobs/${id}/deviation`);
