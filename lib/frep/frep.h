@@ -126,6 +126,11 @@ fm_node fm_r_subtract(fm_graph *g, fm_node f1, fm_node f2, double alpha);
  * a0 > 0 adds material, a0 < 0 removes it. */
 fm_node fm_blend_union(fm_graph *g, fm_node f1, fm_node f2, double a0, double a1, double a2);
 fm_node fm_blend_inter(fm_graph *g, fm_node f1, fm_node f2, double a0, double a1, double a2);
+/* The same with a0, a1, a2 given as expressions (parameters, or values a
+ * language computes); a constant a1 or a2 of 0, or a non-finite constant,
+ * is refused. */
+fm_node fm_blend_union_expr(fm_graph *g, fm_node f1, fm_node f2, fm_node a0, fm_node a1, fm_node a2);
+fm_node fm_blend_inter_expr(fm_graph *g, fm_node f1, fm_node f2, fm_node a0, fm_node a1, fm_node a2);
 /* rho-blending (Shapiro eq. 6.2): x1 + x2 + s sqrt(x1^2 + x2^2 + s_rho (s_rho - |s_rho|) / (8 rho^2)),
  * s_rho = x1^2 + x2^2 - rho^2; s = +1 union, -1 intersection. */
 fm_node fm_rho_blend_union(fm_graph *g, fm_node f1, fm_node f2, double rho);
@@ -159,10 +164,21 @@ fm_node fm_affine(fm_graph *g, fm_node f, const double m[16]);
  * entries are expressions (usually of t); the object is moved by X' = A X + c
  * and f is evaluated at A^-1 (X' - c), inverted symbolically. */
 fm_node fm_affine_t(fm_graph *g, fm_node f, const fm_node m[12]);
+/* The inverse maps behind fm_affine_t and fm_rotate / fm_twist applied to
+ * coordinate expressions instead of an object, for languages that transform
+ * the point before they build the object (lib/hf): p[0..2] are the x, y, z
+ * expressions of the point and are replaced by those of the point the
+ * motion brings there. fm_affine_t_coords: p = A^-1 (p - c), m as for
+ * fm_affine_t. fm_rotate_coords: the inverse rotation about `axis` by the
+ * angle expression theta, which may depend on p[axis] (a twist). Return 1,
+ * or 0 with a graph error (p is then unchanged). */
+int fm_affine_t_coords(fm_graph *g, fm_node p[3], const fm_node m[12]);
+int fm_rotate_coords(fm_graph *g, fm_node p[3], int axis, fm_node theta);
 fm_node fm_translate(fm_graph *g, fm_node f, double dx, double dy, double dz);
 /* Rotation about a coordinate axis by angle (radians), right-handed. */
 fm_node fm_rotate(fm_graph *g, fm_node f, int axis, double angle);
-/* Twist about axis: rotation by rate * (coordinate along axis). */
+/* Twist about axis: rotation by rate * (coordinate along axis)
+ * (fm_rotate_coords with theta = rate * p[axis]). */
 fm_node fm_twist(fm_graph *g, fm_node f, int axis, double rate);
 /* Taper along axis: scale of the other two coordinates by
  * 1 + rate * (coordinate along axis), evaluated by its inverse. */
@@ -206,6 +222,13 @@ fm_node fm_cone(fm_graph *g, const double base[3], const double axis[3], double 
                 double h);
 /* Torus about axis through c: major radius R, minor r. Exact. */
 fm_node fm_torus(fm_graph *g, const double c[3], const double axis[3], double R, double r);
+/* The same torus about the line through c parallel to coordinate `axis`
+ * (0..2), at the point whose coordinates are the expressions p, with the
+ * centre and radii given as expressions (not checked: expressions may have
+ * any value; the formula is r - sqrt((sqrt(l1^2 + l2^2) - R)^2 + l0^2) with
+ * l = p - c, l0 along the axis). */
+fm_node fm_torus_expr(fm_graph *g, const fm_node p[3], const fm_node c[3], int axis, fm_node R,
+                      fm_node r);
 /* Superellipsoid ((|x/a|^(2/e2) + |y/b|^(2/e2))^(e2/e1) + |z/c|^(2/e1) <= 1),
  * normalized to first order. */
 fm_node fm_superellipsoid(fm_graph *g, const double c[3], const double radii[3], double e1,

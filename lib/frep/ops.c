@@ -165,27 +165,50 @@ fm_node fm_r_subtract(fm_graph *g, fm_node f1, fm_node f2, double alpha)
 
 /* ------------------------------------------------------------ blends -- */
 
-static fm_node displacement_blend(fm_graph *g, fm_node f1, fm_node f2, double a0, double a1,
-                                  double a2, int sign, const char *who)
+/* a / c for a constant c as a multiplication by 1 / c (as the double-valued
+ * builders always did), else a division node. */
+static fm_node div_by(fm_graph *g, fm_node a, fm_node c)
 {
-    if (missing(g, f1, who) || missing(g, f2, who)) return FM_NONE;
-    if (!finite(a0) || !finite(a1) || !finite(a2) || a1 == 0.0 || a2 == 0.0)
-        return fm_graph_fail(g, FM_ERR_INPUT,
-                             "%s: a0 = %g must be finite and a1 = %g, a2 = %g finite and non-zero",
-                             who, a0, a1, a2);
+    double v;
+    if (fm_node_is_const(g, c, &v)) return scale(g, 1.0 / v, a);
+    return fm_div(g, a, c);
+}
+
+static fm_node displacement_blend(fm_graph *g, fm_node f1, fm_node f2, fm_node a0, fm_node a1,
+                                  fm_node a2, int sign, const char *who)
+{
+    if (missing(g, f1, who) || missing(g, f2, who) || missing(g, a0, who) || missing(g, a1, who) ||
+        missing(g, a2, who))
+        return FM_NONE;
+    const fm_node a[3] = {a0, a1, a2};
+    for (int i = 0; i < 3; i++) {
+        double v;
+        if (fm_node_is_const(g, a[i], &v) && (!finite(v) || (i > 0 && v == 0.0)))
+            return fm_graph_fail(g, FM_ERR_INPUT, "%s: a%d = %g must be finite%s", who, i, v,
+                                 i > 0 ? " and non-zero" : "");
+    }
     fm_node r0 = r_alpha(g, f1, f2, 0.0, sign, who);
     fm_node den = fm_add(g, k(g, 1.0),
-                         fm_add(g, fm_square(g, scale(g, 1.0 / a1, f1)),
-                                fm_square(g, scale(g, 1.0 / a2, f2))));
-    return fm_add(g, r0, fm_div(g, k(g, a0), den));
+                         fm_add(g, fm_square(g, div_by(g, f1, a1)), fm_square(g, div_by(g, f2, a2))));
+    return fm_add(g, r0, fm_div(g, a0, den));
 }
 
 fm_node fm_blend_union(fm_graph *g, fm_node f1, fm_node f2, double a0, double a1, double a2)
 {
-    return displacement_blend(g, f1, f2, a0, a1, a2, +1, "blend union");
+    return displacement_blend(g, f1, f2, k(g, a0), k(g, a1), k(g, a2), +1, "blend union");
 }
 
 fm_node fm_blend_inter(fm_graph *g, fm_node f1, fm_node f2, double a0, double a1, double a2)
+{
+    return displacement_blend(g, f1, f2, k(g, a0), k(g, a1), k(g, a2), -1, "blend intersection");
+}
+
+fm_node fm_blend_union_expr(fm_graph *g, fm_node f1, fm_node f2, fm_node a0, fm_node a1, fm_node a2)
+{
+    return displacement_blend(g, f1, f2, a0, a1, a2, +1, "blend union");
+}
+
+fm_node fm_blend_inter_expr(fm_graph *g, fm_node f1, fm_node f2, fm_node a0, fm_node a1, fm_node a2)
 {
     return displacement_blend(g, f1, f2, a0, a1, a2, -1, "blend intersection");
 }
@@ -638,13 +661,18 @@ fm_node fm_affine(fm_graph *g, fm_node f, const double m[16])
     return remap_run(g, f, map, rigid);
 }
 
-fm_node fm_affine_t(fm_graph *g, fm_node f, const fm_node m[12])
+int fm_affine_t_coords(fm_graph *g, fm_node p[3], const fm_node m[12])
 {
     const char *who = "time-dependent affine map";
-    if (missing(g, f, who)) return FM_NONE;
-    if (!m) return fm_graph_fail(g, FM_ERR_INPUT, "%s: no matrix given", who);
+    if (!g || g->failed) return 0;
+    if (!p || !m) {
+        fm_graph_fail(g, FM_ERR_INPUT, "%s: no %s given", who, p ? "matrix" : "point");
+        return 0;
+    }
+    for (int i = 0; i < 3; i++)
+        if (missing(g, p[i], who)) return 0;
     for (int i = 0; i < 12; i++)
-        if (missing(g, m[i], who)) return FM_NONE;
+        if (missing(g, m[i], who)) return 0;
     /* A = m[4 r + c] for r, c < 3; translation m[4 r + 3]. Inverse by
      * cofactors: (A^-1)_{ij} = C_{ji} / det A. */
 #define A(r, c) m[4 * (r) + (c)]
@@ -658,19 +686,31 @@ fm_node fm_affine_t(fm_graph *g, fm_node f, const fm_node m[12])
     fm_node det = fm_add(g, fm_add(g, mul0(g, A(0, 0), cof[0][0]), mul0(g, A(0, 1), cof[0][1])),
                          mul0(g, A(0, 2), cof[0][2]));
     double det_value;
-    if (fm_node_is_const(g, det, &det_value) && (det_value == 0.0 || !isfinite(det_value)))
-        return fm_graph_fail(g, FM_ERR_INPUT, "%s: the matrix is singular (determinant %g)", who,
-                             det_value);
-    fm_node d[3];
-    for (int r = 0; r < 3; r++) d[r] = fm_sub(g, fm_var(g, r), A(r, 3));
-    fm_node map[FM_AXES] = {FM_NONE, FM_NONE, FM_NONE, FM_NONE};
+    if (fm_node_is_const(g, det, &det_value) && (det_value == 0.0 || !isfinite(det_value))) {
+        fm_graph_fail(g, FM_ERR_INPUT, "%s: the matrix is singular (determinant %g)", who, det_value);
+        return 0;
+    }
+    fm_node d[3], out[3];
+    for (int r = 0; r < 3; r++) d[r] = fm_sub(g, p[r], A(r, 3));
     for (int i = 0; i < 3; i++) {
         fm_node e = k(g, 0.0);
         for (int j = 0; j < 3; j++) e = fm_add(g, e, mul0(g, cof[j][i], d[j]));
-        map[i] = fm_div(g, e, det);
+        out[i] = fm_div(g, e, det);
     }
 #undef A
-    if (g->failed) return FM_NONE;
+    if (g->failed) return 0;
+    for (int i = 0; i < 3; i++) p[i] = out[i];
+    return 1;
+}
+
+fm_node fm_affine_t(fm_graph *g, fm_node f, const fm_node m[12])
+{
+    const char *who = "time-dependent affine map";
+    if (missing(g, f, who)) return FM_NONE;
+    if (!m) return fm_graph_fail(g, FM_ERR_INPUT, "%s: no matrix given", who);
+    fm_node p[3] = {fm_var(g, FM_X), fm_var(g, FM_Y), fm_var(g, FM_Z)};
+    if (!fm_affine_t_coords(g, p, m)) return FM_NONE;
+    fm_node map[FM_AXES] = {p[0], p[1], p[2], FM_NONE};
     /* Rigidity of a symbolic matrix cannot be checked; a constant one can. */
     int rigid = 1;
     double a[9];
@@ -704,14 +744,36 @@ fm_node fm_translate(fm_graph *g, fm_node f, double dx, double dy, double dz)
     return remap_rigid(g, f, map);
 }
 
-/* The inverse of a rotation by angle node theta about `axis`: coordinate i
- * and j (the next two in cyclic order) of the original point. */
-static void inverse_rotation(fm_graph *g, int axis, fm_node c, fm_node s, fm_node map[FM_AXES])
+/* The inverse of a rotation about `axis` by the angle whose cosine and sine
+ * are the nodes c and s, applied to the point p: coordinates i and j (the
+ * next two in cyclic order) of the original point. */
+static void inverse_rotation(fm_graph *g, fm_node p[3], int axis, fm_node c, fm_node s)
 {
     int i = (axis + 1) % 3, j = (axis + 2) % 3;
-    fm_node xi = fm_var(g, i), xj = fm_var(g, j);
-    map[i] = fm_add(g, mul0(g, c, xi), mul0(g, s, xj));
-    map[j] = fm_sub(g, mul0(g, c, xj), mul0(g, s, xi));
+    fm_node xi = p[i], xj = p[j];
+    p[i] = fm_add(g, mul0(g, c, xi), mul0(g, s, xj));
+    p[j] = fm_sub(g, mul0(g, c, xj), mul0(g, s, xi));
+}
+
+int fm_rotate_coords(fm_graph *g, fm_node p[3], int axis, fm_node theta)
+{
+    const char *who = "rotate coordinates";
+    if (!g || g->failed) return 0;
+    if (!p) {
+        fm_graph_fail(g, FM_ERR_INPUT, "%s: no point given", who);
+        return 0;
+    }
+    if (!check_axis3(g, axis, who, "rotation") || missing(g, theta, who)) return 0;
+    for (int i = 0; i < 3; i++)
+        if (missing(g, p[i], who)) return 0;
+    inverse_rotation(g, p, axis, fm_unary(g, FM_OP_COS, theta), fm_unary(g, FM_OP_SIN, theta));
+    return !g->failed;
+}
+
+/* The x, y, z coordinates, for the builders that map an object. */
+static void identity_coords(fm_graph *g, fm_node p[3])
+{
+    for (int i = 0; i < 3; i++) p[i] = fm_var(g, i);
 }
 
 fm_node fm_rotate(fm_graph *g, fm_node f, int axis, double angle)
@@ -720,8 +782,10 @@ fm_node fm_rotate(fm_graph *g, fm_node f, int axis, double angle)
     if (missing(g, f, who) || !check_axis3(g, axis, who, "rotation")) return FM_NONE;
     if (!finite(angle)) return fm_graph_fail(g, FM_ERR_INPUT, "%s: angle %g is not finite", who, angle);
     if (angle == 0.0) return f;
-    fm_node map[FM_AXES] = {FM_NONE, FM_NONE, FM_NONE, FM_NONE};
-    inverse_rotation(g, axis, k(g, cos(angle)), k(g, sin(angle)), map);
+    fm_node p[3];
+    identity_coords(g, p);
+    inverse_rotation(g, p, axis, k(g, cos(angle)), k(g, sin(angle)));
+    fm_node map[FM_AXES] = {p[0], p[1], p[2], FM_NONE};
     return remap_rigid(g, f, map);
 }
 
@@ -731,9 +795,10 @@ fm_node fm_twist(fm_graph *g, fm_node f, int axis, double rate)
     if (missing(g, f, who) || !check_axis3(g, axis, who, "twist")) return FM_NONE;
     if (!finite(rate)) return fm_graph_fail(g, FM_ERR_INPUT, "%s: rate %g is not finite", who, rate);
     if (rate == 0.0) return f;
-    fm_node theta = scale(g, rate, fm_var(g, axis));
-    fm_node map[FM_AXES] = {FM_NONE, FM_NONE, FM_NONE, FM_NONE};
-    inverse_rotation(g, axis, fm_unary(g, FM_OP_COS, theta), fm_unary(g, FM_OP_SIN, theta), map);
+    fm_node p[3];
+    identity_coords(g, p);
+    if (!fm_rotate_coords(g, p, axis, scale(g, rate, p[axis]))) return FM_NONE;
+    fm_node map[FM_AXES] = {p[0], p[1], p[2], FM_NONE};
     return fm_remap(g, f, map);
 }
 

@@ -202,6 +202,16 @@ fm_node fm_cone(fm_graph *g, const double base[3], const double axis[3], double 
     return fm_select(g, fm_binary(g, FM_OP_LT, in, k(g, 0.0)), fm_neg(g, dist), dist);
 }
 
+/* r - sqrt((sqrt(l1^2 + l2^2) - R)^2 + along^2): the torus in its local
+ * frame (l1, l2 across the axis, along it). */
+static fm_node torus_local(fm_graph *g, fm_node l1, fm_node l2, fm_node along, fm_node R,
+                           fm_node r)
+{
+    fm_node tube = fm_sqrt(g, fm_add(g, fm_square(g, fm_sub(g, radial(g, l1, l2), R)),
+                                     fm_square(g, along)));
+    return fm_sub(g, r, tube);
+}
+
 fm_node fm_torus(fm_graph *g, const double c[3], const double axis[3], double R, double r)
 {
     if (!usable(g)) return FM_NONE;
@@ -214,9 +224,24 @@ fm_node fm_torus(fm_graph *g, const double c[3], const double axis[3], double R,
                              "torus: radii R = %g and r = %g must be finite numbers > 0", R, r);
     fm_node l1, l2, along;
     axis_frame(g, c, u, &l1, &l2, &along);
-    fm_node tube = fm_sqrt(g, fm_add(g, fm_square(g, fm_sub(g, radial(g, l1, l2), k(g, R))),
-                                     fm_square(g, along)));
-    return fm_sub(g, k(g, r), tube);
+    return torus_local(g, l1, l2, along, k(g, R), k(g, r));
+}
+
+fm_node fm_torus_expr(fm_graph *g, const fm_node p[3], const fm_node c[3], int axis, fm_node R,
+                      fm_node r)
+{
+    if (!usable(g)) return FM_NONE;
+    if (!p || !c) return fm_graph_fail(g, FM_ERR_INPUT, "torus: no point or centre given");
+    if (axis < 0 || axis > 2)
+        return fm_graph_fail(g, FM_ERR_INPUT, "torus: axis %d is not 0 (x), 1 (y) or 2 (z)", axis);
+    for (int i = 0; i < 3; i++)
+        if (p[i] == FM_NONE || c[i] == FM_NONE)
+            return fm_graph_fail(g, FM_ERR_INPUT, "torus: a coordinate or the centre is missing");
+    if (R == FM_NONE || r == FM_NONE)
+        return fm_graph_fail(g, FM_ERR_INPUT, "torus: a radius is missing");
+    fm_node l1 = fm_sub(g, p[(axis + 1) % 3], c[(axis + 1) % 3]);
+    fm_node l2 = fm_sub(g, p[(axis + 2) % 3], c[(axis + 2) % 3]);
+    return torus_local(g, l1, l2, fm_sub(g, p[axis], c[axis]), R, r);
 }
 
 /* w / sqrt(w^2 + |grad w|^2) (Shapiro eq. 4.9) with the gradient given as

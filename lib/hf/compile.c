@@ -379,11 +379,12 @@ static fm_node apply_binary(hf_exec *ex, hf_frame *fr, hf_tok op, fm_node a, fm_
     case HF_TK_STAR: return fm_mul(g, a, b);
     case HF_TK_SLASH: return fm_div(g, a, b);
     case HF_TK_CARET: return fm_binary(g, FM_OP_POW, a, b);
-    case HF_TK_BAR: return fm_hf_r_union(g, a, b, fr->alpha);
+    /* HyperFun's | & \ are Pasko's R_alpha (eq. 2) with the current r_alpha */
+    case HF_TK_BAR: return fm_r_union(g, a, b, fr->alpha);
     case HF_TK_AMP:
     case HF_TK_AT: /* operands name their own coordinates, so eq. 13 is an intersection */
-        return fm_hf_r_inter(g, a, b, fr->alpha);
-    case HF_TK_BACKSLASH: return fm_hf_r_inter(g, a, fm_neg(g, b), fr->alpha);
+        return fm_r_inter(g, a, b, fr->alpha);
+    case HF_TK_BACKSLASH: return fm_r_subtract(g, a, b, fr->alpha);
     case HF_TK_LT: return fm_binary(g, FM_OP_LT, a, b);
     case HF_TK_GT: return fm_binary(g, FM_OP_LT, b, a);
     case HF_TK_LE: return fm_binary(g, FM_OP_LE, a, b);
@@ -505,29 +506,8 @@ static int ext_affine_t(hf_exec *ex, hf_frame *fr, const hf_ast *at, fm_node *ou
     int i = 0;
     for (e = ex->p->nodes[e].next; e; e = ex->p->nodes[e].next)
         if (!eval(ex, fr, e, &m[i++])) return 0;
-    fm_graph *g = ex->g;
-#define A(r, c) m[(r) * 4 + (c)]
-    fm_node cof[3][3];
-    for (int r = 0; r < 3; r++)
-        for (int c = 0; c < 3; c++) {
-            int r1 = (r + 1) % 3, r2 = (r + 2) % 3, c1 = (c + 1) % 3, c2 = (c + 2) % 3;
-            cof[r][c] = fm_sub(g, fm_mul(g, A(r1, c1), A(r2, c2)), fm_mul(g, A(r1, c2), A(r2, c1)));
-        }
-    fm_node det = fm_add(g, fm_add(g, fm_mul(g, A(0, 0), cof[0][0]), fm_mul(g, A(0, 1), cof[0][1])),
-                         fm_mul(g, A(0, 2), cof[0][2]));
-    double k;
-    if (fm_node_is_const(g, det, &k) && k == 0.0)
-        return xfail(ex, at, FM_ERR_INPUT, "fmAffineT: the matrix A is singular (det A = 0)");
-    fm_node rel[3], res[3];
-    for (int r = 0; r < 3; r++) rel[r] = fm_sub(g, xs.elems[r], A(r, 3));
-    for (int r = 0; r < 3; r++) { /* (A^-1)_{rc} = cof[c][r] / det */
-        fm_node s = fm_const(g, 0.0);
-        for (int c = 0; c < 3; c++) s = fm_add(g, s, fm_mul(g, cof[c][r], rel[c]));
-        res[r] = fm_div(g, s, det);
-    }
-#undef A
-    for (int r = 0; r < 3; r++) xs.elems[r] = res[r];
-    *out = fm_const(g, 1.0);
+    fm_affine_t_coords(ex->g, xs.elems, m); /* a singular A is a graph error */
+    *out = fm_const(ex->g, 1.0);
     return check_graph(ex, at);
 }
 

@@ -108,8 +108,4 @@ typedef struct hf_lib_fn {
 const hf_lib_fn *fm_hf_library_find(const char *lower_name);
 const hf_lib_fn *fm_hf_library_at(size_t i); /* NULL past the end */
 
-/* HyperFun's R-functions with alpha (interpreter formulas). */
-fm_node fm_hf_r_union(fm_graph *g, fm_node a, fm_node b, double alpha);
-fm_node fm_hf_r_inter(fm_graph *g, fm_node a, fm_node b, double alpha);
-
 #endif

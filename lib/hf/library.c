@@ -66,33 +66,6 @@ static void axes(int axis, int *u, int *v)
     *v = axis == 2 ? 1 : 2;
 }
 
-/* ------------------------------------------------- R-functions (alpha) -- */
-
-/* HyperFun: (1/(1+alpha)) (f1 + f2 +- sqrt(|f1^2 + f2^2 - 2 alpha f1 f2|)).
- * alpha = 1 is exactly max / min and is built as such (exact distances
- * outside, tight intervals); alpha = 0 drops the zero terms. */
-static fm_node r_op(fm_graph *g, fm_node a, fm_node b, double alpha, int sign)
-{
-    if (alpha == 1.0) return sign > 0 ? fm_max(g, a, b) : fm_min(g, a, b);
-    fm_node s = fm_add(g, fm_square(g, a), fm_square(g, b));
-    if (alpha != 0.0)
-        s = fm_abs(g, fm_sub(g, s, fm_mul(g, fm_const(g, 2.0 * alpha), fm_mul(g, a, b))));
-    fm_node r = sign > 0 ? fm_add(g, fm_add(g, a, b), fm_sqrt(g, s))
-                         : fm_sub(g, fm_add(g, a, b), fm_sqrt(g, s));
-    if (alpha != 0.0) r = fm_mul(g, fm_const(g, 1.0 / (1.0 + alpha)), r);
-    return r;
-}
-
-fm_node fm_hf_r_union(fm_graph *g, fm_node a, fm_node b, double alpha)
-{
-    return r_op(g, a, b, alpha, 1);
-}
-
-fm_node fm_hf_r_inter(fm_graph *g, fm_node a, fm_node b, double alpha)
-{
-    return r_op(g, a, b, alpha, -1);
-}
-
 /* --------------------------------------------------------- primitives -- */
 
 /* hfSphere(x, center, R) = R^2 - |x - center|^2 */
@@ -176,7 +149,14 @@ static fm_node lib_torus_z(ctx_t *c, hf_value *a) { return torus(c, a, 2); }
 /* hfBlock(x, vertex, dx, dy, dz): the slabs s_i = (x_i - v_i)(v_i + d_i - x_i)
  * intersected with HyperFun's library formula for the current alpha:
  * min for alpha = 1, else f = s1 + s2 - sqrt(s1^2 + s2^2 - 2 alpha s1 s2)
- * and again with s3 (no 1/(1+alpha) factor, as in HyperFun's hfBlock). */
+ * and again with s3, which is (1 + alpha) times lib/frep's R_alpha
+ * intersection (HyperFun's hfBlock leaves out the 1/(1+alpha) factor). */
+static fm_node block_join(ctx_t *c, fm_node a, fm_node b)
+{
+    fm_node r = fm_r_inter(c->g, a, b, c->alpha);
+    return c->alpha == 1.0 ? r : mul(c, K(c, 1.0 + c->alpha), r);
+}
+
 static fm_node lib_block(ctx_t *c, hf_value *a)
 {
     fm_node s[3];
@@ -188,14 +168,7 @@ static fm_node lib_block(ctx_t *c, hf_value *a)
         fm_node hi = sub(c, add(c, a[1].elems[i], a[2 + i].scalar), a[0].elems[i]);
         s[i] = mul(c, lo, hi);
     }
-    if (c->alpha == 1.0) return fm_min(c->g, fm_min(c->g, s[0], s[1]), s[2]);
-    fm_node f = s[0];
-    for (int i = 1; i < 3; i++) {
-        fm_node q = add(c, sq(c, f), sq(c, s[i]));
-        if (c->alpha != 0.0) q = sub(c, q, mul(c, K(c, 2.0 * c->alpha), mul(c, f, s[i])));
-        f = sub(c, add(c, f, s[i]), rt(c, q));
-    }
-    return f;
+    return block_join(c, block_join(c, s[0], s[1]), s[2]);
 }
 
 /* hfSuperell(x, center, a, b, c, s1, s2) =
@@ -290,20 +263,17 @@ static fm_node lib_soft(ctx_t *c, hf_value *a)
 /* ------------------------------------------------------------- blends -- */
 
 /* hfBlendUni(f1, f2, a0, a1, a2) = f1 + f2 + sqrt(f1^2 + f2^2)
- *                                  + a0 / (1 + (f1/a1)^2 + (f2/a2)^2) */
+ *                                  + a0 / (1 + (f1/a1)^2 + (f2/a2)^2),
+ * hfBlendInt the same with f1 + f2 - sqrt(...), plus the displacement
+ * (HyperFun adds a0 for both; a negative a0 removes material): lib/frep's
+ * displacement blends (Pasko eq. 6-8). */
 static fm_node blend(ctx_t *c, hf_value *a, int sign)
 {
-    fm_node f1 = a[0].scalar, f2 = a[1].scalar;
     if (!nonzero(c, a[3].scalar, "a1") || !nonzero(c, a[4].scalar, "a2")) return FM_NONE;
-    fm_node disp = dvd(c, a[2].scalar,
-                       add(c, add(c, K(c, 1.0), sq(c, dvd(c, f1, a[3].scalar))),
-                           sq(c, dvd(c, f2, a[4].scalar))));
-    fm_node root = rt(c, add(c, sq(c, f1), sq(c, f2)));
-    fm_node r = sign > 0 ? add(c, add(c, f1, f2), root) : sub(c, add(c, f1, f2), root);
-    return add(c, r, disp);
+    fm_node (*op)(fm_graph *, fm_node, fm_node, fm_node, fm_node, fm_node) =
+        sign > 0 ? fm_blend_union_expr : fm_blend_inter_expr;
+    return op(c->g, a[0].scalar, a[1].scalar, a[2].scalar, a[3].scalar, a[4].scalar);
 }
-/* hfBlendInt: the same with f1 + f2 - sqrt(...), plus the displacement
- * (HyperFun adds a0 for both; a negative a0 removes material). */
 static fm_node lib_blend_uni(ctx_t *c, hf_value *a) { return blend(c, a, 1); }
 static fm_node lib_blend_int(ctx_t *c, hf_value *a) { return blend(c, a, -1); }
 
@@ -325,35 +295,30 @@ static fm_node lib_scale(ctx_t *c, hf_value *a)
     return K(c, 1.0);
 }
 
-/* Rotation of the pair (p, q) of coordinates by theta as HyperFun's inverse
+/* Rotation of the coordinates about `axis` by theta as HyperFun's inverse
  * mappings write it: p' = p cos + q sin, q' = -p sin + q cos, where
- * (p, q) = (y, z) about X, (z, x) about Y and (x, y) about Z. */
-static void rotate_pair(ctx_t *c, fm_node *xs, int axis, fm_node theta)
+ * (p, q) = (y, z) about X, (z, x) about Y and (x, y) about Z: lib/frep's
+ * inverse rotation. */
+static fm_node rotate(ctx_t *c, hf_value *a, int axis, fm_node theta)
 {
-    int p = axis == 0 ? 1 : axis == 1 ? 2 : 0;
-    int q = axis == 0 ? 2 : axis == 1 ? 0 : 1;
-    fm_node ct = un(c, FM_OP_COS, theta), st = un(c, FM_OP_SIN, theta);
-    fm_node np = add(c, mul(c, xs[p], ct), mul(c, xs[q], st));
-    fm_node nq = add(c, fm_neg(c->g, mul(c, xs[p], st)), mul(c, xs[q], ct));
-    xs[p] = np;
-    xs[q] = nq;
+    return fm_rotate_coords(c->g, a[0].elems, axis, theta) ? K(c, 1.0) : FM_NONE;
 }
 
 /* hfRotate3DX(x, theta) (and Y, Z) */
-static fm_node lib_rot_x(ctx_t *c, hf_value *a) { rotate_pair(c, a[0].elems, 0, a[1].scalar); return K(c, 1.0); }
-static fm_node lib_rot_y(ctx_t *c, hf_value *a) { rotate_pair(c, a[0].elems, 1, a[1].scalar); return K(c, 1.0); }
-static fm_node lib_rot_z(ctx_t *c, hf_value *a) { rotate_pair(c, a[0].elems, 2, a[1].scalar); return K(c, 1.0); }
+static fm_node lib_rot_x(ctx_t *c, hf_value *a) { return rotate(c, a, 0, a[1].scalar); }
+static fm_node lib_rot_y(ctx_t *c, hf_value *a) { return rotate(c, a, 1, a[1].scalar); }
+static fm_node lib_rot_z(ctx_t *c, hf_value *a) { return rotate(c, a, 2, a[1].scalar); }
 
 /* hfTwistX(x, x1, x2, theta1, theta2): t = (x - x1)/(x2 - x1),
- * theta = (1 - t) theta1 + t theta2, then the rotation about X by theta. */
+ * theta = (1 - t) theta1 + t theta2, then the rotation about X by theta
+ * (lib/frep's twist is this rotation with theta = rate * x). */
 static fm_node twist(ctx_t *c, hf_value *a, int axis)
 {
     fm_node span = sub(c, a[2].scalar, a[1].scalar);
     if (!nonzero(c, span, "the interval (x2 - x1)")) return FM_NONE;
     fm_node t = dvd(c, sub(c, a[0].elems[axis], a[1].scalar), span);
     fm_node theta = add(c, mul(c, sub(c, K(c, 1.0), t), a[3].scalar), mul(c, t, a[4].scalar));
-    rotate_pair(c, a[0].elems, axis, theta);
-    return K(c, 1.0);
+    return rotate(c, a, axis, theta);
 }
 static fm_node lib_twist_x(ctx_t *c, hf_value *a) { return twist(c, a, 0); }
 static fm_node lib_twist_y(ctx_t *c, hf_value *a) { return twist(c, a, 1); }
@@ -430,13 +395,11 @@ static fm_node lib_dcone_x(ctx_t *c, hf_value *a) { return dcone(c, a, 0); }
 static fm_node lib_dcone_y(ctx_t *c, hf_value *a) { return dcone(c, a, 1); }
 static fm_node lib_dcone_z(ctx_t *c, hf_value *a) { return dcone(c, a, 2); }
 
-/* hfDTorusX(x, center, R, r0) = r0 - sqrt((sqrt((y-cy)^2 + (z-cz)^2) - R)^2 + (x-cx)^2) */
+/* hfDTorusX(x, center, R, r0) = r0 - sqrt((sqrt((y-cy)^2 + (z-cz)^2) - R)^2 + (x-cx)^2):
+ * lib/frep's exact torus. */
 static fm_node dtorus(ctx_t *c, hf_value *a, int axis)
 {
-    int u, v;
-    axes(axis, &u, &v);
-    fm_node ring = sub(c, rt(c, add(c, sq(c, d(c, a, u)), sq(c, d(c, a, v)))), a[2].scalar);
-    return sub(c, a[3].scalar, rt(c, add(c, sq(c, ring), sq(c, d(c, a, axis)))));
+    return fm_torus_expr(c->g, a[0].elems, a[1].elems, axis, a[2].scalar, a[3].scalar);
 }
 static fm_node lib_dtorus_x(ctx_t *c, hf_value *a) { return dtorus(c, a, 0); }
 static fm_node lib_dtorus_y(ctx_t *c, hf_value *a) { return dtorus(c, a, 1); }

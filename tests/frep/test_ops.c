@@ -170,12 +170,29 @@ static void test_blends(void)
         CHECK_NEAR(ev2(g, hu, a, b), fmax(fmax(a, b), 0.25 - a * b), 0);
         CHECK_NEAR(ev2(g, hi, a, b), fmin(fmin(a, b), a * b - 0.25), 0);
     }
+    /* The coefficients as expressions (a language's values): a0 a parameter,
+     * a1 a constant, a2 an expression of z; the same eq. 6-8. */
+    fm_node z = fm_var(g, FM_Z);
+    fm_node bue = fm_blend_union_expr(g, x, y, fm_param(g, "a0", a0), fm_const(g, a1),
+                                      fm_add(g, fm_const(g, a2), z));
+    fm_node bie = fm_blend_inter_expr(g, x, y, fm_param(g, "a0", a0), fm_const(g, a1),
+                                      fm_add(g, fm_const(g, a2), z));
+    for (int i = 0; i < 300; i++) {
+        double a = test_uniform(-2, 2), b = test_uniform(-2, 2), c = test_uniform(-0.3, 0.3);
+        double d = 1 / (1 + (a / a1) * (a / a1) + (b / (a2 + c)) * (b / (a2 + c)));
+        double s = a * a + b * b;
+        CHECK_NEAR(ev4(g, bue, a, b, c, 0), a + b + sqrt(s) + a0 * d, 1e-12);
+        CHECK_NEAR(ev4(g, bie, a, b, c, 0), a + b - sqrt(s) + a0 * d, 1e-12);
+    }
     /* At the corner the displacement is a0 exactly. */
     CHECK_NEAR(ev2(g, bu, 0, 0), a0, 1e-15);
     CHECK_NEAR(ev2(g, ri, 0, 0), -0.4, 1e-15);
     free_graph(g);
     EXPECT_ERROR(fm_blend_union(eg, ex, ey, 1, 0, 1), FM_ERR_INPUT, "non-zero");
     EXPECT_ERROR(fm_blend_inter(eg, ex, ey, NAN, 1, 1), FM_ERR_INPUT, "a0 = nan");
+    EXPECT_ERROR(fm_blend_union_expr(eg, ex, ey, fm_const(eg, 1), fm_const(eg, 1), fm_const(eg, 0)),
+                 FM_ERR_INPUT, "a2 = 0 must be finite and non-zero");
+    EXPECT_ERROR(fm_blend_inter_expr(eg, ex, ey, FM_NONE, ex, ey), FM_ERR_INPUT, "missing");
     EXPECT_ERROR(fm_rho_blend_union(eg, ex, ey, 0), FM_ERR_INPUT, "rho = 0 must be");
     EXPECT_ERROR(fm_rho_blend_inter(eg, ex, ey, -1), FM_ERR_INPUT, "rho = -1");
     EXPECT_ERROR(fm_hyperbolic_blend_union(eg, ex, ey, INFINITY), FM_ERR_INPUT, "a = inf");
@@ -428,6 +445,20 @@ static void test_mappings(void)
     fm_node mc[12];
     for (int i = 0; i < 12; i++) mc[i] = fm_const(g, affine_m[i]);
     check_forward(g, f, fm_affine_t(g, f, mc), fwd_affine, -2, 2, 1e-12);
+    /* The same maps applied to coordinate expressions, then to f: rotation
+     * by a constant angle, a twist (angle 0.8 z), the affine map. */
+    fm_node p[3] = {x, y, z};
+    CHECK(fm_rotate_coords(g, p, FM_Y, fm_const(g, 0.7)));
+    fm_node map[FM_AXES] = {p[0], p[1], p[2], FM_NONE};
+    check_forward(g, f, fm_remap(g, f, map), fwd_rotate_y, -2, 2, 1e-14);
+    fm_node q[3] = {x, y, z};
+    CHECK(fm_rotate_coords(g, q, FM_Z, fm_mul(g, fm_const(g, 0.8), z)));
+    fm_node tmap[FM_AXES] = {q[0], q[1], q[2], FM_NONE};
+    check_forward(g, f, fm_remap(g, f, tmap), fwd_twist_z, -2, 2, 1e-13);
+    fm_node r[3] = {x, y, z};
+    CHECK(fm_affine_t_coords(g, r, mc));
+    fm_node amap[FM_AXES] = {r[0], r[1], r[2], FM_NONE};
+    check_forward(g, f, fm_remap(g, f, amap), fwd_affine, -2, 2, 1e-12);
     CHECK(fm_graph_error(g) == NULL);
     free_graph(g);
 
@@ -444,6 +475,19 @@ static void test_mappings(void)
         fm_node ms[12];
         for (int i = 0; i < 12; i++) ms[i] = fm_const(eg, i < 4 ? (double)(i % 4 == 0) : 0.0);
         expect_error(eg, fm_affine_t(eg, fm_var(eg, FM_X), ms), FM_ERR_INPUT, "singular");
+        free_graph(eg);
+        /* A failed coordinate map leaves the point as it was. */
+        eg = fm_graph_new(0);
+        for (int i = 0; i < 12; i++) ms[i] = fm_const(eg, i < 4 ? (double)(i % 4 == 0) : 0.0);
+        fm_node pa[3] = {fm_var(eg, FM_X), fm_var(eg, FM_Y), fm_var(eg, FM_Z)}, p0 = pa[0];
+        CHECK(!fm_affine_t_coords(eg, pa, ms));
+        CHECK(pa[0] == p0);
+        CHECK_STR_CONTAINS(fm_graph_error(eg)->message, "singular");
+        free_graph(eg);
+        eg = fm_graph_new(0);
+        fm_node pr[3] = {fm_var(eg, FM_X), fm_var(eg, FM_Y), fm_var(eg, FM_Z)};
+        CHECK(!fm_rotate_coords(eg, pr, 3, fm_const(eg, 1)));
+        CHECK_STR_CONTAINS(fm_graph_error(eg)->message, "rotation axis 3");
         free_graph(eg);
     }
 }

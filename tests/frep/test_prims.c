@@ -222,6 +222,40 @@ static void test_torus(void)
     }
     expect_error(g, fm_torus(g, c, axis, 3, -1), FM_ERR_INPUT, "r = -1");
     free_graph(g);
+
+    /* fm_torus_expr: the torus about a coordinate axis at a point and with a
+     * centre and radii given as expressions, against the closed form
+     * r - sqrt((sqrt(l1^2 + l2^2) - R)^2 + l0^2), l = p - c; here p is x
+     * shifted by 0.25 and R a parameter. */
+    g = fm_graph_new(0);
+    fm_node x = fm_var(g, FM_X), y = fm_var(g, FM_Y), z = fm_var(g, FM_Z);
+    fm_node pt[3] = {fm_sub(g, x, fm_const(g, 0.25)), y, z};
+    fm_node cc[3] = {fm_const(g, c[0]), fm_const(g, c[1]), fm_const(g, c[2])};
+    for (int ax = 0; ax < 3; ax++) {
+        fm_node fe = fm_torus_expr(g, pt, cc, ax, fm_param(g, "R", R), fm_const(g, r));
+        for (int i = 0; i < 300; i++) {
+            double p[3], l[3];
+            random_point(p, -5, 5);
+            l[0] = p[0] - 0.25 - c[0];
+            l[1] = p[1] - c[1];
+            l[2] = p[2] - c[2];
+            double ring = sqrt(l[(ax + 1) % 3] * l[(ax + 1) % 3] + l[(ax + 2) % 3] * l[(ax + 2) % 3]);
+            CHECK_NEAR(ev(g, fe, p), r - sqrt((ring - R) * (ring - R) + l[ax] * l[ax]), 1e-12);
+        }
+    }
+    /* About z through c it is fm_torus with axis (0, 0, 1) at the unshifted point. */
+    fm_node id[3] = {x, y, z};
+    const double zaxis[3] = {0, 0, 1};
+    fm_node fz = fm_torus_expr(g, id, cc, FM_Z, fm_const(g, R), fm_const(g, r));
+    fm_node tz = fm_torus(g, c, zaxis, R, r);
+    for (int i = 0; i < 300; i++) {
+        double p[3];
+        random_point(p, -5, 5);
+        CHECK_NEAR(ev(g, fz, p), ev(g, tz, p), 1e-14);
+    }
+    CHECK(fm_graph_error(g) == NULL);
+    expect_error(g, fm_torus_expr(g, id, cc, 3, cc[0], cc[1]), FM_ERR_INPUT, "axis 3");
+    free_graph(g);
 }
 
 static void test_ellipsoid(void)

@@ -76,6 +76,9 @@ static void name_errors(void)
     EXPECT_ERROR("s(x[3]) { array c[3]; c = [1, 2]; s = 1; }", FM_ERR_INPUT, 1, 27,
                  "array 'c' has 3 items, but the list has 2");
     EXPECT_ERROR("s(x[3]) { r_alpha = 2; s = 1; }", FM_ERR_INPUT, 1, 21, "r_alpha must be in [0, 1]");
+    /* lib/frep's time-dependent affine map refuses a singular A (its message) */
+    EXPECT_ERROR("s(x[3]) { r = fmAffineT(x, 1, 0, 0, 0,  2, 0, 0, 0,  0, 0, 1, 0); s = 1; }",
+                 FM_ERR_INPUT, 1, 15, "the matrix is singular (determinant 0)");
     EXPECT_ERROR("s(x[3]) { r_alpha = x[1]; s = 1; }", FM_ERR_INPUT, 1, 21,
                  "r_alpha must be a constant known at compile time");
     EXPECT_ERROR("s(x[3]) { t = 1; }", FM_ERR_INPUT, 1, 1, "object 's' never assigns its result; end it with 's = ...;'");

@@ -88,6 +88,7 @@ static double block(const double x[3], double alpha)
 static double f_block0(const double x[3]) { return block(x, 0); }
 static double f_block_half(const double x[3]) { return block(x, 0.5); }
 static double f_block1(const double x[3]) { return block(x, 1); }
+static double f_block_03(const double x[3]) { return block(x, 0.3); }
 static double f_superell(const double x[3])
 {
     double xy = pow(fabs(D0 / 1), 2 / 0.7) + pow(fabs(D1 / 2), 2 / 0.7);
@@ -332,6 +333,44 @@ static void check_sardf_by_hand(void)
     CHECK_NEAR(eval_at("hfDSub(x[1], x[2], 1, 0.2)", 2, 0.5), -0.5, 1e-14);
 }
 
+/* A program compiled to a tape with its evaluator (NULLs where a step
+ * failed, which the CHECKs report). */
+typedef struct compiled {
+    fm_graph *g;
+    fm_hf_model m;
+    fm_tape *tape;
+    fm_evaluator *ev;
+} compiled;
+
+static void compile_for_eval(const char *src, compiled *c)
+{
+    fm_error err;
+    c->g = fm_graph_new(0);
+    CHECK(fm_hf_compile_string(c->g, src, strlen(src), "lib", NULL, NULL, &c->m, &err) == FM_OK);
+    c->tape = fm_tape_compile(c->g, c->m.root, &err);
+    CHECK(c->tape != NULL);
+    c->ev = c->tape ? fm_evaluator_new(c->tape, &err) : NULL;
+    CHECK(c->ev != NULL);
+}
+
+static void compiled_free(compiled *c)
+{
+    fm_evaluator_free(c->ev);
+    fm_tape_free(c->tape);
+    fm_graph_free(c->g);
+}
+
+/* A random box in [-3, 3]^3 with sides up to max_side (t = 0). */
+static void random_box(fm_interval box[4], double max_side)
+{
+    double w = test_uniform(0.001, max_side);
+    box[3].lo = box[3].hi = 0;
+    for (int i = 0; i < 3; i++) {
+        box[i].lo = test_uniform(-3, 3);
+        box[i].hi = box[i].lo + w * test_rand01();
+    }
+}
+
 /* Interval soundness on random boxes (every sampled value inside the
  * enclosure, the enclosure finite) and the gradient against central
  * differences wherever the function is smooth at the step's scale. */
@@ -339,22 +378,14 @@ static void check_sardf_eval(const char *expr)
 {
     char src[512];
     snprintf(src, sizeof src, "t(x[3], a[1])\n{\nt = %s;\n}\n", expr);
-    fm_graph *g = fm_graph_new(0);
-    fm_hf_model m;
-    fm_error err;
-    CHECK(fm_hf_compile_string(g, src, strlen(src), "lib", NULL, NULL, &m, &err) == FM_OK);
-    fm_tape *tape = fm_tape_compile(g, m.root, &err);
-    CHECK(tape != NULL);
-    fm_evaluator *ev = tape ? fm_evaluator_new(tape, &err) : NULL;
-    CHECK(ev != NULL);
+    compiled c;
+    compile_for_eval(src, &c);
+    fm_graph *g = c.g;
+    fm_evaluator *ev = c.ev;
     int unsound = 0, infinite = 0, grad_bad = 0, smooth = 0;
     for (int b = 0; ev && b < 400; b++) {
-        double w = test_uniform(0.001, 2);
-        fm_interval box[4] = {{0, 0}, {0, 0}, {0, 0}, {0, 0}};
-        for (int i = 0; i < 3; i++) {
-            box[i].lo = test_uniform(-3, 3);
-            box[i].hi = box[i].lo + w * test_rand01();
-        }
+        fm_interval box[4];
+        random_box(box, 2);
         fm_interval r = fm_eval_interval(ev, box);
         if ((!isfinite(r.lo) || !isfinite(r.hi)) && infinite++ < 2)
             fprintf(stderr, "%s: [%g, %g] on [%g, %g] x [%g, %g] x [%g, %g]\n", expr, r.lo, r.hi,
@@ -369,7 +400,7 @@ static void check_sardf_eval(const char *expr)
         }
         double p[4] = {test_uniform(-3, 3), test_uniform(-3, 3), test_uniform(-3, 3), 0}, gr[4];
         double v = fm_eval_grad(ev, p, gr);
-        CHECK_NEAR(v, fm_graph_eval_reference(g, m.root, p), 1e-12);
+        CHECK_NEAR(v, fm_graph_eval_reference(g, c.m.root, p), 1e-12);
         const double h = 1e-6;
         for (int i = 0; i < 3; i++) {
             double q[4] = {p[0], p[1], p[2], 0};
@@ -389,9 +420,7 @@ static void check_sardf_eval(const char *expr)
     CHECK(infinite == 0);
     CHECK(grad_bad == 0);
     CHECK(smooth > 900);
-    fm_evaluator_free(ev);
-    fm_tape_free(tape);
-    fm_graph_free(g);
+    compiled_free(&c);
 }
 
 static void check_sardf_errors(void)
@@ -412,6 +441,107 @@ static void check_sardf_errors(void)
         CHECK_STR_CONTAINS(fm_error_format(&err, buf, sizeof buf), bad[i][1]);
         fm_graph_free(g);
     }
+}
+
+/* ---- the operations hf builds with lib/frep's builders, pinned to the
+ * papers' formulas written out here: Pasko et al. 1995 eq. 2 for | & \ with
+ * r_alpha, eq. 6-8 for the blends, the exact torus, the twist. Point values
+ * must match, and the interval of a box must contain the formula's value at
+ * every sampled point of the box. ---- */
+
+/* Pasko eq. 2: (f1 + f2 + s sqrt(f1^2 + f2^2 - 2 alpha f1 f2)) / (1 + alpha) */
+static double pasko_eq2(double f1, double f2, double alpha, int s)
+{
+    return (f1 + f2 + s * sqrt(f1 * f1 + f2 * f2 - 2 * alpha * f1 * f2)) / (1 + alpha);
+}
+static double op_f1(const double x[3]) { return 1 - x[0] * x[0] - 0.5 * x[1]; }
+static double op_f2(const double x[3]) { return x[1] + 0.5 * x[2] - 0.25; }
+#define OP_F1 "(1 - x[1]^2 - 0.5*x[2])"
+#define OP_F2 "(x[2] + 0.5*x[3] - 0.25)"
+static double f_uni0(const double x[3]) { return pasko_eq2(op_f1(x), op_f2(x), 0, 1); }
+static double f_int0(const double x[3]) { return pasko_eq2(op_f1(x), op_f2(x), 0, -1); }
+static double f_sub0(const double x[3]) { return pasko_eq2(op_f1(x), -op_f2(x), 0, -1); }
+static double f_uni3(const double x[3]) { return pasko_eq2(op_f1(x), op_f2(x), 0.3, 1); }
+static double f_int3(const double x[3]) { return pasko_eq2(op_f1(x), op_f2(x), 0.3, -1); }
+static double f_sub3(const double x[3]) { return pasko_eq2(op_f1(x), -op_f2(x), 0.3, -1); }
+static double f_uni1(const double x[3]) { return pasko_eq2(op_f1(x), op_f2(x), 1, 1); }
+static double f_int1(const double x[3]) { return pasko_eq2(op_f1(x), op_f2(x), 1, -1); }
+static double f_sub1(const double x[3]) { return pasko_eq2(op_f1(x), -op_f2(x), 1, -1); }
+/* alpha = 1: eq. 3, max and min, to the bit */
+static double f_max(const double x[3]) { return fmax(op_f1(x), op_f2(x)); }
+static double f_min(const double x[3]) { return fmin(op_f1(x), op_f2(x)); }
+/* eq. 6-8 with the same f1, f2 */
+static double f_blend_uni_ops(const double x[3])
+{
+    double f1 = op_f1(x), f2 = op_f2(x);
+    return f1 + f2 + sqrt(f1 * f1 + f2 * f2) + 0.8 / (1 + sqr(f1 / 0.6) + sqr(f2 / 1.1));
+}
+static double f_blend_int_ops(const double x[3])
+{
+    double f1 = op_f1(x), f2 = op_f2(x);
+    return f1 + f2 - sqrt(f1 * f1 + f2 * f2) - 0.8 / (1 + sqr(f1 / 0.6) + sqr(f2 / 1.1));
+}
+/* a twisted exact torus: the twist about Z from 0.3 at z = -1 to 1.2 at
+ * z = 2 (twist_angle), then the distance torus about Z through c */
+static double f_twisted_torus(const double x[3])
+{
+    double y[3] = {x[0], x[1], x[2]};
+    rot(&y[0], &y[1], twist_angle(x[2]));
+    double ring = sqrt(sqr(y[0] - C[0]) + sqr(y[1] - C[1])) - 2;
+    return 0.5 - sqrt(sqr(ring) + sqr(y[2] - C[2]));
+}
+
+static void check_eval(const char *stmts, const char *expr, formula f, double tol)
+{
+    check(stmts, expr, f, tol);
+    char src[4096];
+    snprintf(src, sizeof src, "t(x[3], a[1])\n{\n%s%s\nt = %s;\n}\n", prologue, stmts, expr);
+    compiled c;
+    compile_for_eval(src, &c);
+    fm_evaluator *ev = c.ev;
+    int outside = 0, point_bad = 0;
+    for (int b = 0; ev && b < 200; b++) {
+        fm_interval box[4];
+        random_box(box, 1.5);
+        fm_interval r = fm_eval_interval(ev, box);
+        for (int k = 0; k < 30; k++) {
+            double p[4] = {0, 0, 0, 0};
+            for (int i = 0; i < 3; i++) p[i] = test_uniform(box[i].lo, box[i].hi);
+            double want = f(p), got = fm_eval_point(ev, p);
+            /* the formula's value, less its rounding, lies in the enclosure */
+            double slack = tol * (1 + fabs(want));
+            if (!(want >= r.lo - slack && want <= r.hi + slack) && outside++ < 3)
+                fprintf(stderr, "%s%s: formula %.17g at (%g, %g, %g) outside [%.17g, %.17g]\n",
+                        stmts, expr, want, p[0], p[1], p[2], r.lo, r.hi);
+            if (!(fabs(got - want) <= slack) && point_bad++ < 3)
+                fprintf(stderr, "%s%s at (%g, %g, %g): tape %.17g, formula %.17g\n", stmts, expr,
+                        p[0], p[1], p[2], got, want);
+        }
+    }
+    CHECK(outside == 0);
+    CHECK(point_bad == 0);
+    compiled_free(&c);
+}
+
+static void check_ops_against_papers(void)
+{
+    const double tol = 1e-12;
+    check_eval("", OP_F1 " | " OP_F2, f_uni0, tol);
+    check_eval("", OP_F1 " & " OP_F2, f_int0, tol);
+    check_eval("", OP_F1 " \\ " OP_F2, f_sub0, tol);
+    check_eval("r_alpha = 0.3;", OP_F1 " | " OP_F2, f_uni3, tol);
+    check_eval("r_alpha = 0.3;", OP_F1 " & " OP_F2, f_int3, tol);
+    check_eval("r_alpha = 0.3;", OP_F1 " \\ " OP_F2, f_sub3, tol);
+    check_eval("r_alpha = 1;", OP_F1 " | " OP_F2, f_uni1, tol);
+    check_eval("r_alpha = 1;", OP_F1 " & " OP_F2, f_int1, tol);
+    check_eval("r_alpha = 1;", OP_F1 " \\ " OP_F2, f_sub1, tol);
+    check_eval("r_alpha = 1;", OP_F1 " | " OP_F2, f_max, 0);
+    check_eval("r_alpha = 1;", OP_F1 " & " OP_F2, f_min, 0);
+    check_eval("r_alpha = 0.3;", "hfBlock(x, c, 1, 2, 3)", f_block_03, tol);
+    check_eval("", "hfBlendUni(" OP_F1 ", " OP_F2 ", 0.8, 0.6, 1.1)", f_blend_uni_ops, tol);
+    check_eval("", "hfBlendInt(" OP_F1 ", " OP_F2 ", -0.8, 0.6, 1.1)", f_blend_int_ops, tol);
+    check_eval("r = hfTwistZ(xt, -1, 2, 0.3, 1.2);", "hfDTorusZ(xt, c, 2, 0.5)", f_twisted_torus,
+               tol);
 }
 
 int main(void)
@@ -478,5 +608,6 @@ int main(void)
     check_sardf_eval("hfDInt(x[1] - x[3], x[2], 0.7, 0.2)");
     check_sardf_eval("hfDSub(x[1], 0.5*x[2] + x[3], 1.3, 0.1)");
     check_sardf_errors();
+    check_ops_against_papers();
     return test_summary("hf_library");
 }
