@@ -1,0 +1,143 @@
+/* job_internal.h: what the job runner's files share (job.h is the public
+ * side). job.c orchestrates a job; each concern has a file of its own:
+ *   job_tools.c    the tool table built into cutters (custom HyperFun ones too)
+ *   job_program.c  program dispatch (G-code, trajectory) and the stop-at rule
+ *   job_cut.c      the cut loop: the survey pass, batching, cuts, progress
+ *   job_check.c    the collision check's set-up beside the cut
+ *   job_live.c     live jobs: motions from a controller through the same cut
+ *   job_design.c   the design comparison's design and the blame of gouges
+ *   job_resources.c  clocks and the process's memory and CPU time */
+#ifndef FM_JOB_INTERNAL_H
+#define FM_JOB_INTERNAL_H
+
+#include "frep/frep.h"
+#include "job.h"
+
+/* The most motions cut together (one swept-volume field). */
+#define JOB_MAX_BATCH 256
+
+/* ---------------------------------------------------------- tools -- */
+
+/* A built tool, with the HyperFun model behind a custom cutter. */
+typedef struct job_tool {
+    fm_tool tool;
+    fm_graph *graph;
+    fm_tape *tape;
+} job_tool;
+
+typedef struct job_tools {
+    fm_tool_table table; /* when loaded here */
+    const fm_tool_table *use;
+    job_tool *built;
+    size_t count;
+} job_tools;
+
+/* The spec's table (or its file) built into tools; free with
+ * job_tools_free, also on error. */
+fm_status job_tools_load(const fm_job_spec *spec, job_tools *t, fm_error *err);
+void job_tools_free(job_tools *t);
+/* The tool that cuts for a motion: the spindle's, or the table's only tool
+ * when the program never loaded one (T0: many single-tool programs have no
+ * M6). NULL: nothing cuts. */
+const fm_tool *job_tool_for(const job_tools *t, int number);
+
+/* -------------------------------------------------------- program -- */
+
+typedef fm_status (*job_probe_fn)(void *user, const fm_motion *move, int toward, int *tripped,
+                                  double *fraction, int *at_start, fm_error *err);
+
+fm_program_kind job_program_kind(const fm_job_spec *spec);
+/* Interpret the spec's program into sink (probe: G38 moves, NULL: none
+ * trips). */
+fm_status job_run_program(const fm_job_spec *spec, const fm_tool_table *tools,
+                          fm_motion_sink sink, void *user, job_probe_fn probe, fm_error *err);
+
+/* spec.stop_at_line: has the program gone past LINE with this motion? */
+typedef struct job_stop_rule {
+    int line;  /* 0: never stop */
+    int seen;  /* a motion of LINE went by */
+} job_stop_rule;
+
+int job_stop_before(job_stop_rule *r, const fm_motion *m);
+
+/* ------------------------------------------------------------ cut -- */
+
+/* The first pass: the whole program is checked before anything is cut,
+ * and its length gives the progress its denominator. */
+typedef struct job_survey {
+    long motions;
+    double time_total;
+    int max_line;
+    int any_tip;
+    double tip_lo[3], tip_hi[3]; /* box of the tool tip over the program */
+    job_stop_rule stop;
+    int stopped;
+} job_survey;
+
+int job_survey_sink(void *user, const fm_motion *m);
+
+typedef struct job_cutter {
+    const fm_job_spec *spec;
+    const fm_job_hooks *hooks;
+    job_tools *tools;
+    fm_stock *stock;
+    fm_error *err;
+    fm_status status;
+    int stopped;
+
+    fm_motion batch[JOB_MAX_BATCH];
+    size_t batch_count;
+    double batch_length;
+    const fm_tool *batch_tool;
+
+    fm_job_progress progress;
+    double started;
+    job_stop_rule stop;
+    int stopped_at_line;
+    unsigned char *lines_cut; /* bitmap of source lines that cut */
+    size_t lines_cap;
+    long blocks;
+    fm_stock_cut_stats stats; /* summed over cuts */
+    long cuts;
+
+    /* the collision check and its grid (c->stock itself, or a grid of its
+     * own cut alongside) */
+    fm_check *check;
+    fm_stock *check_grid;
+    int check_twin;
+    size_t findings_seen;
+    double check_time;
+} job_cutter;
+
+/* The motion sink of the cutting pass (user: the cutter) and its G38
+ * probe. */
+int job_cut_sink(void *user, const fm_motion *m);
+fm_status job_cut_probe(void *user, const fm_motion *move, int toward, int *tripped,
+                        double *fraction, int *at_start, fm_error *err);
+/* Cut what the batch holds, then report progress. */
+fm_status job_flush_batch(job_cutter *c);
+/* Tell the progress hook where the job is after motion last (nothing is
+ * pending in the batch). */
+void job_report(job_cutter *c, const fm_motion *last);
+
+/* ---------------------------------------------------------- check -- */
+
+fm_status job_check_setup(job_cutter *c, const job_survey *sv, fm_error *err);
+void job_check_free(job_cutter *c);
+
+/* ----------------------------------------------------------- live -- */
+
+fm_status job_run_live(job_cutter *c);
+
+/* --------------------------------------------------------- design -- */
+
+fm_design *job_make_design(const fm_job_spec *spec, const fm_stock *stock, fm_error *err);
+fm_status job_blame_gouges(const fm_job_spec *spec, const job_tools *tools, double voxel,
+                           fm_job_result *result, fm_error *err);
+
+/* ------------------------------------------------------ resources -- */
+
+double job_now_s(void);    /* monotonic clock, s */
+double job_cpu_s(void);    /* CPU time of the process, s */
+
+#endif

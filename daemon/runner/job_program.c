@@ -1,0 +1,84 @@
+/* job_program.c: the one program dispatch: a job's program (G-code of
+ * either dialect, or a parametric trajectory) interpreted into motions
+ * with the spec's options; and the stop-at rule. */
+#include <ctype.h>
+#include <string.h>
+
+#include "job_internal.h"
+#include "toolpaths/gcode/gcode.h"
+#include "toolpaths/tooltable/tooltable.h"
+#include "toolpaths/traj/traj.h"
+
+int fm_path_has_extension(const char *path, const char *ext)
+{
+    size_t n = strlen(path), e = strlen(ext);
+    if (n <= e) return 0;
+    for (size_t i = 0; i < e; i++)
+        if (tolower((unsigned char)path[n - e + i]) != tolower((unsigned char)ext[i])) return 0;
+    return 1;
+}
+
+fm_program_kind job_program_kind(const fm_job_spec *spec)
+{
+    if (spec->program_kind != FM_PROGRAM_AUTO) return spec->program_kind;
+    const char *name = spec->program_path ? spec->program_path : spec->program_name;
+    if (name && fm_path_has_extension(name, ".json")) return FM_PROGRAM_TRAJECTORY;
+    return FM_PROGRAM_GCODE;
+}
+
+fm_status job_run_program(const fm_job_spec *spec, const fm_tool_table *tools,
+                             fm_motion_sink sink, void *user, job_probe_fn probe, fm_error *err)
+{
+    if (!spec->program_path && !spec->program_text)
+        return fm_error_set(err, FM_ERR_INPUT, "no program given");
+    if (job_program_kind(spec) == FM_PROGRAM_TRAJECTORY) {
+        fm_traj_options topt;
+        fm_traj_options_default(&topt);
+        topt.rapid_rate = spec->rapid_rate > 0 ? spec->rapid_rate : topt.rapid_rate;
+        if (spec->program_path) return fm_traj_run_file(spec->program_path, &topt, sink, user, NULL, err);
+        return fm_traj_run_string(spec->program_text, spec->program_length,
+                                  spec->program_name ? spec->program_name : "trajectory", &topt,
+                                  sink, user, NULL, err);
+    }
+    fm_gcode_options gopt;
+    fm_gcode_options_default(&gopt);
+    if (spec->rapid_rate > 0) gopt.rapid_rate = spec->rapid_rate;
+    gopt.tools = tools;
+    gopt.probe = probe;
+    gopt.probe_user = user;
+    if (spec->dialect && !fm_gcode_dialect_parse(spec->dialect, &gopt.dialect))
+        return fm_error_set(err, FM_ERR_INPUT, "dialect '%s': expected linuxcnc or fanuc",
+                            spec->dialect);
+    gopt.subroutine_path = spec->subroutine_path;
+    memcpy(gopt.reference_points, spec->reference_points, sizeof gopt.reference_points);
+    gopt.calculator_input = spec->calculator_input;
+    gopt.machine = spec->machine;
+    if (spec->program_path)
+        return fm_gcode_run_file(spec->program_path, &gopt, sink, user, NULL, err);
+    return fm_gcode_run_string(spec->program_text, spec->program_length,
+                               spec->program_name ? spec->program_name : "program", &gopt, sink,
+                               user, NULL, err);
+}
+
+fm_status fm_job_interpret(const fm_job_spec *spec, fm_motion_sink sink, void *user,
+                           fm_error *err)
+{
+    if (spec->tools) return job_run_program(spec, spec->tools, sink, user, NULL, err);
+    fm_tool_table table;
+    memset(&table, 0, sizeof table);
+    fm_status st = spec->tools_path ? fm_tooltable_load(spec->tools_path, &table, err)
+                                    : fm_error_set(err, FM_ERR_INPUT, "no tool table given");
+    if (st == FM_OK) st = job_run_program(spec, &table, sink, user, NULL, err);
+    fm_tool_table_free(&table);
+    return st;
+}
+
+int job_stop_before(job_stop_rule *r, const fm_motion *m)
+{
+    if (r->line <= 0) return 0;
+    if (m->line == r->line) {
+        r->seen = 1;
+        return 0;
+    }
+    return r->seen || m->line > r->line;
+}
