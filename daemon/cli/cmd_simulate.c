@@ -172,34 +172,7 @@ static int exit_status(fm_status st)
 typedef struct job_file {
     fm_job_doc *doc;
     char dir[PATH_MAX];
-    char paths[FM_JOB_MAX_FIXTURES + 2][PATH_MAX];
-    int path_count;
 } job_file;
-
-static fm_status write_model(job_file *jf, const fm_job_model *m, const char *stem,
-                             char **path_out, fm_error *err)
-{
-    if (!jf->dir[0]) {
-        const char *tmp = getenv("TMPDIR");
-        snprintf(jf->dir, sizeof jf->dir, "%.3000s/frepmill-job-XXXXXX", tmp && *tmp ? tmp : "/tmp");
-        if (!mkdtemp(jf->dir)) {
-            jf->dir[0] = '\0';
-            return fm_error_set(err, FM_ERR_IO, "cannot create a temporary folder: %s",
-                                strerror(errno));
-        }
-    }
-    char *path = jf->paths[jf->path_count++];
-    snprintf(path, PATH_MAX, "%.3000s/%s.%s", jf->dir, stem, m->is_stl ? "stl" : "hf");
-    FILE *f = fopen(path, "wb");
-    size_t n = f ? fwrite(m->data, 1, m->size, f) : 0;
-    if (!f || n != m->size || fclose(f) != 0) {
-        int e = errno;
-        if (f && n != m->size) fclose(f);
-        return fm_error_set(err, FM_ERR_IO, "cannot write %s: %s", path, strerror(e));
-    }
-    *path_out = path;
-    return FM_OK;
-}
 
 static fm_status load_job(const char *path, job_file *jf, fm_error *err)
 {
@@ -238,29 +211,31 @@ static fm_status load_job(const char *path, job_file *jf, fm_error *err)
         return st;
     }
     fm_job_doc *doc = jf->doc;
-    char *model;
-    if (doc->stock_model.size &&
-        ((st = write_model(jf, &doc->stock_model, "stock", &model, err)) != FM_OK ||
-         (st = fm_job_doc_set_stock_file(doc, model, err)) != FM_OK))
-        return st;
-    if (doc->design_model.size &&
-        ((st = write_model(jf, &doc->design_model, "design", &model, err)) != FM_OK ||
-         (st = fm_job_doc_set_design_file(doc, model, err)) != FM_OK))
-        return st;
-    for (int i = 0; i < doc->check.fixture_count; i++) {
-        char stem[32];
-        snprintf(stem, sizeof stem, "fixture%d", i);
-        if ((st = write_model(jf, &doc->fixtures[i], stem, &model, err)) != FM_OK ||
-            (st = fm_job_doc_set_fixture_file(doc, i, model, err)) != FM_OK)
-            return st;
+    if (!doc->stock_model.size && !doc->design_model.size && !doc->check.fixture_count)
+        return FM_OK;
+    const char *tmp = getenv("TMPDIR");
+    snprintf(jf->dir, sizeof jf->dir, "%.3000s/frepmill-job-XXXXXX", tmp && *tmp ? tmp : "/tmp");
+    if (!mkdtemp(jf->dir)) {
+        jf->dir[0] = '\0';
+        return fm_error_set(err, FM_ERR_IO, "cannot create a temporary folder: %s",
+                            strerror(errno));
     }
-    return FM_OK;
+    return fm_job_doc_materialize(doc, jf->dir, NULL, err);
 }
 
 static void job_file_free(job_file *jf)
 {
-    for (int i = 0; i < jf->path_count; i++) unlink(jf->paths[i]);
-    if (jf->dir[0]) rmdir(jf->dir);
+    if (jf->dir[0]) {
+        /* the models fm_job_doc_materialize wrote, then the folder */
+        fm_job_doc *doc = jf->doc;
+        const char *paths[FM_JOB_MAX_FIXTURES + 2] = {doc->stock_model.size ? doc->stock_text : NULL,
+                                                      doc->design_model.size ? doc->design_text
+                                                                             : NULL};
+        for (int i = 0; i < doc->check.fixture_count; i++) paths[2 + i] = doc->fixture_paths[i];
+        for (int i = 0; i < FM_JOB_MAX_FIXTURES + 2; i++)
+            if (paths[i]) unlink(paths[i]);
+        rmdir(jf->dir);
+    }
     fm_job_doc_free(jf->doc);
 }
 

@@ -4,11 +4,13 @@
 #include "job_doc.h"
 
 #include <ctype.h>
+#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "machine.h"
 #include "stock_spec.h"
@@ -710,4 +712,52 @@ fm_status fm_job_doc_check_memory(const fm_job_doc *doc, size_t budget, fm_error
 size_t fm_job_doc_program_bytes(const fm_job_doc *doc)
 {
     return doc->program_length;
+}
+
+static fm_status plain_write(const char *dir, const char *name, const void *data, size_t size,
+                             fm_error *err)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    FILE *f = fopen(path, "wb");
+    size_t n = f ? fwrite(data, 1, size, f) : 0;
+    int closed = f ? fclose(f) : EOF;
+    if (!f || n != size || closed != 0)
+        return fm_error_set(err, FM_ERR_IO, "cannot write %s: %s", path, strerror(errno));
+    return FM_OK;
+}
+
+static fm_status materialize_one(const char *dir, const char *stem, const fm_job_model *m,
+                                 fm_job_doc_writer write, char *path, size_t size, fm_error *err)
+{
+    char name[64];
+    snprintf(name, sizeof name, "%s.%s", stem, m->is_stl ? "stl" : "hf");
+    snprintf(path, size, "%s/%s", dir, name);
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISREG(st.st_mode) && (size_t)st.st_size == m->size) return FM_OK;
+    return (write ? write : plain_write)(dir, name, m->data, m->size, err);
+}
+
+fm_status fm_job_doc_materialize(fm_job_doc *doc, const char *dir, fm_job_doc_writer write,
+                                 fm_error *err)
+{
+    char path[4096];
+    if (strlen(dir) > sizeof path - 64)
+        return fm_error_set(err, FM_ERR_INPUT, "the folder %.64s... is too long", dir);
+    fm_status st = FM_OK;
+    if (doc->stock_model.size) {
+        st = materialize_one(dir, "stock", &doc->stock_model, write, path, sizeof path, err);
+        if (st == FM_OK) st = fm_job_doc_set_stock_file(doc, path, err);
+    }
+    if (st == FM_OK && doc->design_model.size) {
+        st = materialize_one(dir, "design", &doc->design_model, write, path, sizeof path, err);
+        if (st == FM_OK) st = fm_job_doc_set_design_file(doc, path, err);
+    }
+    for (int i = 0; st == FM_OK && i < doc->check.fixture_count; i++) {
+        char stem[32];
+        snprintf(stem, sizeof stem, "fixture%d", i);
+        st = materialize_one(dir, stem, &doc->fixtures[i], write, path, sizeof path, err);
+        if (st == FM_OK) st = fm_job_doc_set_fixture_file(doc, i, path, err);
+    }
+    return st;
 }

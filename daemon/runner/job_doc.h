@@ -130,6 +130,20 @@ fm_status fm_job_doc_set_stock_file(fm_job_doc *doc, const char *path, fm_error 
 fm_status fm_job_doc_set_fixture_file(fm_job_doc *doc, int i, const char *path, fm_error *err);
 fm_status fm_job_doc_set_design_file(fm_job_doc *doc, const char *path, fm_error *err);
 
+/* Write one file durably or not: the shape of the daemon's crash-safe
+ * writer (fm_store_write_atomic). */
+typedef fm_status (*fm_job_doc_writer)(const char *dir, const char *name, const void *data,
+                                       size_t size, fm_error *err);
+
+/* The one place a document's inline models become files: the stock, the
+ * design and each fixture are written to dir as stock.EXT, design.EXT and
+ * fixtureN.EXT (EXT: stl or hf) with write (NULL: a plain write), and the
+ * run spec is pointed at them. A file of the model's size already there is
+ * kept (a document read back at start finds its models where it left
+ * them). The CLI (--job) and the daemon's job store both call it. */
+fm_status fm_job_doc_materialize(fm_job_doc *doc, const char *dir, fm_job_doc_writer write,
+                                 fm_error *err);
+
 /* Would the stock's grid exceed budget bytes? Known before anything is
  * built for box and cylinder stocks only (others pass and meet the budget
  * when built). FM_ERR_LIMIT, reason "memory_budget", when over. */

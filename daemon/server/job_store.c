@@ -49,37 +49,11 @@ void fm_job_store_write_result(job *j)
     json_decref(result);
 }
 
-/* Write one model file unless the same bytes' size is there already (a
- * document read back at start finds its models where it left them). */
-static fm_status write_model(const char *dir, const char *name, const fm_job_model *m,
-                             char *path, size_t size, fm_error *err)
-{
-    snprintf(path, size, "%s/%s", dir, name);
-    struct stat st;
-    if (stat(path, &st) == 0 && S_ISREG(st.st_mode) && (size_t)st.st_size == m->size) return FM_OK;
-    return fm_store_write_atomic(dir, name, m->data, m->size, err);
-}
-
+/* The models beside spec.json (the runner's one writer of inline models,
+ * crash-safe here). */
 fm_status fm_job_store_write_models(fm_job_doc *doc, const char *dir, fm_error *err)
 {
-    char path[PATH_MAX], name[64];
-    fm_status st = FM_OK;
-    if (doc->stock_model.size) {
-        snprintf(name, sizeof name, "stock.%s", doc->stock_model.is_stl ? "stl" : "hf");
-        st = write_model(dir, name, &doc->stock_model, path, sizeof path, err);
-        if (st == FM_OK) st = fm_job_doc_set_stock_file(doc, path, err);
-    }
-    if (st == FM_OK && doc->design_model.size) {
-        snprintf(name, sizeof name, "design.%s", doc->design_model.is_stl ? "stl" : "hf");
-        st = write_model(dir, name, &doc->design_model, path, sizeof path, err);
-        if (st == FM_OK) st = fm_job_doc_set_design_file(doc, path, err);
-    }
-    for (int i = 0; st == FM_OK && i < doc->check.fixture_count; i++) {
-        snprintf(name, sizeof name, "fixture%d.%s", i, doc->fixtures[i].is_stl ? "stl" : "hf");
-        st = write_model(dir, name, &doc->fixtures[i], path, sizeof path, err);
-        if (st == FM_OK) st = fm_job_doc_set_fixture_file(doc, i, path, err);
-    }
-    return st;
+    return fm_job_doc_materialize(doc, dir, fm_store_write_atomic, err);
 }
 
 fm_status fm_job_store_create(const char *jobs_dir, const char *id, double created,

@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "runner/job_doc.h"
 #include "runner/stock_spec.h"
@@ -459,6 +460,101 @@ static void test_design(void)
     }
 }
 
+/* A file's whole contents, NUL-terminated (NULL when it cannot be read). */
+static char *slurp(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    char *buf = calloc(1, 4096);
+    *size = buf ? fread(buf, 1, 4095, f) : 0;
+    fclose(f);
+    return buf;
+}
+
+static int writes_seen;
+static fm_status counting_write(const char *dir, const char *name, const void *data, size_t size,
+                                fm_error *err)
+{
+    writes_seen++;
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    FILE *f = fopen(path, "wb");
+    if (!f) return fm_error_set(err, FM_ERR_IO, "cannot write %s", path);
+    fwrite(data, 1, size, f);
+    fclose(f);
+    return FM_OK;
+}
+
+/* fm_job_doc_materialize: the stock, design and fixtures of a document
+ * become files named by their kind, the run spec points at them, the bytes
+ * are the document's (the STL decoded from base64), and a second call finds
+ * them there and writes nothing. */
+static void test_materialize(void)
+{
+    /* 84 bytes of binary STL (an empty mesh's header and count) in base64:
+     * 84 zero bytes are 112 'A's. */
+    char stl[113];
+    memset(stl, 'A', 112);
+    stl[112] = '\0';
+    char text[2048];
+    snprintf(text, sizeof text,
+             "{\"stock\": {\"hyperfun\": \"my_model(x[3], a[1]) { my_model = 1 - x[1]*x[1]; }\"}, "
+             "\"tools\": %s, \"program\": {\"gcode\": \"G0 X1\"}, "
+             "\"design\": {\"stl_base64\": \"%s\"}, "
+             "\"fixtures\": [{\"hyperfun\": \"f(x[3], a[1]) { f = 1; }\", \"name\": \"vise\"}]}",
+             TOOLS, stl);
+    fm_error err;
+    fm_job_doc *doc = parse(text, &err);
+    CHECK(doc != NULL);
+    if (!doc) return;
+    CHECK(doc->spec.stock_spec == NULL); /* an inline model has no file yet */
+    char dir[] = "/tmp/fm-test-materialize-XXXXXX";
+    CHECK(mkdtemp(dir) != NULL);
+    writes_seen = 0;
+    CHECK(fm_job_doc_materialize(doc, dir, counting_write, &err) == FM_OK);
+    CHECK(writes_seen == 3);
+    char want[256];
+    snprintf(want, sizeof want, "%s/stock.hf", dir);
+    CHECK(doc->spec.stock_spec && !strcmp(doc->spec.stock_spec, want));
+    size_t n = 0;
+    char *got = slurp(want, &n);
+    CHECK(got && n == strlen("my_model(x[3], a[1]) { my_model = 1 - x[1]*x[1]; }") &&
+          !strcmp(got, "my_model(x[3], a[1]) { my_model = 1 - x[1]*x[1]; }"));
+    free(got);
+    snprintf(want, sizeof want, "%s/design.stl", dir);
+    CHECK(doc->spec.design_path && !strcmp(doc->spec.design_path, want));
+    got = slurp(want, &n);
+    int zeros = got && n == 84;
+    for (size_t i = 0; zeros && i < n; i++) zeros = got[i] == 0;
+    CHECK(zeros);
+    free(got);
+    snprintf(want, sizeof want, "%s/fixture0.hf", dir);
+    CHECK(doc->spec.check && doc->spec.check->fixture_count == 1 &&
+          !strcmp(doc->spec.check->fixtures[0], want));
+    /* read back at start: the files are there, nothing is written again */
+    writes_seen = 0;
+    CHECK(fm_job_doc_materialize(doc, dir, counting_write, &err) == FM_OK);
+    CHECK(writes_seen == 0);
+    /* the plain writer (NULL) writes a fresh folder too */
+    char dir2[] = "/tmp/fm-test-materialize-XXXXXX";
+    CHECK(mkdtemp(dir2) != NULL);
+    CHECK(fm_job_doc_materialize(doc, dir2, NULL, &err) == FM_OK);
+    snprintf(want, sizeof want, "%s/fixture0.hf", dir2);
+    got = slurp(want, &n);
+    CHECK(got && !strcmp(got, "f(x[3], a[1]) { f = 1; }"));
+    free(got);
+    const char *names[] = {"stock.hf", "design.stl", "fixture0.hf"};
+    for (int i = 0; i < 3; i++) {
+        snprintf(want, sizeof want, "%s/%s", dir, names[i]);
+        unlink(want);
+        snprintf(want, sizeof want, "%s/%s", dir2, names[i]);
+        unlink(want);
+    }
+    rmdir(dir);
+    rmdir(dir2);
+    fm_job_doc_free(doc);
+}
+
 int main(void)
 {
     test_job_ok();
@@ -470,5 +566,6 @@ int main(void)
     test_memory();
     test_stock_spec();
     test_base64();
+    test_materialize();
     return test_summary("job_doc");
 }
