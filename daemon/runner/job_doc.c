@@ -236,14 +236,10 @@ static fm_status parse_tools(fm_job_doc *doc, json_t *tools, const fm_job_doc_ru
 {
     if (!json_is_object(tools))
         return refuse(err, "bad_type", "tools must be the JSON tool table (an object)");
-    /* Indented: a message's line and column then point into a readable
-     * form of the table. */
-    char *text = json_dumps(tools, JSON_INDENT(1));
-    if (!text) return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    /* parsed once, with the document: no text in between */
     fm_error terr;
     fm_error_clear(&terr);
-    fm_status st = fm_tooltable_parse_json(text, strlen(text), "tools", &doc->tools, &terr);
-    free(text);
+    fm_status st = fm_tooltable_from_json(tools, "tools", &doc->tools, &terr);
     if (st != FM_OK) return refuse(err, "bad_tools", "tools: %s", terr.message);
     if (doc->tools.count == 0) return refuse(err, "bad_tools", "tools: the table has no tools");
     for (size_t i = 0; i < doc->tools.count && !rules->allow_files; i++)

@@ -126,9 +126,41 @@ static void test_tbl(void)
     CHECK(fm_tooltable_load("no/such/file.tbl", &tt, &err) == FM_ERR_IO);
 }
 
+/* fm_tooltable_from_json: a table already parsed (a job document's) gives
+ * what its text gives: an inch table's diameter 0.25 in is 6.35 mm, and a
+ * flute length missing from an object is refused by field. */
+static void test_from_json(void)
+{
+    json_t *root = json_loads("{\"units\": \"inch\", \"tools\": [{\"number\": 3, \"shape\": "
+                              "\"ball\", \"diameter\": 0.25, \"flute_length\": 1, "
+                              "\"length\": 2}]}",
+                              0, NULL);
+    CHECK(root != NULL);
+    fm_tool_table table;
+    fm_error err;
+    CHECK(fm_tooltable_from_json(root, "tools", &table, &err) == FM_OK);
+    CHECK(table.count == 1);
+    if (table.count == 1) {
+        CHECK(table.tools[0].number == 3);
+        CHECK_NEAR(table.tools[0].diameter, 6.35, 1e-12);
+        CHECK_NEAR(table.tools[0].flute_length, 25.4, 1e-12);
+    }
+    fm_tool_table_free(&table);
+    json_object_del(json_array_get(json_object_get(root, "tools"), 0), "flute_length");
+    CHECK(fm_tooltable_from_json(root, "tools", &table, &err) == FM_ERR_INPUT);
+    CHECK_STR_CONTAINS(err.message, "flute_length");
+    CHECK(table.count == 0 && table.tools == NULL);
+    json_decref(root);
+    json_t *list = json_array();
+    CHECK(fm_tooltable_from_json(list, "tools", &table, &err) == FM_ERR_INPUT);
+    CHECK_STR_CONTAINS(err.message, "expected an object");
+    json_decref(list);
+}
+
 int main(void)
 {
     test_json();
     test_tbl();
+    test_from_json();
     return test_summary("tooltable_unit");
 }

@@ -229,8 +229,8 @@ static fm_status parse_tool(jctx *c, json_t *t, fm_tool_spec *s)
     return FM_OK;
 }
 
-fm_status fm_tooltable_parse_json(const char *text, size_t len, const char *name,
-                                  fm_tool_table *out, fm_error *err)
+fm_status fm_tooltable_from_json(json_t *root, const char *name, fm_tool_table *out,
+                                 fm_error *err)
 {
     fm_error local;
     if (!err) err = &local;
@@ -238,14 +238,6 @@ fm_status fm_tooltable_parse_json(const char *text, size_t len, const char *name
     out->count = 0;
     out->tools = NULL;
     if (!name) name = "";
-    if (len > FM_TOOLTABLE_MAX_BYTES)
-        return fm_error_at(err, FM_ERR_LIMIT, name, 0, 0, "tool table larger than %u bytes",
-                           FM_TOOLTABLE_MAX_BYTES);
-    json_error_t je;
-    json_t *root = json_loadb(text, len, JSON_REJECT_DUPLICATES, &je);
-    if (!root)
-        return fm_error_at(err, FM_ERR_INPUT, name, je.line > 0 ? je.line : 0,
-                           je.column > 0 ? je.column : 0, "invalid JSON: %s", je.text);
     fm_status st = FM_OK;
     jctx c = {name, err, 1.0, 0, -1};
     if (!json_is_object(root)) {
@@ -304,8 +296,30 @@ fm_status fm_tooltable_parse_json(const char *text, size_t len, const char *name
         out->count = i + 1;
     }
 done:
-    json_decref(root);
     if (st) fm_tool_table_free(out);
+    return st;
+}
+
+
+fm_status fm_tooltable_parse_json(const char *text, size_t len, const char *name,
+                                  fm_tool_table *out, fm_error *err)
+{
+    fm_error local;
+    if (!err) err = &local;
+    fm_error_clear(err);
+    out->count = 0;
+    out->tools = NULL;
+    if (!name) name = "";
+    if (len > FM_TOOLTABLE_MAX_BYTES)
+        return fm_error_at(err, FM_ERR_LIMIT, name, 0, 0, "tool table larger than %u bytes",
+                           FM_TOOLTABLE_MAX_BYTES);
+    json_error_t je;
+    json_t *root = json_loadb(text, len, JSON_REJECT_DUPLICATES, &je);
+    if (!root)
+        return fm_error_at(err, FM_ERR_INPUT, name, je.line > 0 ? je.line : 0,
+                           je.column > 0 ? je.column : 0, "invalid JSON: %s", je.text);
+    fm_status st = fm_tooltable_from_json(root, name, out, err);
+    json_decref(root);
     return st;
 }
 

@@ -4,6 +4,7 @@
 #ifndef FM_TOOLTABLE_H
 #define FM_TOOLTABLE_H
 
+#include <jansson.h>
 #include <stddef.h>
 
 #include "core/core.h"
@@ -17,6 +18,11 @@ fm_status fm_tooltable_load(const char *path, fm_tool_table *out, fm_error *err)
 /* Parse text held by the caller; name is used in error messages. */
 fm_status fm_tooltable_parse_json(const char *text, size_t len, const char *name,
                                   fm_tool_table *out, fm_error *err);
+/* The JSON form already parsed (a job document's "tools", read once with
+ * the document): the same validation, no text in between; a reference to
+ * root is not taken. */
+fm_status fm_tooltable_from_json(json_t *root, const char *name, fm_tool_table *out,
+                                 fm_error *err);
 fm_status fm_tooltable_parse_tbl(const char *text, size_t len, const char *name,
                                  fm_tool_table *out, fm_error *err);
 
