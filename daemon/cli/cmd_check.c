@@ -4,10 +4,8 @@
  * Findings go to standard output (or --report) as JSON, a summary to
  * standard error; the exit status says clean (0), findings (1), bad input
  * (2), resource limit (3), I/O (4). */
-#include <ctype.h>
 #include <errno.h>
 #include <jansson.h>
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -15,11 +13,10 @@
 #include "check/check.h"
 #include "runner/check_pass.h"
 #include "commands.h"
-#include "toolpaths/gcode/gcode.h"
 #include "runner/findings_json.h"
+#include "job_flags.h"
 #include "runner/job.h"
 
-#define CHECK_MAX_FIXTURES 32
 #define CHECK_DEFAULT_VOXEL FM_CHECK_PASS_VOXEL
 
 static void usage(FILE *out)
@@ -52,28 +49,9 @@ static void usage(FILE *out)
             CHECK_DEFAULT_VOXEL);
 }
 
-static int parse_double(const char *s, double *out)
-{
-    char *end;
-    errno = 0;
-    *out = strtod(s, &end);
-    return end != s && *end == '\0' && errno != ERANGE && isfinite(*out);
-}
-
 typedef struct check_run {
     fm_check *check;
 } check_run;
-
-static int exit_status(fm_status st)
-{
-    switch (st) {
-    case FM_OK: return 0;
-    case FM_ERR_LIMIT: return 3;
-    case FM_ERR_IO: return 4;
-    case FM_ERR_INPUT: return 2;
-    default: return 5;
-    }
-}
 
 static void summary(const fm_check *check, const fm_job_result *res)
 {
@@ -97,87 +75,42 @@ static void summary(const fm_check *check, const fm_job_result *res)
     }
 }
 
+/* The job's flags and the document keys they set (job_flags.h): the
+ * check's options are the document's options.check. */
+static const fm_job_flag CHECK_FLAGS[] = {
+    {"PROGRAM", "program.file", FM_JOB_FLAG_TEXT},
+    {"--stock", "stock", FM_JOB_FLAG_TEXT},
+    {"--tools", "tools", FM_JOB_FLAG_TEXT},
+    {"--fixture", "fixtures", FM_JOB_FLAG_FIXTURE},
+    {"--machine", "machine", FM_JOB_FLAG_TEXT},
+    {"--clearance", "options.check.clearance", FM_JOB_FLAG_NUMBER},
+    {"--rapid-clearance", "options.check.rapid_clearance", FM_JOB_FLAG_NUMBER},
+    {"--tolerance", "options.check.tolerance", FM_JOB_FLAG_NUMBER},
+    {"--max-ramp", "options.check.max_ramp", FM_JOB_FLAG_NUMBER},
+    {"--voxel", "options.check.voxel", FM_JOB_FLAG_NUMBER},
+    {"--rapid-rate", "options.rapid_rate", FM_JOB_FLAG_NUMBER},
+    {"--dialect", "options.dialect", FM_JOB_FLAG_TEXT},
+    {"--subroutine-path", "options.subroutine_path", FM_JOB_FLAG_TEXT},
+    {"--calculator-input", "options.calculator_input", FM_JOB_FLAG_SWITCH},
+    {NULL, NULL, 0}};
+
 int fm_cmd_check(int argc, char **argv)
 {
-    fm_check_pass_input in;
-    fm_check_pass_input_default(&in);
-    fm_job_spec spec = in.spec;
-    spec.stock.voxel_mm = CHECK_DEFAULT_VOXEL;
-    fm_check_options opt = in.check.options;
-    const char *fixtures[CHECK_MAX_FIXTURES];
-    int fixture_count = 0;
-    const char *report_path = NULL, *machine_path = NULL;
-    double rapid_rate = 0;
-
+    const char *report_path = NULL;
+    fm_job_flags flags = {.command = "frepmill check", .table = CHECK_FLAGS};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
-        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-        double d;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             usage(stdout);
             return 0;
-        } else if (a[0] != '-' || !a[1]) {
-            if (spec.program_path) {
-                fprintf(stderr, "frepmill check: more than one program given ('%s' and '%s')\n",
-                        spec.program_path, a);
-                return 2;
-            }
-            spec.program_path = a;
-            continue;
-        } else if (!strcmp(a, "--calculator-input")) {
-            spec.calculator_input = 1;
-            continue;
         }
-        if (!v) {
-            fprintf(stderr, "frepmill check: %s needs a value\n", a);
-            return 2;
-        }
-        i++;
-        if (!strcmp(a, "--stock")) {
-            spec.stock_spec = v;
-        } else if (!strcmp(a, "--tools")) {
-            spec.tools_path = v;
-        } else if (!strcmp(a, "--fixture")) {
-            if (fixture_count == CHECK_MAX_FIXTURES) {
-                fprintf(stderr, "frepmill check: at most %d fixtures\n", CHECK_MAX_FIXTURES);
-                return 2;
-            }
-            if (!fm_path_has_extension(v, ".hf") && !fm_path_has_extension(v, ".stl")) {
-                fprintf(stderr, "frepmill check: --fixture %s: give a .hf model or an .stl mesh\n", v);
-                return 2;
-            }
-            fixtures[fixture_count++] = v;
-        } else if (!strcmp(a, "--machine")) {
-            machine_path = v;
+        int taken = fm_job_flags_take(&flags, argc, argv, &i);
+        if (taken < 0) return 2;
+        if (taken) continue;
+        if (!strcmp(a, "--report") && i + 1 < argc) {
+            report_path = argv[++i];
         } else if (!strcmp(a, "--report")) {
-            report_path = v;
-        } else if (!strcmp(a, "--dialect")) {
-            fm_gcode_dialect dialect;
-            if (!fm_gcode_dialect_parse(v, &dialect)) {
-                fprintf(stderr, "frepmill check: --dialect %s: expected linuxcnc or fanuc\n", v);
-                return 2;
-            }
-            spec.dialect = v;
-        } else if (!strcmp(a, "--subroutine-path")) {
-            spec.subroutine_path = v;
-        } else if (!strcmp(a, "--clearance") && parse_double(v, &d) && d >= 0) {
-            opt.clearance_mm[FM_CHECK_PART_SHANK] = d;
-            opt.clearance_mm[FM_CHECK_PART_HOLDER] = d;
-            opt.clearance_mm[FM_CHECK_PART_HEAD] = d;
-        } else if (!strcmp(a, "--rapid-clearance") && parse_double(v, &d) && d >= 0) {
-            opt.clearance_mm[FM_CHECK_PART_FLUTES] = d;
-        } else if (!strcmp(a, "--tolerance") && parse_double(v, &d) && d > 0) {
-            opt.tolerance_mm = d;
-        } else if (!strcmp(a, "--max-ramp") && parse_double(v, &d) && d >= 0 && d <= 90) {
-            opt.max_ramp_deg = d;
-        } else if (!strcmp(a, "--voxel") && parse_double(v, &d) && d > 0) {
-            spec.stock.voxel_mm = d;
-        } else if (!strcmp(a, "--rapid-rate") && parse_double(v, &d) && d > 0) {
-            rapid_rate = d;
-        } else if (!strcmp(a, "--clearance") || !strcmp(a, "--rapid-clearance") ||
-                   !strcmp(a, "--tolerance") || !strcmp(a, "--max-ramp") ||
-                   !strcmp(a, "--voxel") || !strcmp(a, "--rapid-rate")) {
-            fprintf(stderr, "frepmill check: %s %s: not a valid value\n", a, v);
+            fprintf(stderr, "frepmill check: %s needs a value\n", a);
             return 2;
         } else {
             fprintf(stderr, "frepmill check: unknown option %s\n", a);
@@ -185,44 +118,40 @@ int fm_cmd_check(int argc, char **argv)
             return 2;
         }
     }
-    if (!spec.program_path || !spec.stock_spec || !spec.tools_path) {
-        fprintf(stderr, "frepmill check: %s\n",
-                !spec.program_path ? "no PROGRAM given"
-                : !spec.stock_spec ? "no --stock given"
-                                   : "no --tools given");
+    const char *missing = !fm_job_flags_value(&flags, "PROGRAM") ? "no PROGRAM given"
+                          : !fm_job_flags_value(&flags, "--stock") ? "no --stock given"
+                          : !fm_job_flags_value(&flags, "--tools") ? "no --tools given"
+                                                                   : NULL;
+    if (missing) {
+        fprintf(stderr, "frepmill check: %s\n", missing);
         usage(stderr);
         return 2;
     }
 
+    /* flags -> job document (the check on) -> the check's pass, as the
+     * daemon's POST /v1/check runs it */
+    fm_job_doc *doc = NULL;
+    int status = fm_job_flags_document(&flags, json_pack("{s:{s:{}}}", "options", "check"), &doc);
+    if (status) return status;
+    fm_check_pass_input in;
+    fm_check_pass_input_default(&in);
+    in.spec = doc->spec;
+    in.spec.check = NULL;
+    in.check = doc->check;
     fm_error err;
     fm_error_clear(&err);
     char buf[1024];
-    if (machine_path) {
-        if (fm_check_machine_load(machine_path, &opt.machine, &err) != FM_OK) {
-            fprintf(stderr, "frepmill check: %s\n", fm_error_format(&err, buf, sizeof buf));
-            return 2;
-        }
-        if (opt.machine.rapid_rate > 0) spec.rapid_rate = opt.machine.rapid_rate;
-        memcpy(spec.reference_points, opt.machine.reference_points, sizeof spec.reference_points);
-        spec.machine = &opt.machine.chain; /* A B C words turn its rotary axes */
-    }
-    if (rapid_rate > 0) spec.rapid_rate = rapid_rate;
-
-    in.spec = spec;
-    in.check.voxel_mm = spec.stock.voxel_mm;
-    in.check.options = opt;
-    for (int i = 0; i < fixture_count; i++) in.check.fixtures[i] = fixtures[i];
-    in.check.fixture_count = fixture_count;
     check_run run = {0};
     fm_job_result result;
     fm_status st = fm_check_pass_run(&in, &run.check, &result, &err);
     if (st != FM_OK) {
         fprintf(stderr, "frepmill check: %s\n", fm_error_format(&err, buf, sizeof buf));
-        return exit_status(st);
+        fm_job_doc_free(doc);
+        return fm_job_flags_exit_status(st);
     }
     summary(run.check, &result);
 
-    int status = fm_check_count(run.check) ? 1 : 0;
+    status = fm_check_count(run.check) ? 1 : 0;
     json_t *report = fm_findings_json(run.check);
     int rc;
     if (report_path && strcmp(report_path, "-")) {
@@ -238,5 +167,6 @@ int fm_cmd_check(int argc, char **argv)
         status = 4;
     }
     fm_check_free(run.check);
+    fm_job_doc_free(doc);
     return status;
 }

@@ -7,10 +7,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "runner/job.h"
 #include "runner/machine.h"
 #include "toolpaths/gcode/gcode.h"
 #include "toolpaths/tooltable/tooltable.h"
-#include "toolpaths/traj/traj.h"
 
 static void usage(FILE *out)
 {
@@ -96,11 +96,15 @@ static void print_message(void *user, int line, const char *text)
 
 int fm_cmd_motions(int argc, char **argv)
 {
-    const char *program = NULL, *tools_path = NULL, *machine_path = NULL;
+    const char *tools_path = NULL, *machine_path = NULL;
     fm_check_machine machine;
-    int rapid_given = 0;
-    fm_gcode_options opt;
-    fm_gcode_options_default(&opt);
+    /* the program as a job's (the runner's one dispatch), and what only
+     * this command asks of the interpreters */
+    fm_job_spec spec;
+    fm_job_spec_default(&spec);
+    spec.rapid_rate = 0; /* the interpreters' own unless given */
+    long skip = 0;
+    int start_inch = 0, block_delete = 0, messages = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
@@ -115,51 +119,51 @@ int fm_cmd_motions(int argc, char **argv)
             }
         } else if (!strcmp(a, "--rapid-rate") && i + 1 < argc) {
             char *end;
-            opt.rapid_rate = strtod(argv[++i], &end);
-            rapid_given = 1;
-            if (*end || !(opt.rapid_rate > 0)) {
+            spec.rapid_rate = strtod(argv[++i], &end);
+            if (*end || !(spec.rapid_rate > 0)) {
                 fprintf(stderr, "frepmill motions: --rapid-rate '%s'; expected mm/min > 0\n",
                         argv[i]);
                 return 2;
             }
         } else if (!strcmp(a, "--skip") && i + 1 < argc) {
             char *end;
-            opt.skip_motions = strtol(argv[++i], &end, 10);
-            if (*end || opt.skip_motions < 0) {
+            skip = strtol(argv[++i], &end, 10);
+            if (*end || skip < 0) {
                 fprintf(stderr, "frepmill motions: --skip '%s'; expected a count >= 0\n", argv[i]);
                 return 2;
             }
         } else if (!strcmp(a, "--machine") && i + 1 < argc) {
             machine_path = argv[++i];
         } else if (!strcmp(a, "--inch")) {
-            opt.start_inch = 1;
+            start_inch = 1;
         } else if (!strcmp(a, "--block-delete")) {
-            opt.block_delete = 1;
+            block_delete = 1;
         } else if (!strcmp(a, "--subroutine-path") && i + 1 < argc) {
-            opt.subroutine_path = argv[++i];
+            spec.subroutine_path = argv[++i];
         } else if (!strcmp(a, "--messages")) {
-            opt.message = print_message;
-            opt.message_user = stdout;
+            messages = 1;
         } else if (!strcmp(a, "--dialect") && i + 1 < argc) {
-            if (!fm_gcode_dialect_parse(argv[++i], &opt.dialect)) {
+            fm_gcode_dialect dialect;
+            if (!fm_gcode_dialect_parse(argv[++i], &dialect)) {
                 fprintf(stderr, "frepmill motions: --dialect '%s'; expected linuxcnc or fanuc\n",
                         argv[i]);
                 return 2;
             }
+            spec.dialect = argv[i];
         } else if (!strcmp(a, "--calculator-input")) {
-            opt.calculator_input = 1;
+            spec.calculator_input = 1;
         } else if (a[0] == '-' && a[1]) {
             fprintf(stderr, "frepmill motions: unknown or incomplete option '%s'\n", a);
             usage(stderr);
             return 2;
-        } else if (!program) {
-            program = a;
+        } else if (!spec.program_path) {
+            spec.program_path = a;
         } else {
             fprintf(stderr, "frepmill motions: more than one PROGRAM ('%s')\n", a);
             return 2;
         }
     }
-    if (!program) {
+    if (!spec.program_path) {
         usage(stderr);
         return 2;
     }
@@ -171,7 +175,6 @@ int fm_cmd_motions(int argc, char **argv)
             fprintf(stderr, "%s\n", fm_error_format(&err, msg, sizeof msg));
             return (int)err.code;
         }
-        opt.tools = &table;
     }
     if (machine_path) {
         if (fm_check_machine_load(machine_path, &machine, &err)) {
@@ -179,25 +182,25 @@ int fm_cmd_motions(int argc, char **argv)
             fm_tool_table_free(&table);
             return (int)err.code;
         }
-        opt.machine = &machine.chain;
-        memcpy(opt.reference_points, machine.reference_points, sizeof opt.reference_points);
-        if (machine.rapid_rate > 0 && !rapid_given) opt.rapid_rate = machine.rapid_rate;
+        spec.machine = &machine.chain;
+        memcpy(spec.reference_points, machine.reference_points, sizeof spec.reference_points);
+        if (machine.rapid_rate > 0 && !(spec.rapid_rate > 0)) spec.rapid_rate = machine.rapid_rate;
+    }
+    fm_gcode_options opt;
+    fm_traj_options topt;
+    fm_status st = fm_job_program_options(&spec, tools_path ? &table : NULL, &opt, &topt, &err);
+    /* a trajectory's units come from its document: --inch and
+     * --block-delete are G-code's */
+    opt.skip_motions = topt.skip_motions = skip;
+    opt.start_inch = start_inch;
+    opt.block_delete = block_delete;
+    if (messages) {
+        opt.message = print_message;
+        opt.message_user = stdout;
     }
     static char outbuf[1 << 16];
     setvbuf(stdout, outbuf, _IOFBF, sizeof outbuf);
-    fm_status st;
-    size_t plen = strlen(program);
-    if (plen >= 5 && !strcmp(program + plen - 5, ".json")) {
-        /* A parametric trajectory (docs/trajectory.md); its units come from
-         * the document, so --inch and --block-delete do not apply. */
-        fm_traj_options topt;
-        fm_traj_options_default(&topt);
-        topt.rapid_rate = opt.rapid_rate;
-        topt.skip_motions = opt.skip_motions;
-        st = fm_traj_run_file(program, &topt, print_motion, stdout, NULL, &err);
-    } else {
-        st = fm_gcode_run_file(program, &opt, print_motion, stdout, NULL, &err);
-    }
+    if (st == FM_OK) st = fm_job_program_run(&spec, &opt, &topt, print_motion, stdout, &err);
     fflush(stdout);
     fm_tool_table_free(&table);
     if (st) {

@@ -13,8 +13,8 @@
 #include <unistd.h>
 
 #include "commands.h"
-#include "toolpaths/gcode/gcode.h"
 #include "runner/job.h"
+#include "job_flags.h"
 #include "runner/job_doc.h"
 #include "runner/report_json.h"
 #include "runner/outputs.h"
@@ -156,17 +156,6 @@ static json_t *pose_json(const fm_machine_pose *pose, const double rot[9], const
     return o;
 }
 
-static int exit_status(fm_status st)
-{
-    switch (st) {
-    case FM_OK: return 0;
-    case FM_ERR_LIMIT: return 3;
-    case FM_ERR_IO: return 4;
-    case FM_ERR_INPUT: return 2;
-    default: return 5;
-    }
-}
-
 /* --job: the document and the private folder its inline models are
  * written to (lib/stock and lib/check read models from files). */
 typedef struct job_file {
@@ -210,9 +199,16 @@ static fm_status load_job(const char *path, job_file *jf, fm_error *err)
         if (err && !err->file[0]) snprintf(err->file, sizeof err->file, "%s", path);
         return st;
     }
+    return FM_OK;
+}
+
+/* The document's inline models into a private folder (none: no folder). */
+static fm_status materialize(job_file *jf, fm_error *err)
+{
     fm_job_doc *doc = jf->doc;
-    if (!doc->stock_model.size && !doc->design_model.size && !doc->check.fixture_count)
-        return FM_OK;
+    int fixtures = 0;
+    for (int i = 0; i < doc->check.fixture_count; i++) fixtures += doc->fixtures[i].size > 0;
+    if (!doc->stock_model.size && !doc->design_model.size && !fixtures) return FM_OK;
     const char *tmp = getenv("TMPDIR");
     snprintf(jf->dir, sizeof jf->dir, "%.3000s/frepmill-job-XXXXXX", tmp && *tmp ? tmp : "/tmp");
     if (!mkdtemp(jf->dir)) {
@@ -231,7 +227,8 @@ static void job_file_free(job_file *jf)
         const char *paths[FM_JOB_MAX_FIXTURES + 2] = {doc->stock_model.size ? doc->stock_text : NULL,
                                                       doc->design_model.size ? doc->design_text
                                                                              : NULL};
-        for (int i = 0; i < doc->check.fixture_count; i++) paths[2 + i] = doc->fixture_paths[i];
+        for (int i = 0; i < doc->check.fixture_count; i++)
+            if (doc->fixtures[i].size) paths[2 + i] = doc->fixture_paths[i]; /* not a user's file */
         for (int i = 0; i < FM_JOB_MAX_FIXTURES + 2; i++)
             if (paths[i]) unlink(paths[i]);
         rmdir(jf->dir);
@@ -254,30 +251,47 @@ int fm_cmd_simulate(int argc, char **argv)
     return status;
 }
 
+/* The job's flags and the document keys they set (job_flags.h): the
+ * document's parser holds their ranges and defaults. */
+static const fm_job_flag SIMULATE_FLAGS[] = {
+    {"PROGRAM", "program.file", FM_JOB_FLAG_TEXT},
+    {"--stock", "stock", FM_JOB_FLAG_TEXT},
+    {"--tools", "tools", FM_JOB_FLAG_TEXT},
+    {"--voxel", "voxel", FM_JOB_FLAG_NUMBER},
+    {"--band", "options.band", FM_JOB_FLAG_INTEGER},
+    {"--memory-budget", "options.memory_budget_mb", FM_JOB_FLAG_NUMBER},
+    {"--threads", "options.threads", FM_JOB_FLAG_INTEGER},
+    {"--rapid-rate", "options.rapid_rate", FM_JOB_FLAG_NUMBER},
+    {"--batch", "options.batch", FM_JOB_FLAG_NUMBER},
+    {"--machine", "machine", FM_JOB_FLAG_TEXT},
+    {"--check", "options.check", FM_JOB_FLAG_SWITCH},
+    {"--fixture", "fixtures", FM_JOB_FLAG_FIXTURE},
+    {"--design", "design", FM_JOB_FLAG_TEXT},
+    {"--tolerance", "options.tolerance", FM_JOB_FLAG_NUMBER},
+    {"--stop-at", "options.stop_at", FM_JOB_FLAG_INTEGER},
+    {"--dialect", "options.dialect", FM_JOB_FLAG_TEXT},
+    {"--subroutine-path", "options.subroutine_path", FM_JOB_FLAG_TEXT},
+    {"--calculator-input", "options.calculator_input", FM_JOB_FLAG_SWITCH},
+    /* the one job flag that goes with --job too (a test's knob) */
+    {"--sweep-evaluations", "options.sweep_evaluations", FM_JOB_FLAG_INTEGER},
+    {NULL, NULL, 0}};
+
 static int simulate(int argc, char **argv, job_file *jf)
 {
-    fm_job_spec spec;
-    fm_job_spec_default(&spec);
     const char *outputs[SIMULATE_MAX_OUTPUTS];
     int output_count = 0;
     const char *report_path = NULL;
     int force_progress = 0;
-    int want_check = 0;
-    const char *fixtures[32];
-    int fixture_count = 0;
-    const char *machine_path = NULL;
     fm_output_options out_opt;
     fm_output_options_default(&out_opt);
     int want_png = 0;
-    int rapid_rate_given = 0;
     int color_given = 0;
     double pose_time = NAN; /* --pose-at; NAN: none */
     const char *job_path = NULL;
-    const char *job_flag = NULL; /* a flag that --job gives instead */
+    fm_job_flags flags = {.command = "frepmill simulate", .table = SIMULATE_FLAGS};
 
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
-        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
         double d;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             usage(stdout);
@@ -285,33 +299,17 @@ static int simulate(int argc, char **argv, job_file *jf)
         } else if (!strcmp(a, "--progress")) {
             force_progress = 1;
             continue;
-        } else if (!strcmp(a, "--check")) {
-            want_check = 1;
-            job_flag = a;
-            continue;
-        } else if (!strcmp(a, "--calculator-input")) {
-            spec.calculator_input = 1;
-            job_flag = a;
-            continue;
-        } else if (a[0] != '-' || !a[1]) {
-            if (spec.program_path) {
-                fprintf(stderr, "frepmill simulate: more than one program given ('%s' and '%s')\n",
-                        spec.program_path, a);
-                return 2;
-            }
-            spec.program_path = a;
-            job_flag = "PROGRAM";
-            continue;
         }
+        int taken = fm_job_flags_take(&flags, argc, argv, &i);
+        if (taken < 0) return 2;
+        if (taken) continue;
+        /* the output flags: what is written, not what is run */
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!v) {
             fprintf(stderr, "frepmill simulate: %s needs a value\n", a);
             return 2;
         }
         i++;
-        if (strcmp(a, "--out") && strcmp(a, "--png") && strcmp(a, "--png-size") &&
-            strcmp(a, "--color") && strcmp(a, "--report") && strcmp(a, "--pose-at") &&
-            strcmp(a, "--sweep-evaluations") && strcmp(a, "--job"))
-            job_flag = a;
         int is_png = !strcmp(a, "--png");
         if (is_png || !strcmp(a, "--out")) {
             if (output_count == SIMULATE_MAX_OUTPUTS) {
@@ -350,27 +348,8 @@ static int simulate(int argc, char **argv, job_file *jf)
             }
         } else if (!strcmp(a, "--job")) {
             job_path = v;
-        } else if (!strcmp(a, "--design")) {
-            spec.design_path = v;
-        } else if (!strcmp(a, "--tolerance") && parse_double(v, &d) && d > 0) {
-            spec.tolerance_mm = d;
-        } else if (!strcmp(a, "--stop-at") && parse_double(v, &d) && d >= 1 && d <= 1e9 &&
-                   d == floor(d)) {
-            spec.stop_at_line = (int)d;
-        } else if (!strcmp(a, "--stock")) {
-            spec.stock_spec = v;
-        } else if (!strcmp(a, "--tools")) {
-            spec.tools_path = v;
         } else if (!strcmp(a, "--report")) {
             report_path = v;
-        } else if (!strcmp(a, "--fixture")) {
-            if (fixture_count == 32) {
-                fprintf(stderr, "frepmill simulate: at most 32 fixtures\n");
-                return 2;
-            }
-            fixtures[fixture_count++] = v;
-        } else if (!strcmp(a, "--machine")) {
-            machine_path = v;
         } else if (!strcmp(a, "--pose-at")) {
             if (!strcmp(v, "end")) pose_time = INFINITY;
             else if (parse_double(v, &d) && d >= 0) pose_time = d;
@@ -379,116 +358,86 @@ static int simulate(int argc, char **argv, job_file *jf)
                                 "(>= 0) or end\n", v);
                 return 2;
             }
-        } else if (!strcmp(a, "--dialect")) {
-            fm_gcode_dialect dialect;
-            if (!fm_gcode_dialect_parse(v, &dialect)) {
-                fprintf(stderr, "frepmill simulate: --dialect %s: expected linuxcnc or fanuc\n", v);
-                return 2;
-            }
-            spec.dialect = v;
-        } else if (!strcmp(a, "--subroutine-path")) {
-            spec.subroutine_path = v;
-        } else if (!strcmp(a, "--voxel") && parse_double(v, &d) && d > 0) {
-            spec.stock.voxel_mm = d;
-        } else if (!strcmp(a, "--band") && parse_double(v, &d) && d >= 2 && d <= 32) {
-            spec.stock.band_voxels = (int)d;
-        } else if (!strcmp(a, "--memory-budget") && parse_double(v, &d) && d > 0) {
-            spec.stock.memory_budget = (size_t)(d * 1024 * 1024);
-        } else if (!strcmp(a, "--threads") && parse_double(v, &d) && d >= 0 && d <= 1024) {
-            spec.stock.threads = (int)d;
-        } else if (!strcmp(a, "--rapid-rate") && parse_double(v, &d) && d > 0) {
-            spec.rapid_rate = d;
-            rapid_rate_given = 1;
-        } else if (!strcmp(a, "--batch") && parse_double(v, &d)) {
-            spec.batch_diameters = d;
-        } else if (!strcmp(a, "--sweep-evaluations") && parse_double(v, &d) && d >= 1 && d <= 1e9 &&
-                   d == floor(d)) {
-            spec.sweep_evaluations = (size_t)d;
-        } else if (!strcmp(a, "--voxel") || !strcmp(a, "--band") || !strcmp(a, "--memory-budget") ||
-                   !strcmp(a, "--threads") || !strcmp(a, "--rapid-rate") || !strcmp(a, "--batch") ||
-                   !strcmp(a, "--tolerance") || !strcmp(a, "--stop-at") ||
-                   !strcmp(a, "--sweep-evaluations")) {
-            fprintf(stderr, "frepmill simulate: %s %s: not a valid value\n", a, v);
-            return 2;
         } else {
             fprintf(stderr, "frepmill simulate: unknown option %s\n", a);
             usage(stderr);
             return 2;
         }
     }
+
+    /* The job document: the job file's, or the flags' (the check off unless
+     * --check), through the one parser of job documents. */
+    json_t *base;
     if (job_path) {
-        if (job_flag) {
-            fprintf(stderr, "frepmill simulate: %s: the job file gives it (with --job only output "
-                            "flags and --sweep-evaluations)\n", job_flag);
-            return 2;
-        }
+        for (int i = flags.count - 1; i >= 0; i--)
+            if (strcmp(flags.given[i]->flag, "--sweep-evaluations")) {
+                fprintf(stderr, "frepmill simulate: %s: the job file gives it (with --job only "
+                                "output flags and --sweep-evaluations)\n", flags.given[i]->flag);
+                return 2;
+            }
         fm_error jerr;
         fm_error_clear(&jerr);
         fm_status st = load_job(job_path, jf, &jerr);
         if (st != FM_OK) {
             char buf[1024];
             fprintf(stderr, "frepmill simulate: %s\n", fm_error_format(&jerr, buf, sizeof buf));
-            return exit_status(st);
+            return fm_job_flags_exit_status(st);
         }
-        size_t evaluations = spec.sweep_evaluations;
-        spec = jf->doc->spec;
-        spec.sweep_evaluations = evaluations;
-        if (jf->doc->memory_budget_mb > 0)
-            spec.stock.memory_budget = (size_t)(jf->doc->memory_budget_mb * 1048576.0);
-        if (jf->doc->has_machine) machine_path = job_path; /* for --pose-at */
-    } else if (!spec.program_path || !spec.stock_spec || !spec.tools_path) {
-        fprintf(stderr, "frepmill simulate: %s\n",
-                !spec.program_path ? "no PROGRAM given"
-                : !spec.stock_spec ? "no --stock given"
-                                   : "no --tools given");
-        usage(stderr);
-        return 2;
+        base = json_incref(jf->doc->json);
+    } else {
+        const char *missing = !fm_job_flags_value(&flags, "PROGRAM") ? "no PROGRAM given"
+                              : !fm_job_flags_value(&flags, "--stock") ? "no --stock given"
+                              : !fm_job_flags_value(&flags, "--tools") ? "no --tools given"
+                                                                       : NULL;
+        if (missing) {
+            fprintf(stderr, "frepmill simulate: %s\n", missing);
+            usage(stderr);
+            return 2;
+        }
+        base = json_pack("{s:{s:b}}", "options", "check", 0);
     }
-
-    if (spec.tolerance_mm > 0 && !spec.design_path) {
+    if (fm_job_flags_value(&flags, "--tolerance") && !fm_job_flags_value(&flags, "--design")) {
         fprintf(stderr, "frepmill simulate: --tolerance needs --design\n");
+        json_decref(base);
         return 2;
     }
+    if (fm_job_flags_value(&flags, "--fixture") && !fm_job_flags_value(&flags, "--check")) {
+        fprintf(stderr, "frepmill simulate: --fixture needs --check\n");
+        json_decref(base);
+        return 2;
+    }
+    if (!job_path || flags.count) {
+        /* the flags on the document (with --job: --sweep-evaluations on the
+         * file's), read again by the same parser */
+        fm_job_doc *doc = NULL;
+        int status = fm_job_flags_document(&flags, base, &doc);
+        if (status) return status;
+        fm_job_doc_free(jf->doc);
+        jf->doc = doc;
+    } else {
+        json_decref(base);
+    }
+    fm_error merr;
+    fm_error_clear(&merr);
+    if (materialize(jf, &merr) != FM_OK) {
+        char buf[1024];
+        fprintf(stderr, "frepmill simulate: %s\n", fm_error_format(&merr, buf, sizeof buf));
+        return fm_job_flags_exit_status(merr.code);
+    }
+    fm_job_spec spec = jf->doc->spec;
+    if (jf->doc->memory_budget_mb > 0)
+        spec.stock.memory_budget = (size_t)(jf->doc->memory_budget_mb * 1048576.0);
+
     if (out_opt.coloring == FM_MESH_COLOR_DEVIATION && !spec.design_path) {
         fprintf(stderr, "frepmill simulate: --color deviation needs --design\n");
         return 2;
     }
     /* with a design the pictures show the deviation unless told otherwise */
     if (spec.design_path && !color_given) out_opt.coloring = FM_MESH_COLOR_DEVIATION;
-    if (!isnan(pose_time) && !machine_path) {
+    if (!isnan(pose_time) && !jf->doc->has_machine) {
         fprintf(stderr, "frepmill simulate: --pose-at needs --machine (the rotary axes that turn "
                         "the workpiece)\n");
         return 2;
-    }
-    if (fixture_count && !want_check) {
-        fprintf(stderr, "frepmill simulate: --fixture needs --check\n");
-        return 2;
-    }
-    /* The machine: its rotary axes move the tool for the cut, its rapid
-     * rate times the job (as in `frepmill check`), its reference points
-     * serve Fanuc's G28/G30, and the check gets its limits. */
-    fm_job_check check;
-    fm_job_check_default(&check);
-    if (machine_path && !job_path) {
-        fm_error merr;
-        fm_error_clear(&merr);
-        if (fm_check_machine_load(machine_path, &check.options.machine, &merr) != FM_OK) {
-            char buf[1024];
-            fprintf(stderr, "frepmill simulate: %s\n", fm_error_format(&merr, buf, sizeof buf));
-            return exit_status(merr.code);
-        }
-        if (check.options.machine.rapid_rate > 0 && !rapid_rate_given)
-            spec.rapid_rate = check.options.machine.rapid_rate;
-        memcpy(spec.reference_points, check.options.machine.reference_points,
-               sizeof spec.reference_points);
-        spec.machine = &check.options.machine.chain;
-    }
-    /* The check runs in the simulation's own pass on a grid of its own
-     * voxel (job.h), so its findings are those of `frepmill check`. */
-    if (want_check) {
-        for (int i = 0; i < fixture_count; i++) check.fixtures[i] = fixtures[i];
-        check.fixture_count = fixture_count;
-        spec.check = &check;
     }
 
     progress_bar bar = {0};
@@ -513,7 +462,7 @@ static int simulate(int argc, char **argv, job_file *jf)
         char buf[1024];
         fprintf(stderr, "frepmill simulate: %s\n", fm_error_format(&err, buf, sizeof buf));
         fm_toolpath_free(bar.toolpath);
-        return exit_status(st);
+        return fm_job_flags_exit_status(st);
     }
 
     int status = 0;
@@ -529,7 +478,7 @@ static int simulate(int argc, char **argv, job_file *jf)
     if (st != FM_OK) {
         char buf[1024];
         fprintf(stderr, "frepmill simulate: %s\n", fm_error_format(&err, buf, sizeof buf));
-        status = exit_status(st);
+        status = fm_job_flags_exit_status(st);
     }
     if (fm_toolpath_truncated(bar.toolpath))
         fprintf(stderr, "frepmill simulate: the picture shows only the start of the toolpath "

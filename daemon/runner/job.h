@@ -13,6 +13,8 @@
 #include "stock/stock.h"
 #include "sweep/motion.h"
 #include "tools/tools.h"
+#include "toolpaths/gcode/gcode.h"
+#include "toolpaths/traj/traj.h"
 
 typedef enum fm_program_kind {
     FM_PROGRAM_AUTO = 0, /* by extension: .json is a trajectory, anything else G-code */
@@ -263,6 +265,18 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
  * run cuts. */
 fm_status fm_job_interpret(const fm_job_spec *spec, fm_motion_sink sink, void *user,
                            fm_error *err);
+
+/* The one program dispatch, in two steps for callers that need more of
+ * the interpreters than a job does (`frepmill motions`: skipping, inch
+ * start, block delete, messages): the interpreters' options a spec gives
+ * (tools: the table G-code reads tool lengths from, NULL for none), and
+ * the spec's program (G-code, or a trajectory by kind or .json extension)
+ * run with them. */
+fm_status fm_job_program_options(const fm_job_spec *spec, const fm_tool_table *tools,
+                                 fm_gcode_options *gcode, fm_traj_options *traj, fm_error *err);
+fm_status fm_job_program_run(const fm_job_spec *spec, const fm_gcode_options *gcode,
+                             const fm_traj_options *traj, fm_motion_sink sink, void *user,
+                             fm_error *err);
 
 /* Parse and create the stock of a spec string (also used by `frepmill
  * check`). */

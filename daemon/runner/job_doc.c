@@ -234,6 +234,24 @@ static fm_status parse_stock(fm_job_doc *doc, json_t *stock, const fm_job_doc_ru
 static fm_status parse_tools(fm_job_doc *doc, json_t *tools, const fm_job_doc_rules *rules,
                              fm_error *err)
 {
+    if (json_is_string(tools)) {
+        /* a tool table file (JSON or LinuxCNC .tbl): the CLI's --tools */
+        fm_status st = text_ok(tools, "tools", DOC_STOCK_TEXT_MAX, err);
+        if (st != FM_OK) return st;
+        const char *path = json_string_value(tools);
+        if (!rules->allow_files)
+            return refuse(err, "bad_tools",
+                          "tools \"%.64s\" names a file on the server; give the JSON tool table",
+                          path);
+        if (!(doc->tools_path = dup_bytes(path, strlen(path))))
+            return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+        /* the loader's own error: file:line:column, and I/O for a missing file */
+        if ((st = fm_tooltable_load(path, &doc->tools, err)) != FM_OK) return st;
+        if (doc->tools.count == 0)
+            return refuse(err, "bad_tools", "the tool table %s has no tools", path);
+        doc->spec.tools_path = doc->tools_path;
+        return FM_OK;
+    }
     if (!json_is_object(tools))
         return refuse(err, "bad_type", "tools must be the JSON tool table (an object)");
     /* parsed once, with the document: no text in between */
@@ -260,10 +278,23 @@ static fm_status parse_program(fm_job_doc *doc, json_t *program, const fm_job_do
         return refuse(err, "bad_program",
                       "program must be an object with exactly one of \"gcode\" (text) and "
                       "\"trajectory\" (object)");
-    static const char *const keys[] = {"gcode", "trajectory", "live", NULL};
+    static const char *const keys[] = {"gcode", "trajectory", "live", "file", NULL};
     fm_status st = only_keys(program, keys, "program", err);
     if (st != FM_OK) return st;
     json_t *v;
+    if ((v = json_object_get(program, "file"))) {
+        /* G-code, or a trajectory (.json) by its extension: the CLI's PROGRAM */
+        if ((st = text_ok(v, "program.file", DOC_STOCK_TEXT_MAX, err)) != FM_OK) return st;
+        if (!rules->allow_files)
+            return refuse(err, "bad_program",
+                          "program.file names a file on the server; give \"gcode\" or "
+                          "\"trajectory\"");
+        doc->program_file = dup_bytes(json_string_value(v), json_string_length(v));
+        if (!doc->program_file) return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+        doc->spec.program_kind = FM_PROGRAM_AUTO;
+        doc->spec.program_path = doc->program_file;
+        return FM_OK;
+    }
     if ((v = json_object_get(program, "gcode"))) {
         if ((st = text_ok(v, "program.gcode", FM_JOB_DOC_MAX_TEXT, err)) != FM_OK) return st;
         doc->program = dup_bytes(json_string_value(v), json_string_length(v));
@@ -312,11 +343,20 @@ static fm_status parse_machine(fm_job_doc *doc, json_t *machine, const char *whe
         return refuse(err, "bad_job",
                       "the machine is given twice (\"machine\" and options.check.machine); give "
                       "it once, as \"machine\"");
-    if (!json_is_object(machine)) return refuse(err, "bad_type", "%s must be an object", where);
     fm_error merr;
     fm_error_clear(&merr);
-    if (fm_check_machine_from_json(machine, where, &doc->check.options.machine, &merr) != FM_OK)
+    if (json_is_string(machine) && rules->allow_files) {
+        /* a machine file (docs/check.md): the CLI's --machine; its loader's
+         * error as it is (file, and I/O for a missing file) */
+        if (fm_check_machine_load(json_string_value(machine), &doc->check.options.machine,
+                                  err) != FM_OK)
+            return err ? err->code : FM_ERR_INPUT;
+    } else if (!json_is_object(machine)) {
+        return refuse(err, "bad_type", "%s must be an object", where);
+    } else if (fm_check_machine_from_json(machine, where, &doc->check.options.machine, &merr) !=
+               FM_OK) {
         return refuse(err, "bad_value", "%s", merr.message);
+    }
     /* a component names a model file on this machine: not from a client */
     if (doc->check.options.machine.component_count && !rules->allow_files)
         return refuse(err, "bad_value",
@@ -361,7 +401,7 @@ static fm_status parse_check(fm_job_doc *doc, json_t *check, const fm_job_doc_ru
             o->tolerance_mm = d;
         } else if (!strcmp(key, "max_ramp") && ok && d >= 0 && d <= 90) {
             o->max_ramp_deg = d;
-        } else if (!strcmp(key, "voxel") && ok && d >= 0.01 && d <= 100) {
+        } else if (!strcmp(key, "voxel") && ok && d >= FM_JOB_DOC_VOXEL_MIN && d <= 100) {
             doc->check.voxel_mm = d;
         } else if (!strcmp(key, "clearance") || !strcmp(key, "rapid_clearance") ||
                    !strcmp(key, "tolerance") || !strcmp(key, "max_ramp") ||
@@ -516,7 +556,38 @@ static fm_status parse_options(fm_job_doc *doc, json_t *options, const fm_job_do
     return parse_check(doc, json_object_get(options, "check"), rules, err);
 }
 
-static fm_status parse_fixtures(fm_job_doc *doc, json_t *fixtures, fm_error *err)
+/* {"file": PATH, "name": TEXT}: a fixture file (the CLI's --fixture). */
+static fm_status fixture_file(fm_job_doc *doc, size_t i, json_t *f, const fm_job_doc_rules *rules,
+                              fm_error *err)
+{
+    char where[64];
+    snprintf(where, sizeof where, "fixtures[%zu]", i);
+    static const char *const keys[] = {"file", "name", NULL};
+    fm_status st = only_keys(f, keys, where, err);
+    if (st != FM_OK) return st;
+    json_t *file = json_object_get(f, "file"), *name = json_object_get(f, "name");
+    char sub[96];
+    snprintf(sub, sizeof sub, "%s.file", where);
+    if ((st = text_ok(file, sub, DOC_STOCK_TEXT_MAX, err)) != FM_OK) return st;
+    const char *path = json_string_value(file);
+    if (!rules->allow_files)
+        return refuse(err, "bad_fixture", "%s names a file on the server; give {\"hyperfun\": "
+                                          "TEXT} or {\"stl_base64\": TEXT}", sub);
+    if (!fm_path_has_extension(path, ".hf") && !fm_path_has_extension(path, ".stl"))
+        return refuse(err, "bad_fixture", "fixture %.256s: give a .hf model or an .stl mesh", path);
+    if (name) {
+        snprintf(sub, sizeof sub, "%s.name", where);
+        if ((st = text_ok(name, sub, DOC_NAME_MAX, err)) != FM_OK) return st;
+        snprintf(doc->fixtures[i].name, sizeof doc->fixtures[i].name, "%s", json_string_value(name));
+    }
+    if (!(doc->fixture_paths[i] = dup_bytes(path, strlen(path))))
+        return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    doc->check.fixtures[i] = doc->fixture_paths[i];
+    return FM_OK;
+}
+
+static fm_status parse_fixtures(fm_job_doc *doc, json_t *fixtures, const fm_job_doc_rules *rules,
+                                fm_error *err)
 {
     if (!json_is_array(fixtures)) return refuse(err, "bad_type", "fixtures must be an array");
     if (json_array_size(fixtures) > FM_JOB_MAX_FIXTURES)
@@ -527,7 +598,9 @@ static fm_status parse_fixtures(fm_job_doc *doc, json_t *fixtures, fm_error *err
     json_array_foreach(fixtures, i, f) {
         char where[64];
         snprintf(where, sizeof where, "fixtures[%zu]", i);
-        fm_status st = model_of(f, where, "bad_fixture", 1, &doc->fixtures[i], err);
+        fm_status st = json_is_object(f) && json_object_get(f, "file")
+                           ? fixture_file(doc, i, f, rules, err)
+                           : model_of(f, where, "bad_fixture", 1, &doc->fixtures[i], err);
         if (st != FM_OK) return st;
         doc->check.fixture_count = (int)i + 1;
     }
@@ -542,6 +615,8 @@ void fm_job_doc_free(fm_job_doc *doc)
     json_decref(doc->json);
     fm_tool_table_free(&doc->tools);
     free(doc->program);
+    free(doc->program_file);
+    free(doc->tools_path);
     free(doc->stock_text);
     free(doc->subroutine_path);
     free(doc->stock_model.data);
@@ -579,11 +654,11 @@ fm_status fm_job_doc_from_json(json_t *job, const fm_job_doc_rules *rules_in, fm
     json_t *v;
     if ((st = parse_stock(doc, json_object_get(job, "stock"), rules, err))) goto fail;
     if ((v = json_object_get(job, "voxel")) &&
-        (st = number_in(v, "voxel", 0.001, 100, &doc->spec.stock.voxel_mm, err)))
+        (st = number_in(v, "voxel", FM_JOB_DOC_VOXEL_MIN, 100, &doc->spec.stock.voxel_mm, err)))
         goto fail;
     if ((st = parse_tools(doc, json_object_get(job, "tools"), rules, err))) goto fail;
     if ((st = parse_program(doc, json_object_get(job, "program"), rules, err))) goto fail;
-    if ((v = json_object_get(job, "fixtures")) && (st = parse_fixtures(doc, v, err))) goto fail;
+    if ((v = json_object_get(job, "fixtures")) && (st = parse_fixtures(doc, v, rules, err))) goto fail;
     if ((v = json_object_get(job, "machine")) && (st = parse_machine(doc, v, "machine", rules, err)))
         goto fail;
     if ((v = json_object_get(job, "design")) && (st = parse_design(doc, v, rules, err))) goto fail;
@@ -750,6 +825,7 @@ fm_status fm_job_doc_materialize(fm_job_doc *doc, const char *dir, fm_job_doc_wr
         if (st == FM_OK) st = fm_job_doc_set_design_file(doc, path, err);
     }
     for (int i = 0; st == FM_OK && i < doc->check.fixture_count; i++) {
+        if (!doc->fixtures[i].size) continue; /* a file already */
         char stem[32];
         snprintf(stem, sizeof stem, "fixture%d", i);
         st = materialize_one(dir, stem, &doc->fixtures[i], write, path, sizeof path, err);

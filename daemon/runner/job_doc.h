@@ -2,21 +2,27 @@
  * job_doc.c are where it is defined, parsed and validated, once, into the
  * run spec the job runner takes (fm_job_spec, job.h). The daemon's HTTP API
  * (POST /v1/jobs, POST /v1/check), its job store (spec.json), Modbus live
- * mode, the Redis queue and `frepmill simulate --job FILE` read jobs
- * through here (the CLI otherwise builds its run spec from flags).
+ * mode, the Redis queue, `frepmill simulate --job FILE` and the flags of
+ * `frepmill simulate` and `frepmill check` (daemon/cli/job_flags.c turns
+ * them into a document) read jobs through here: every range and default
+ * of a job is here.
  *
  *   {
  *     "stock":   "box:X0,Y0,Z0,X1,Y1,Z1" | "cylinder:X,Y,Z0,Z1,R"      (mm)
  *                | {"hyperfun": TEXT} | {"stl_base64": BASE64}         (inline models)
  *                | "FILE.hf" | "FILE.stl" | "FILE.vdb"                 (files: CLI only)
- *     "voxel":   MM                                  (default 0.1; 0.001..100)
+ *     "voxel":   MM                                  (default 0.1; 0.0001..100)
  *     "tools":   {...}                               (the JSON tool table, docs/tooltable.md)
+ *                | "FILE"                            (a JSON or .tbl file: CLI only)
  *     "program": {"gcode": TEXT} | {"trajectory": {...}}               (docs/trajectory.md)
+ *                | {"file": FILE}                    (G-code, or a .json trajectory: CLI only)
  *                | {"live": {"feed": MM_PER_MIN}}    (positions from a controller; the daemon
  *                                                     makes these, POST /v1/jobs refuses them)
- *     "fixtures": [{"hyperfun": TEXT | "stl_base64": BASE64, "name": TEXT}, ...]  (at most 64)
+ *     "fixtures": [{"hyperfun": TEXT | "stl_base64": BASE64 | "file": FILE, "name": TEXT}, ...]
+ *                                                    (at most 64; files .hf or .stl: CLI only)
  *     "machine": {"limits": {"x": [LO, HI], ...}, "rapid_rate": MM_PER_MIN,
  *                 "start": [X, Y, Z], "reference_points": [[X, Y, Z], ...]}
+ *                | "FILE.json"                       (the machine file: CLI only)
  *                                                    (docs/check.md's machine file)
  *     "design":  {"hyperfun": TEXT} | {"stl_base64": BASE64}         (the intended part:
  *                | "FILE.stl" | "FILE.hf" | "FILE.vdb"  the report's "design" compares the
@@ -55,6 +61,10 @@
 
 #include "core/core.h"
 #include "job.h"
+
+/* The finest voxel a job may ask for (mm): lib/stock's own bound; the
+ * memory budget refuses what is too fine for the stock's size. */
+#define FM_JOB_DOC_VOXEL_MIN 1e-4
 
 /* The largest text (program, tool table, model) inside a job, bytes. */
 #define FM_JOB_DOC_MAX_TEXT ((size_t)256 << 20)
@@ -99,6 +109,8 @@ typedef struct fm_job_doc {
     /* Owned storage behind spec. */
     fm_tool_table tools;
     char *program;             /* G-code text or the trajectory's JSON */
+    char *program_file;        /* program.file (files rules only) */
+    char *tools_path;          /* "tools" given as a file (files rules only) */
     size_t program_length;
     char *stock_text;          /* the spec string, or the materialized model's path */
     char dialect[16];          /* spec.dialect's storage */

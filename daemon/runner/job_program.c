@@ -5,9 +5,7 @@
 #include <string.h>
 
 #include "job_internal.h"
-#include "toolpaths/gcode/gcode.h"
 #include "toolpaths/tooltable/tooltable.h"
-#include "toolpaths/traj/traj.h"
 
 int fm_path_has_extension(const char *path, const char *ext)
 {
@@ -26,38 +24,54 @@ fm_program_kind job_program_kind(const fm_job_spec *spec)
     return FM_PROGRAM_GCODE;
 }
 
-fm_status job_run_program(const fm_job_spec *spec, const fm_tool_table *tools,
-                             fm_motion_sink sink, void *user, job_probe_fn probe, fm_error *err)
+fm_status fm_job_program_options(const fm_job_spec *spec, const fm_tool_table *tools,
+                                 fm_gcode_options *gcode, fm_traj_options *traj, fm_error *err)
+{
+    fm_traj_options_default(traj);
+    if (spec->rapid_rate > 0) traj->rapid_rate = spec->rapid_rate;
+    fm_gcode_options_default(gcode);
+    if (spec->rapid_rate > 0) gcode->rapid_rate = spec->rapid_rate;
+    gcode->tools = tools;
+    if (spec->dialect && !fm_gcode_dialect_parse(spec->dialect, &gcode->dialect))
+        return fm_error_set(err, FM_ERR_INPUT, "dialect '%s': expected linuxcnc or fanuc",
+                            spec->dialect);
+    gcode->subroutine_path = spec->subroutine_path;
+    memcpy(gcode->reference_points, spec->reference_points, sizeof gcode->reference_points);
+    gcode->calculator_input = spec->calculator_input;
+    gcode->machine = spec->machine;
+    return FM_OK;
+}
+
+fm_status fm_job_program_run(const fm_job_spec *spec, const fm_gcode_options *gcode,
+                             const fm_traj_options *traj, fm_motion_sink sink, void *user,
+                             fm_error *err)
 {
     if (!spec->program_path && !spec->program_text)
         return fm_error_set(err, FM_ERR_INPUT, "no program given");
     if (job_program_kind(spec) == FM_PROGRAM_TRAJECTORY) {
-        fm_traj_options topt;
-        fm_traj_options_default(&topt);
-        topt.rapid_rate = spec->rapid_rate > 0 ? spec->rapid_rate : topt.rapid_rate;
-        if (spec->program_path) return fm_traj_run_file(spec->program_path, &topt, sink, user, NULL, err);
+        if (spec->program_path)
+            return fm_traj_run_file(spec->program_path, traj, sink, user, NULL, err);
         return fm_traj_run_string(spec->program_text, spec->program_length,
-                                  spec->program_name ? spec->program_name : "trajectory", &topt,
+                                  spec->program_name ? spec->program_name : "trajectory", traj,
                                   sink, user, NULL, err);
     }
+    if (spec->program_path)
+        return fm_gcode_run_file(spec->program_path, gcode, sink, user, NULL, err);
+    return fm_gcode_run_string(spec->program_text, spec->program_length,
+                               spec->program_name ? spec->program_name : "program", gcode, sink,
+                               user, NULL, err);
+}
+
+fm_status job_run_program(const fm_job_spec *spec, const fm_tool_table *tools,
+                          fm_motion_sink sink, void *user, job_probe_fn probe, fm_error *err)
+{
     fm_gcode_options gopt;
-    fm_gcode_options_default(&gopt);
-    if (spec->rapid_rate > 0) gopt.rapid_rate = spec->rapid_rate;
-    gopt.tools = tools;
+    fm_traj_options topt;
+    fm_status st = fm_job_program_options(spec, tools, &gopt, &topt, err);
+    if (st != FM_OK) return st;
     gopt.probe = probe;
     gopt.probe_user = user;
-    if (spec->dialect && !fm_gcode_dialect_parse(spec->dialect, &gopt.dialect))
-        return fm_error_set(err, FM_ERR_INPUT, "dialect '%s': expected linuxcnc or fanuc",
-                            spec->dialect);
-    gopt.subroutine_path = spec->subroutine_path;
-    memcpy(gopt.reference_points, spec->reference_points, sizeof gopt.reference_points);
-    gopt.calculator_input = spec->calculator_input;
-    gopt.machine = spec->machine;
-    if (spec->program_path)
-        return fm_gcode_run_file(spec->program_path, &gopt, sink, user, NULL, err);
-    return fm_gcode_run_string(spec->program_text, spec->program_length,
-                               spec->program_name ? spec->program_name : "program", &gopt, sink,
-                               user, NULL, err);
+    return fm_job_program_run(spec, &gopt, &topt, sink, user, err);
 }
 
 fm_status fm_job_interpret(const fm_job_spec *spec, fm_motion_sink sink, void *user,
