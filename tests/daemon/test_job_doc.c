@@ -555,6 +555,95 @@ static void test_materialize(void)
     fm_job_doc_free(doc);
 }
 
+/* The CLI's file forms (job_flags.c writes them): a tool table, program,
+ * machine and fixture named by file are read under the files rules and
+ * refused over the network with their reasons. */
+static void test_file_forms(void)
+{
+    char dir[] = "/tmp/fm-test-docfiles-XXXXXX";
+    CHECK(mkdtemp(dir) != NULL);
+    char tools[256], machine[256];
+    snprintf(tools, sizeof tools, "%s/tools.tbl", dir);
+    snprintf(machine, sizeof machine, "%s/machine.json", dir);
+    FILE *f = fopen(tools, "w");
+    if (f) {
+        fputs("T4 P4 D8 Z0 ;flat\n", f);
+        fclose(f);
+    }
+    f = fopen(machine, "w");
+    if (f) {
+        fputs("{\"rapid_rate\": 12000}\n", f);
+        fclose(f);
+    }
+    char text[2048];
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-5,10,10,0\", \"tools\": \"%s\", \"program\": {\"file\": "
+             "\"part.ngc\"}, \"machine\": \"%s\", \"fixtures\": [{\"file\": \"clamp.hf\"}]}",
+             tools, machine);
+    const fm_job_doc_rules files = {.allow_files = 1};
+    fm_error err;
+    fm_job_doc *doc = parse_with(text, &files, &err);
+    CHECK(doc != NULL);
+    if (doc) {
+        CHECK(doc->spec.tools == &doc->tools && doc->tools.count == 1);
+        if (doc->tools.count == 1) CHECK_NEAR(doc->tools.tools[0].diameter, 8, 0);
+        CHECK(doc->spec.tools_path && !strcmp(doc->spec.tools_path, tools));
+        CHECK(doc->spec.program_path && !strcmp(doc->spec.program_path, "part.ngc"));
+        CHECK(doc->spec.program_kind == FM_PROGRAM_AUTO);
+        CHECK(doc->has_machine);
+        CHECK_NEAR(doc->spec.rapid_rate, 12000, 0); /* the machine's, no options.rapid_rate */
+        /* the check is on by default in a document; the CLI's simulate says false */
+        CHECK(doc->spec.check && doc->spec.check->fixture_count == 1 &&
+              !strcmp(doc->spec.check->fixtures[0], "clamp.hf"));
+        fm_job_doc_free(doc);
+    }
+    /* over the network each file is refused */
+    doc = parse(text, &err);
+    CHECK(doc == NULL && !strcmp(err.reason, "bad_tools"));
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-5,10,10,0\", \"tools\": %s, \"program\": {\"file\": "
+             "\"part.ngc\"}}", TOOLS);
+    doc = parse(text, &err);
+    CHECK(doc == NULL && !strcmp(err.reason, "bad_program"));
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-5,10,10,0\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, "
+             "\"fixtures\": [{\"file\": \"clamp.hf\"}]}", TOOLS);
+    doc = parse(text, &err);
+    CHECK(doc == NULL && !strcmp(err.reason, "bad_fixture"));
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-5,10,10,0\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, "
+             "\"machine\": \"%s\"}", TOOLS, machine);
+    doc = parse(text, &err);
+    CHECK(doc == NULL && !strcmp(err.reason, "bad_type"));
+    /* a fixture file must be a model a check reads */
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-5,10,10,0\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}, "
+             "\"fixtures\": [{\"file\": \"clamp.obj\"}]}", TOOLS);
+    doc = parse_with(text, &files, &err);
+    CHECK(doc == NULL && !strcmp(err.reason, "bad_fixture"));
+    /* a missing tool table is the loader's I/O error, naming the file */
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-5,10,10,0\", \"tools\": \"%s/none.json\", \"program\": "
+             "{\"gcode\": \"G0\"}}", dir);
+    doc = parse_with(text, &files, &err);
+    CHECK(doc == NULL && err.code == FM_ERR_IO);
+    /* the finest voxel is lib/stock's own bound */
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-5,10,10,0\", \"voxel\": 0.0001, \"tools\": %s, \"program\": "
+             "{\"gcode\": \"G0\"}}", TOOLS);
+    doc = parse(text, &err);
+    CHECK(doc != NULL);
+    fm_job_doc_free(doc);
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-5,10,10,0\", \"voxel\": 0.00009, \"tools\": %s, \"program\": "
+             "{\"gcode\": \"G0\"}}", TOOLS);
+    doc = parse(text, &err);
+    CHECK(doc == NULL && !strcmp(err.reason, "bad_value"));
+    unlink(tools);
+    unlink(machine);
+    rmdir(dir);
+}
+
 int main(void)
 {
     test_job_ok();
@@ -567,5 +656,6 @@ int main(void)
     test_stock_spec();
     test_base64();
     test_materialize();
+    test_file_forms();
     return test_summary("job_doc");
 }
