@@ -9,12 +9,6 @@
 #include "stock_spec.h"
 #include "sweep/sweep.h"
 
-static void release_design_model(void *ctx)
-{
-    fm_model_field_close(ctx);
-    free(ctx);
-}
-
 fm_design *job_make_design(const fm_job_spec *spec, const fm_stock *stock, fm_error *err)
 {
     const char *path = spec->design_path;
@@ -29,19 +23,12 @@ fm_design *job_make_design(const fm_job_spec *spec, const fm_stock *stock, fm_er
     if (fm_path_has_extension(path, ".vdb")) return fm_design_load_vdb(stock, path, &opt, err);
     if (fm_path_has_extension(path, ".hf")) {
         /* the design evaluates the model when it compares: it owns it */
-        fm_model_field *mf = malloc(sizeof *mf);
-        if (!mf) {
-            fm_error_set(err, FM_ERR_LIMIT, "out of memory for the design's model");
-            return NULL;
-        }
         const double h = fm_stock_voxel_size(stock);
-        if (fm_model_field_open(path, h, h * fm_design_band_voxels(stock, spec->tolerance_mm),
-                                "design", mf, err) != FM_OK) {
-            free(mf);
+        fm_field field;
+        if (fm_stock_hf_field(path, h, h * fm_design_band_voxels(stock, spec->tolerance_mm),
+                              "design", &field, err) != FM_OK)
             return NULL;
-        }
-        mf->field.release = release_design_model;
-        return fm_design_from_field(stock, &mf->field, &opt, err);
+        return fm_design_from_field(stock, &field, &opt, err);
     }
     fm_error_set(err, FM_ERR_INPUT, "design '%s' is not a .stl mesh, a .hf model or a .vdb snapshot",
                  path);

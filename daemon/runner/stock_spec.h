@@ -8,7 +8,6 @@
 #define FM_STOCK_SPEC_H
 
 #include "core/core.h"
-#include "frep/frep.h"
 #include "stock/stock.h"
 
 typedef enum fm_stock_shape {
@@ -32,28 +31,6 @@ fm_status fm_stock_spec_parse(const char *text, fm_stock_spec *out, fm_error *er
 /* The surface projected on the three axis planes (fm_stock_estimate_bytes'
  * input) of a box or cylinder; -1 for model files (known only once built). */
 double fm_stock_spec_projected_area(const fm_stock_spec *spec);
-/* A HyperFun model (.hf) as an fm_field, the one builder for stocks and
- * designs (stock_spec.c says how): values are the model normalized to a
- * first-order distance (f / |grad f|) cut by its bounding box; a box
- * the raw model's interval over the box widened by reach (mm: the grid's
- * band) shows all inside or all outside is reported beyond the band (a
- * tile), so interior leaves are never evaluated and the grid's memory
- * grows with the model's area, not its volume. The bounds are searched
- * within +-2000 mm down to voxel; what ("stock", "design") names it in
- * messages (file path first). Close with fm_model_field_close (safe on a
- * closed or failed one). */
-typedef struct fm_model_field {
-    fm_graph *graph;
-    fm_tape *tape;
-    fm_field field;
-    double reach; /* mm */
-    double voxel; /* mm: the grid's, sizes the blocks of shortened tapes */
-} fm_model_field;
-
-fm_status fm_model_field_open(const char *path, double voxel, double reach, const char *what,
-                              fm_model_field *mf, fm_error *err);
-void fm_model_field_close(fm_model_field *mf);
-
 /* Build the stock (lib/stock); NULL with err filled. */
 fm_stock *fm_stock_spec_make(const fm_stock_spec *spec, const fm_stock_options *opt,
                              fm_error *err);

@@ -46,6 +46,21 @@ fm_stock *fm_stock_new_cylinder(double x, double y, double z0, double z1, double
  * leaves the interval pass finds. */
 fm_stock *fm_stock_new_from_field(const fm_field *field, const fm_stock_options *opt,
                                   fm_error *err);
+/* A HyperFun model (.hf) as a field (hf_model.c says how): values are the
+ * model normalized to a first-order distance (f / |grad f|) cut by its
+ * bounding box; a box the raw model's interval over the box widened by
+ * reach (mm: the grid's band) shows all inside or all outside is reported
+ * beyond the band (a tile), so interior leaves are never evaluated and the
+ * grid's memory grows with the model's area, not its volume. The bounds
+ * are searched within +-2000 mm down to voxel; what ("stock", "design")
+ * names it in messages (file path first). The field owns the compiled
+ * model: fm_field_release frees it (fm_design_from_field takes it over).
+ * The one builder of models as fields, for stocks and designs. */
+fm_status fm_stock_hf_field(const char *path, double voxel, double reach, const char *what,
+                            fm_field *out, fm_error *err);
+/* A stock from a HyperFun model: its field at the options' voxel, reach
+ * the band. */
+fm_stock *fm_stock_new_from_hf(const char *path, const fm_stock_options *opt, fm_error *err);
 /* Binary or ASCII STL of a closed mesh (cast or pre-machined stock). An
  * open surface is refused (FM_ERR_INPUT) with its first open edge. The
  * _named form says what the solid is in its errors ("fixture", ...; the
