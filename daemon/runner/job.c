@@ -35,123 +35,78 @@ void fm_job_result_release(fm_job_result *r)
     r->check = NULL;
 }
 
-fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_result *result,
-                     fm_error *err)
+/* The stock's bounds before the first cut (mm, within a voxel). */
+static void initial_bounds(fm_stock *stock, double lo[3], double hi[3])
 {
-    memset(result, 0, sizeof *result);
-    double started = job_now_s();
-    job_tools tools;
-    fm_status st = job_tools_load(spec, &tools, err);
-    if (st != FM_OK) {
-        job_tools_free(&tools);
-        fm_stock_free(spec->resume_stock);
-        return st;
-    }
-
-    /* First pass: the whole program is checked before anything is cut, and
-     * its length gives the progress its denominator. */
-    job_survey sv = {0};
-    int live = spec->program_kind == FM_PROGRAM_LIVE;
-    sv.stop.line = spec->stop_at_line;
-    st = live ? FM_OK : job_run_program(spec, tools.use, job_survey_sink, &sv, NULL, err);
-    if (st != FM_OK) {
-        job_tools_free(&tools);
-        fm_stock_free(spec->resume_stock);
-        return st;
-    }
-
-    fm_stock *stock = spec->resume_stock ? spec->resume_stock
-                                         : fm_job_make_stock(spec->stock_spec, &spec->stock, err);
-    if (!stock) {
-        job_tools_free(&tools);
-        return err ? err->code : FM_ERR_INPUT;
-    }
-    /* The design before any cut: its errors come at once, and progress
-     * hooks can colour by deviation while the job runs. */
-    fm_design *design = NULL;
-    if (spec->design_path) {
-        const double w0 = job_now_s(), c0 = job_cpu_s();
-        design = job_make_design(spec, stock, err);
-        if (!design) {
-            fm_stock_free(stock);
-            job_tools_free(&tools);
-            return err && err->code ? err->code : FM_ERR_INPUT;
-        }
-        result->design_build_wall_s = job_now_s() - w0;
-        result->design_build_cpu_s = job_cpu_s() - c0;
-    }
-
-    double initial_lo[3] = {0, 0, 0}, initial_hi[3] = {0, 0, 0};
     int32_t ilo[3], ihi[3];
     fm_error bounds_err;
-    if (fm_stock_active_bounds(stock, ilo, ihi, &bounds_err) == FM_OK) {
-        double a[3] = {ilo[0], ilo[1], ilo[2]}, b[3] = {ihi[0], ihi[1], ihi[2]};
-        fm_stock_index_to_world(stock, a, initial_lo);
-        fm_stock_index_to_world(stock, b, initial_hi);
-        /* Active voxels reach a band beyond the surface on either side. */
-        double band = fm_stock_band_voxels(stock) * fm_stock_voxel_size(stock);
-        for (int k = 0; k < 3; k++) {
-            initial_lo[k] += band;
-            initial_hi[k] -= band;
-        }
+    memset(lo, 0, 3 * sizeof *lo);
+    memset(hi, 0, 3 * sizeof *hi);
+    if (fm_stock_active_bounds(stock, ilo, ihi, &bounds_err) != FM_OK) return;
+    double a[3] = {ilo[0], ilo[1], ilo[2]}, b[3] = {ihi[0], ihi[1], ihi[2]};
+    fm_stock_index_to_world(stock, a, lo);
+    fm_stock_index_to_world(stock, b, hi);
+    /* Active voxels reach a band beyond the surface on either side. */
+    double band = fm_stock_band_voxels(stock) * fm_stock_voxel_size(stock);
+    for (int k = 0; k < 3; k++) {
+        lo[k] += band;
+        hi[k] -= band;
     }
+}
 
-    job_cutter *c = calloc(1, sizeof *c);
-    if (!c) {
-        fm_design_free(design);
-        fm_stock_free(stock);
-        job_tools_free(&tools);
-        return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
-    }
-    c->spec = spec;
-    c->hooks = hooks;
-    c->tools = &tools;
-    c->stock = stock;
-    c->err = err;
-    c->started = job_now_s();
-    c->progress.motions_total = sv.motions;
-    c->progress.program_time_total = sv.time_total;
-    c->progress.block = -1;
-    c->progress.design = design;
-    c->stop.line = spec->stop_at_line;
+/* The survey: the whole program is checked before anything is cut, its
+ * length gives the progress its denominator, and its motions are kept for
+ * the cut and the blame (the one interpretation). */
+static fm_status survey(const fm_job_spec *spec, const job_tools *tools, job_survey *sv,
+                        fm_job_result *result, fm_error *err)
+{
+    sv->stop.line = spec->stop_at_line;
+    if (spec->program_kind == FM_PROGRAM_LIVE) return FM_OK;
+    sv->log = spec->motion_log ? job_motions_open_log(spec->motion_log, err)
+                               : job_motions_new(JOB_MOTIONS_MEMORY, NULL);
+    if (!sv->log) return err && err->code ? err->code : FM_ERR_LIMIT;
+    result->interpretations++;
+    fm_status st = job_run_program(spec, tools->use, job_survey_sink, sv, job_survey_probe, err);
+    /* a log that cannot serve the toolpath leaves no file to be read */
+    if (spec->motion_log && (st != FM_OK || !job_motions_usable(sv->log))) remove(spec->motion_log);
+    return st;
+}
 
-    if (hooks && hooks->on_stock) hooks->on_stock(hooks->user, stock);
-    if (spec->check) st = job_check_setup(c, &sv, err);
+/* The cutting pass: the survey's motions replayed, or the program again
+ * when they could not be kept or its probe reads the stock. */
+static fm_status cut(job_cutter *c, const job_survey *sv, fm_job_result *result, fm_error *err)
+{
+    const fm_job_spec *spec = c->spec;
+    if (spec->program_kind == FM_PROGRAM_LIVE) return job_run_live(c);
+    if (job_motions_usable(sv->log) && !sv->probing)
+        return fm_job_motions_replay(sv->log, spec->machine, job_cut_sink, c, err);
+    result->interpretations++;
+    return job_run_program(spec, c->tools->use, job_cut_sink, c, job_cut_probe, err);
+}
+
+/* Compare the stock with the design and blame its gouges. */
+static fm_status compare(job_cutter *c, fm_design *design, fm_job_motions *log,
+                         fm_job_result *result, fm_error *err)
+{
+    const double w0 = job_now_s(), c0 = job_cpu_s();
+    fm_status st = fm_stock_compare_design(c->stock, design, FM_JOB_MAX_REGIONS,
+                                           &result->deviation, err);
+    result->has_deviation = st == FM_OK;
+    const double w1 = job_now_s(), c1 = job_cpu_s();
+    result->design_compare_wall_s = w1 - w0;
+    result->design_compare_cpu_s = c1 - c0;
     if (st == FM_OK)
-        st = live ? job_run_live(c) : job_run_program(spec, tools.use, job_cut_sink, c, job_cut_probe, err);
-    if (st == FM_OK) st = c->status;
-    if (st == FM_OK && !c->stopped && !c->stopped_at_line) st = job_flush_batch(c);
-    if (st == FM_OK && design && !c->stopped) {
-        const double w0 = job_now_s(), c0 = job_cpu_s();
-        st = fm_stock_compare_design(stock, design, FM_JOB_MAX_REGIONS, &result->deviation, err);
-        result->has_deviation = st == FM_OK;
-        const double w1 = job_now_s(), c1 = job_cpu_s();
-        result->design_compare_wall_s = w1 - w0;
-        result->design_compare_cpu_s = c1 - c0;
-        if (st == FM_OK)
-            st = job_blame_gouges(spec, &tools, fm_stock_voxel_size(stock), result, err);
-        result->design_blame_wall_s = job_now_s() - w1;
-        result->design_blame_cpu_s = job_cpu_s() - c1;
-    }
-    if (st != FM_OK) {
-        job_check_free(c);
-        free(c->lines_cut);
-        free(c);
-        fm_deviation_free(&result->deviation);
-        result->has_deviation = 0;
-        fm_design_free(design);
-        fm_stock_free(stock);
-        job_tools_free(&tools);
-        return st;
-    }
-    if (c->check) {
-        fm_check_finish(c->check);
-        result->check = c->check;
-        result->check_time_s = c->check_time;
-        c->check = NULL;
-        job_check_free(c);
-    }
+        st = job_blame_gouges(c->spec, c->tools, fm_stock_voxel_size(c->stock), log, result, err);
+    result->design_blame_wall_s = job_now_s() - w1;
+    result->design_blame_cpu_s = job_cpu_s() - c1;
+    return st;
+}
 
+/* The figures of a finished job. */
+static void fill_result(const job_cutter *c, const job_survey *sv, fm_job_result *result)
+{
+    fm_stock *stock = c->stock;
+    const int live = c->spec->program_kind == FM_PROGRAM_LIVE;
     result->stock = stock;
     result->stopped = c->stopped;
     result->initial_volume_mm3 = fm_stock_initial_volume(stock);
@@ -161,12 +116,10 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     fm_error area_err;
     if (fm_stock_surface_area(stock, &area, &area_err) == FM_OK) result->surface_area_mm2 = area;
     result->has_thin = fm_stock_thin_material(stock, &result->thin, &area_err) == FM_OK;
-    result->motions = live ? c->progress.motions_total : sv.motions;
+    result->motions = live ? c->progress.motions_total : sv->motions;
     result->blocks = c->blocks;
-    result->program_time_s = live ? c->progress.program_time_total : sv.time_total;
+    result->program_time_s = live ? c->progress.program_time_total : sv->time_total;
     result->voxel_mm = fm_stock_voxel_size(stock);
-    memcpy(result->initial_lo, initial_lo, sizeof initial_lo);
-    memcpy(result->initial_hi, initial_hi, sizeof initial_hi);
     size_t n = fm_stock_tool_volumes(stock, result->tools,
                                      sizeof result->tools / sizeof result->tools[0]);
     result->tool_count = n < 64 ? n : 64;
@@ -177,17 +130,81 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     result->voxels_uncertain = c->stats.voxels_uncertain;
     result->uncertain_max_mm = c->stats.uncertain_max_mm;
     result->uncertain_line = c->progress.uncertain_line;
-    result->stopped_at_line = c->stopped_at_line ? spec->stop_at_line : 0;
-    result->design = design;
+    result->stopped_at_line = c->stopped_at_line ? c->spec->stop_at_line : 0;
     result->design_wall_s =
         result->design_build_wall_s + result->design_compare_wall_s + result->design_blame_wall_s;
     result->design_cpu_s =
         result->design_build_cpu_s + result->design_compare_cpu_s + result->design_blame_cpu_s;
-    result->wall_time_s = job_now_s() - started;
     result->peak_memory_bytes = fm_job_peak_rss();
+}
 
-    free(c->lines_cut);
-    free(c);
+fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_result *result,
+                     fm_error *err)
+{
+    memset(result, 0, sizeof *result);
+    const double started = job_now_s();
+    job_tools tools;
+    job_survey sv = {0};
+    fm_stock *stock = spec->resume_stock; /* owned from here on, also on error */
+    fm_design *design = NULL;
+    job_cutter *c = NULL;
+    fm_status st = job_tools_load(spec, &tools, err);
+    if (st == FM_OK) st = survey(spec, &tools, &sv, result, err);
+    if (st == FM_OK && !stock && !(stock = fm_job_make_stock(spec->stock_spec, &spec->stock, err)))
+        st = err && err->code ? err->code : FM_ERR_INPUT;
+    /* The design before any cut: its errors come at once, and progress
+     * hooks can colour by deviation while the job runs. */
+    if (st == FM_OK && spec->design_path) {
+        const double w0 = job_now_s(), c0 = job_cpu_s();
+        if (!(design = job_make_design(spec, stock, err)))
+            st = err && err->code ? err->code : FM_ERR_INPUT;
+        result->design_build_wall_s = job_now_s() - w0;
+        result->design_build_cpu_s = job_cpu_s() - c0;
+    }
+    if (st == FM_OK && !(c = calloc(1, sizeof *c)))
+        st = fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    if (st == FM_OK) {
+        initial_bounds(stock, result->initial_lo, result->initial_hi);
+        c->spec = spec;
+        c->hooks = hooks;
+        c->tools = &tools;
+        c->stock = stock;
+        c->err = err;
+        c->started = job_now_s();
+        c->progress.motions_total = sv.motions;
+        c->progress.program_time_total = sv.time_total;
+        c->progress.block = -1;
+        c->progress.design = design;
+        c->stop.line = spec->stop_at_line;
+        if (hooks && hooks->on_stock) hooks->on_stock(hooks->user, stock);
+        if (spec->check) st = job_check_setup(c, &sv, err);
+        if (st == FM_OK) st = cut(c, &sv, result, err);
+        if (st == FM_OK) st = c->status;
+        if (st == FM_OK && !c->stopped && !c->stopped_at_line) st = job_flush_batch(c);
+        if (st == FM_OK && design && !c->stopped) st = compare(c, design, sv.log, result, err);
+    }
+    if (st == FM_OK) {
+        if (c->check) {
+            fm_check_finish(c->check);
+            result->check = c->check;
+            result->check_time_s = c->check_time;
+            c->check = NULL;
+        }
+        fill_result(c, &sv, result);
+        result->design = design;
+        result->wall_time_s = job_now_s() - started;
+    } else {
+        fm_deviation_free(&result->deviation);
+        result->has_deviation = 0;
+        fm_design_free(design);
+        fm_stock_free(stock);
+    }
+    if (c) {
+        job_check_free(c);
+        free(c->lines_cut);
+        free(c);
+    }
+    fm_job_motions_free(sv.log);
     job_tools_free(&tools);
-    return FM_OK;
+    return st;
 }

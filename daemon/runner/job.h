@@ -122,6 +122,15 @@ typedef struct fm_job_spec {
      * max_evaluations; 0: the default 20,000). Smaller budgets are for
      * tests that provoke the budget warning (fm_job_result.voxels_uncertain). */
     size_t sweep_evaluations;
+
+    /* Where the program's motions are kept (fm_job_motions_replay_file
+     * serves them after the job: the daemon's toolpath); NULL: in memory,
+     * spilled to a temporary file beyond a budget. The program is
+     * interpreted once per job either way, its motions replayed for the cut
+     * and the blame; again only when a motion cannot be kept (a
+     * trajectory's parametric path: then no file is left) or the cut's
+     * probe must read the stock (G38). */
+    const char *motion_log;
 } fm_job_spec;
 
 void fm_job_spec_default(fm_job_spec *spec);
@@ -247,7 +256,23 @@ typedef struct fm_job_result {
      * warning). has_thin is 0 when the search itself failed. */
     int has_thin;
     fm_stock_thin_report thin;
+    /* How many times the program was interpreted (1: the survey's motions
+     * were replayed for the cut and the blame). */
+    int interpretations;
 } fm_job_result;
+
+/* The motions of a job's program, kept (job_motions.c). */
+typedef struct fm_job_motions fm_job_motions;
+void fm_job_motions_free(fm_job_motions *log);
+long fm_job_motions_count(const fm_job_motions *log);
+/* The motions in order into sink (a non-zero return stops it, FM_OK);
+ * machine: the job's, which the motions' rotary poses read. */
+fm_status fm_job_motions_replay(fm_job_motions *log, const fm_machine *machine,
+                                fm_motion_sink sink, void *user, fm_error *err);
+/* The same from the file a job kept (spec.motion_log), after it or while
+ * it cuts: FM_ERR_IO when there is none (interpret the program instead). */
+fm_status fm_job_motions_replay_file(const char *path, const fm_machine *machine,
+                                     fm_motion_sink sink, void *user, fm_error *err);
 
 /* Free what a result owns (stock, design, deviation, check); safe on a zeroed
  * result. */

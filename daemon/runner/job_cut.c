@@ -23,6 +23,7 @@ static void grow_box(job_survey *s, const double lo[3], const double hi[3])
 int job_survey_sink(void *user, const fm_motion *m)
 {
     job_survey *s = user;
+    job_motions_add(s->log, m); /* all of them: the cut stops itself */
     /* past a stop the program is still checked, but not counted */
     if (s->stop.line > 0 && (s->stopped || (s->stopped = job_stop_before(&s->stop, m)))) return 0;
     s->motions++;
@@ -58,6 +59,17 @@ int job_survey_sink(void *user, const fm_motion *m)
     }
     grow_box(s, lo, hi);
     return 0;
+}
+
+fm_status job_survey_probe(void *user, const fm_motion *move, int toward, int *tripped,
+                           double *fraction, int *at_start, fm_error *err)
+{
+    (void)move, (void)toward, (void)err;
+    ((job_survey *)user)->probing = 1;
+    *tripped = 1;
+    *fraction = 1;
+    *at_start = 0;
+    return FM_OK;
 }
 
 double fm_job_motion_length(const fm_motion *m)

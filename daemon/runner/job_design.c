@@ -38,7 +38,8 @@ fm_design *job_make_design(const fm_job_spec *spec, const fm_stock *stock, fm_er
 /* Each listed gouge is blamed on the motion whose swept volume reaches
  * deepest at the gouge's deepest point (on the final surface, so the motion
  * that cut it has its sweep's boundary there and every other a value at or
- * below it). The program is interpreted once more; only motions whose box
+ * below it). The program's motions are replayed (interpreted once more
+ * when they could not be kept); only motions whose box
  * can reach a point build their sweep. A gouge no motion reaches within a
  * voxel (cut before this program, in an earlier job's stock) stays
  * unblamed. */
@@ -117,7 +118,7 @@ static int blame_sink(void *user, const fm_motion *m)
 }
 
 fm_status job_blame_gouges(const fm_job_spec *spec, const job_tools *tools, double voxel,
-                              fm_job_result *result, fm_error *err)
+                           fm_job_motions *log, fm_job_result *result, fm_error *err)
 {
     const fm_deviation *dev = &result->deviation;
     if (dev->gouge_count == 0) return FM_OK;
@@ -131,7 +132,13 @@ fm_status job_blame_gouges(const fm_job_spec *spec, const job_tools *tools, doub
     b->err = err;
     for (size_t i = 0; i < FM_JOB_MAX_REGIONS; i++) b->best[i] = -INFINITY;
     /* no probe: a G38 move does not trip here (docs/simulate.md) */
-    fm_status st = job_run_program(spec, tools->use, blame_sink, b, NULL, err);
+    fm_status st;
+    if (job_motions_usable(log)) {
+        st = fm_job_motions_replay(log, spec->machine, blame_sink, b, err);
+    } else {
+        st = job_run_program(spec, tools->use, blame_sink, b, NULL, err);
+        result->interpretations++;
+    }
     if (st == FM_OK) st = b->status;
     /* a sweep that ends more than a voxel from the point did not cut it */
     for (size_t i = 0; i < dev->gouge_count; i++)

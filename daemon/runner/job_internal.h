@@ -5,10 +5,13 @@
  *   job_cut.c      the cut loop: the survey pass, batching, cuts, progress
  *   job_check.c    the collision check's set-up beside the cut
  *   job_live.c     live jobs: motions from a controller through the same cut
+ *   job_motions.c  the program's motions kept: interpreted once per job
  *   job_design.c   the design comparison's design and the blame of gouges
  *   job_resources.c  clocks and the process's memory and CPU time */
 #ifndef FM_JOB_INTERNAL_H
 #define FM_JOB_INTERNAL_H
+
+#include <stdio.h>
 
 #include "frep/frep.h"
 #include "job.h"
@@ -60,6 +63,20 @@ typedef struct job_stop_rule {
 
 int job_stop_before(job_stop_rule *r, const fm_motion *m);
 
+/* -------------------------------------------------------- motions -- */
+
+/* How much of a log stays in memory before it spills to a temporary file. */
+#define JOB_MOTIONS_MEMORY ((size_t)64 << 20)
+
+/* A log in memory (memory_bytes, then spilled to file, or to a temporary
+ * file when file is NULL), or in the job's own file (spec.motion_log). */
+fm_job_motions *job_motions_new(size_t memory_bytes, FILE *file);
+fm_job_motions *job_motions_open_log(const char *path, fm_error *err);
+void job_motions_add(fm_job_motions *log, const fm_motion *m);
+/* Every motion the program made is in it (none was a PARAM motion, no
+ * write failed). */
+int job_motions_usable(const fm_job_motions *log);
+
 /* ------------------------------------------------------------ cut -- */
 
 /* The first pass: the whole program is checked before anything is cut,
@@ -72,9 +89,15 @@ typedef struct job_survey {
     double tip_lo[3], tip_hi[3]; /* box of the tool tip over the program */
     job_stop_rule stop;
     int stopped;
+    fm_job_motions *log; /* the motions kept for the cut and the blame */
+    int probing;         /* a G38 move: the cut's motions depend on the stock */
 } job_survey;
 
 int job_survey_sink(void *user, const fm_motion *m);
+/* The survey's G38: noted (the cut then interprets the program again, its
+ * probe reading the stock), tripped at the end as with no probe. */
+fm_status job_survey_probe(void *user, const fm_motion *move, int toward, int *tripped,
+                           double *fraction, int *at_start, fm_error *err);
 
 typedef struct job_cutter {
     const fm_job_spec *spec;
@@ -133,7 +156,7 @@ fm_status job_run_live(job_cutter *c);
 
 fm_design *job_make_design(const fm_job_spec *spec, const fm_stock *stock, fm_error *err);
 fm_status job_blame_gouges(const fm_job_spec *spec, const job_tools *tools, double voxel,
-                           fm_job_result *result, fm_error *err);
+                           fm_job_motions *log, fm_job_result *result, fm_error *err);
 
 /* ------------------------------------------------------ resources -- */
 
