@@ -68,7 +68,7 @@ static fm_status survey(const fm_job_spec *spec, const job_tools *tools, job_sur
     result->interpretations++;
     fm_status st = job_run_program(spec, tools->use, job_survey_sink, sv, job_survey_probe, err);
     /* a log that cannot serve the toolpath leaves no file to be read */
-    if (spec->motion_log && (st != FM_OK || !job_motions_usable(sv->log))) remove(spec->motion_log);
+    if (spec->motion_log) job_motions_keep(sv->log, spec->motion_log, st == FM_OK);
     return st;
 }
 

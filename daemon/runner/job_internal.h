@@ -72,6 +72,9 @@ int job_stop_before(job_stop_rule *r, const fm_motion *m);
  * file when file is NULL), or in the job's own file (spec.motion_log). */
 fm_job_motions *job_motions_new(size_t memory_bytes, FILE *file);
 fm_job_motions *job_motions_open_log(const char *path, fm_error *err);
+/* The job's own log complete (keep: the survey succeeded): in place at
+ * path when usable, else no file there. */
+fm_status job_motions_keep(fm_job_motions *log, const char *path, int keep);
 void job_motions_add(fm_job_motions *log, const fm_motion *m);
 /* Every motion the program made is in it (none was a PARAM motion, no
  * write failed). */

@@ -5,7 +5,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "job_internal.h"
 
@@ -114,8 +113,15 @@ fm_status fm_job_motions_replay(fm_job_motions *log, const fm_machine *machine,
 fm_job_motions *job_motions_open_log(const char *path, fm_error *err)
 {
     /* the job's own file: every motion goes there, after a magic header
-     * that says which build wrote it (its fm_motion's size) */
-    FILE *f = fopen(path, "w+b");
+     * that says which build wrote it (its fm_motion's size); written as
+     * PATH.part and renamed once whole (job_motions_keep), so that a reader
+     * finds all of a program's motions or none */
+    char part[4096];
+    if (snprintf(part, sizeof part, "%s.part", path) >= (int)sizeof part) {
+        fm_error_set(err, FM_ERR_INPUT, "the motion log's path is too long");
+        return NULL;
+    }
+    FILE *f = fopen(part, "w+b");
     if (!f) {
         fm_error_set(err, FM_ERR_IO, "cannot write the motion log %s", path);
         return NULL;
@@ -134,6 +140,18 @@ fm_job_motions *job_motions_open_log(const char *path, fm_error *err)
     }
     log->data_offset = ftell(f);
     return log;
+}
+
+fm_status job_motions_keep(fm_job_motions *log, const char *path, int keep)
+{
+    char part[4096];
+    snprintf(part, sizeof part, "%s.part", path);
+    if (!keep || !job_motions_usable(log) || fflush(log->file) != 0) {
+        remove(part);
+        remove(path); /* an earlier run's: not this program's motions */
+        return FM_OK;
+    }
+    return rename(part, path) == 0 ? FM_OK : FM_ERR_IO;
 }
 
 fm_status fm_job_motions_replay_file(const char *path, const fm_machine *machine,

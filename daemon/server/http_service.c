@@ -194,6 +194,19 @@ static int toolpath_sink(void *user, const fm_motion *m)
     return fm_toolpath_truncated(user);
 }
 
+/* The toolpath and how many motions reached it (from the motion log). */
+typedef struct toolpath_from {
+    fm_toolpath *path;
+    long motions;
+} toolpath_from;
+
+static int toolpath_counted(void *user, const fm_motion *m)
+{
+    toolpath_from *tf = user;
+    tf->motions++;
+    return toolpath_sink(tf->path, m);
+}
+
 static fm_status svc_toolpath(void *ctx, const char *id, fm_http_blob *out, fm_error *err)
 {
     job *j = fm_jobs_get(ctx, id);
@@ -207,9 +220,18 @@ static fm_status svc_toolpath(void *ctx, const char *id, fm_http_blob *out, fm_e
     }
     fm_error ferr;
     fm_error_clear(&ferr);
+    /* what the job made (its motion log), else the program interpreted */
+    char motion_log[JOB_DIR_MAX + 16];
+    fm_job_file_path(j, "motions.log", motion_log, sizeof motion_log);
+    toolpath_from tf = {path, 0};
     fm_status st = spec->program_kind == FM_PROGRAM_LIVE
                        ? FM_OK
-                       : fm_job_interpret(spec, toolpath_sink, path, &ferr);
+                       : fm_job_motions_replay_file(motion_log, spec->machine, toolpath_counted,
+                                                    &tf, &ferr);
+    if (st != FM_OK && spec->program_kind != FM_PROGRAM_LIVE && tf.motions == 0) {
+        fm_error_clear(&ferr);
+        st = fm_job_interpret(spec, toolpath_sink, path, &ferr);
+    }
     json_t *prog = json_stringn(spec->program_text ? spec->program_text : "", spec->program_length);
     const char *kind = spec->program_kind == FM_PROGRAM_GCODE  ? "gcode"
                        : spec->program_kind == FM_PROGRAM_LIVE ? "live"

@@ -215,6 +215,10 @@ static void run_job(fm_queue *q, job *j)
 
     spec.stock.memory_budget = fm_job_memory_budget(q->cfg.job_memory_bytes, j->doc);
     if (!j->doc->threads_given) spec.stock.threads = q->cfg.threads_per_job;
+    /* the motions the job makes, kept for GET /v1/jobs/ID/toolpath */
+    char motion_log[JOB_DIR_MAX + 16];
+    fm_job_file_path(j, "motions.log", motion_log, sizeof motion_log);
+    spec.motion_log = motion_log;
     fm_status st = FM_OK;
     int live = spec.program_kind == FM_PROGRAM_LIVE;
     fm_job_motion_source source;

@@ -5,7 +5,7 @@ by a daemon of the fleet. The job cuts a slot and plunges a rapid into the
 stock: its removed volume has a closed form (checked for each entrance, so
 that a value they share cannot pass wrong), the rapid is one error finding
 at its line, and the reports agree number for number (wall and CPU times
-aside).
+aside). The daemon's toolpath of the job is served from the motions it kept.
 Usage: test_entrances.py FREPMILLD FREPMILL"""
 import json
 import math
@@ -130,6 +130,14 @@ def main():
             # 3. HTTP
             job_id = submit(d.url, document(), tmp)
             status, reports["http"] = daemon_report(d.url, job_id)
+            # its toolpath is what the job produced: the motions it kept
+            check(os.path.exists(os.path.join(tmp, "state", "jobs", job_id, "motions.log")),
+                  "the job kept its motions (motions.log)")
+            code, tp = curl_json(d.url + "/v1/jobs/%s/toolpath" % job_id)
+            check(code == 200 and len(tp["motions"]) == reports["http"]["motions"] and
+                  [m[1] for m in tp["motions"]][RAPID_LINE - 4] == RAPID_LINE,
+                  "GET toolpath: %d motions like the report, the rapid at line %d" %
+                  (len(tp["motions"]), RAPID_LINE))
             # 4. the fleet: a queue entry, its result in the results hash
             r = redis.client()
             entry = r("XADD", "frepmill:jobs", "*", "job", json.dumps(document())).decode()
