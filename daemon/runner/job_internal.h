@@ -1,5 +1,6 @@
 /* job_internal.h: what the job runner's files share (job.h is the public
- * side). job.c orchestrates a job; each concern has a file of its own:
+ * side). job_run.c orchestrates a job (job.h, fm_job_run); each concern has
+ * a file of its own:
  *   job_tools.c    the tool table built into cutters (custom HyperFun ones too)
  *   job_program.c  program dispatch (G-code, trajectory) and the stop-at rule
  *   job_cut.c      the cut loop: the survey pass, batching, cuts, progress

@@ -1,4 +1,4 @@
-/* job.c: a job from spec to result (DESIGN.md sec. 3): tools, a survey of
+/* job_run.c: a job from spec to result (DESIGN.md sec. 3): tools, a survey of
  * the program, the stock and design, the cutting pass (with the check in
  * it, or a live source), the design comparison, and the result's figures.
  * The concerns live in the files job_internal.h lists. */
