@@ -14,7 +14,7 @@ set -eu
 group=${1:-build}
 
 build_pkgs="build-essential cmake ninja-build pkg-config libopenvdb-dev libboost-iostreams-dev libtbb-dev libhiredis-dev \
-libblosc-dev libdraco-dev libmodbus-dev libmicrohttpd-dev libjansson-dev libstb-dev curl"
+libblosc-dev libdraco-dev libmodbus-dev libmicrohttpd-dev libjansson-dev libzip-dev libstb-dev curl"
 test_pkgs="valgrind python3 linuxcnc-uspace mbpoll draco curl chromium redis-server clang libclang-rt-14-dev"
 
 case "$group" in

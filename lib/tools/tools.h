@@ -29,6 +29,18 @@ typedef struct fm_holder_segment {
     double length;       /* mm */
 } fm_holder_segment;
 
+/* A library's feeds and speeds for a tool (Fusion 360's presets): kept for
+ * reports, not used by the simulation. 0 where the library has no value. */
+#define FM_TOOL_MAX_PRESETS 4
+typedef struct fm_tool_preset {
+    char name[48];
+    double spindle_rpm;
+    double cutting_speed;  /* m/min */
+    double feed;           /* cutting feed, mm/min */
+    double plunge_feed;    /* mm/min */
+    double feed_per_tooth; /* mm */
+} fm_tool_preset;
+
 /* Every length in millimetres, every angle in degrees. A field a shape does
  * not use is 0. */
 typedef struct fm_tool_spec {
@@ -52,7 +64,13 @@ typedef struct fm_tool_spec {
                               program's Z zero was touched off with this tool */
     char hyperfun_file[256];
     double bound_radius;   /* hyperfun: declared bounding radius */
-    char comment[128];
+    char comment[128];     /* the description as the table or library names the tool */
+    /* What a CAM library says besides the geometry, for reports (0 / empty
+     * when the table does not say). */
+    int flute_count;       /* Fusion NOF */
+    int length_register;   /* Fusion post-process length-offset: the H register its posts write */
+    int preset_count;
+    fm_tool_preset presets[FM_TOOL_MAX_PRESETS];
 } fm_tool_spec;
 
 typedef struct fm_tool_table {

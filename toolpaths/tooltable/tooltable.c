@@ -1,8 +1,12 @@
 /* tooltable.c: JSON and LinuxCNC .tbl tool tables -> fm_tool_table, with a
- * clear error for every field that is missing, mistyped or out of range. */
+ * clear error for every field that is missing, mistyped or out of range;
+ * the loader that tells every format apart by content, and what the other
+ * readers (fusion.c, freecad.c, camotics.c, comments.c) share. */
 #include "tooltable.h"
+#include "tooltable_internal.h"
 
 #include <ctype.h>
+#include <stdarg.h>
 #include <errno.h>
 #include <jansson.h>
 #include <math.h>
@@ -487,48 +491,220 @@ fail:
     return st;
 }
 
-fm_status fm_tooltable_load(const char *path, fm_tool_table *out, fm_error *err)
+/* ------------------------------------------------------------------ */
+/* What the readers share                                              */
+
+void tt_warn(const tt_reader *r, const char *fmt, ...)
 {
-    fm_error local;
-    if (!err) err = &local;
-    out->count = 0;
-    out->tools = NULL;
+    if (!r->opt || !r->opt->warning) return;
+    char msg[768];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    r->opt->warning(r->opt->warning_user, msg);
+}
+
+void tt_copy(char *dst, size_t size, const char *src)
+{
+    snprintf(dst, size, "%s", src ? src : "");
+}
+
+int tt_same(const char *a, const char *b)
+{
+    for (; *a && *b; a++, b++)
+        if (tolower((unsigned char)*a) != tolower((unsigned char)*b)) return 0;
+    return *a == *b;
+}
+
+fm_status tt_validate(const tt_reader *r, const fm_tool_spec *s, const char *where)
+{
+    fm_error e;
+    fm_error_clear(&e);
+    if (fm_tool_validate(s, &e) == FM_OK) return FM_OK;
+    return fm_error_at(r->err, FM_ERR_INPUT, r->name, 0, 0, "%s: %s", where, e.message);
+}
+
+fm_status tt_push(const tt_reader *r, fm_tool_table *t, size_t *cap, const fm_tool_spec *s,
+                  const char *where)
+{
+    for (size_t i = 0; i < t->count; i++)
+        if (t->tools[i].number == s->number)
+            return fm_error_at(r->err, FM_ERR_INPUT, r->name, 0, 0,
+                               "%s: duplicate tool number %d (also \"%.60s\")", where, s->number,
+                               t->tools[i].comment);
+    if (t->count >= FM_TOOLTABLE_MAX_TOOLS)
+        return fm_error_at(r->err, FM_ERR_LIMIT, r->name, 0, 0, "more than %d tools",
+                           FM_TOOLTABLE_MAX_TOOLS);
+    if (t->count == *cap) {
+        size_t nc = *cap ? *cap * 2 : 16;
+        fm_tool_spec *nt = realloc(t->tools, nc * sizeof *nt);
+        if (!nt) return fm_error_set(r->err, FM_ERR_LIMIT, "out of memory");
+        t->tools = nt;
+        *cap = nc;
+    }
+    t->tools[t->count++] = *s;
+    return FM_OK;
+}
+
+fm_status tt_read_file(const char *path, size_t max, char **text, size_t *len, fm_error *err)
+{
+    *text = NULL;
+    *len = 0;
     FILE *f = fopen(path, "rb");
     if (!f) return fm_error_at(err, FM_ERR_IO, path, 0, 0, "cannot open: %s", strerror(errno));
-    size_t cap = 4096, len = 0;
-    char *buf = malloc(cap);
+    size_t cap = 4096, n = 0;
+    char *buf = malloc(cap + 1);
     fm_status st = FM_OK;
-    if (!buf) {
-        fclose(f);
-        return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
-    }
     for (;;) {
-        if (len == cap) {
-            if (cap > FM_TOOLTABLE_MAX_BYTES) {
-                st = fm_error_at(err, FM_ERR_LIMIT, path, 0, 0, "tool table larger than %u bytes",
-                                 FM_TOOLTABLE_MAX_BYTES);
+        if (!buf) {
+            st = fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+            break;
+        }
+        if (n == cap) {
+            if (cap > max) {
+                st = fm_error_at(err, FM_ERR_LIMIT, path, 0, 0, "tool table larger than %zu bytes",
+                                 max);
                 break;
             }
-            char *nb = realloc(buf, cap * 2);
-            if (!nb) {
-                st = fm_error_set(err, FM_ERR_LIMIT, "out of memory");
-                break;
-            }
+            char *nb = realloc(buf, cap * 2 + 1);
+            if (!nb) free(buf);
             buf = nb;
             cap *= 2;
+            continue;
         }
-        size_t r = fread(buf + len, 1, cap - len, f);
-        if (r == 0) break;
-        len += r;
+        size_t k = fread(buf + n, 1, cap - n, f);
+        if (k == 0) break;
+        n += k;
     }
     if (!st && ferror(f)) st = fm_error_at(err, FM_ERR_IO, path, 0, 0, "read error");
     fclose(f);
-    if (!st) {
-        size_t p = 0;
-        while (p < len && isspace((unsigned char)buf[p])) p++;
-        if (p < len && buf[p] == '{') st = fm_tooltable_parse_json(buf, len, path, out, err);
-        else st = fm_tooltable_parse_tbl(buf, len, path, out, err);
+    if (!st && n > max)
+        st = fm_error_at(err, FM_ERR_LIMIT, path, 0, 0, "tool table larger than %zu bytes", max);
+    if (st) {
+        free(buf);
+        return st;
     }
-    free(buf);
+    buf[n] = '\0';
+    *text = buf;
+    *len = n;
+    return FM_OK;
+}
+
+/* ------------------------------------------------------------------ */
+/* Telling the formats apart                                           */
+
+typedef enum tt_format {
+    TT_FREPMILL = 0,
+    TT_FUSION,
+    TT_FREECAD_BIT,
+    TT_FREECAD_LIBRARY,
+    TT_CAMOTICS
+} tt_format;
+
+/* By the keys: Fusion's "data"; FreeCAD's "shape" + "parameter" (a bit) or
+ * "version" + "tools" [{"nr", "path"}] (a library); CAMotics' "tools" as an
+ * object (a project) or an object of numbered tools; everything else is
+ * frepmill's form (whose parser names what is wrong). */
+static tt_format json_format(json_t *root)
+{
+    if (!json_is_object(root)) return TT_FREPMILL;
+    if (json_object_get(root, "data")) return TT_FUSION;
+    if (json_object_get(root, "shape") && json_object_get(root, "parameter")) return TT_FREECAD_BIT;
+    json_t *tools = json_object_get(root, "tools");
+    if (json_is_object(tools)) return TT_CAMOTICS;
+    if (json_is_array(tools)) {
+        json_t *first = json_array_get(tools, 0);
+        if (json_object_get(root, "version") || json_object_get(first, "nr"))
+            return TT_FREECAD_LIBRARY;
+        return TT_FREPMILL;
+    }
+    if (!tools && json_object_size(root) > 0) {
+        const char *key;
+        json_t *v;
+        json_object_foreach(root, key, v) {
+            if (!key[0] || strspn(key, "0123456789") != strlen(key) || !json_is_object(v) ||
+                !json_object_get(v, "shape"))
+                return TT_FREPMILL;
+        }
+        return TT_CAMOTICS;
+    }
+    return TT_FREPMILL;
+}
+
+/* Content in memory; dir: the folder of the file it came from (NULL: not a
+ * file). */
+static fm_status parse_any(const char *data, size_t len, const char *name, const char *dir,
+                           const fm_tooltable_options *opt, fm_tool_table *out, fm_error *err)
+{
+    out->count = 0;
+    out->tools = NULL;
+    if (!name) name = "";
+    tt_reader r = {name, opt, err};
+    if (len > FM_TOOLTABLE_MAX_BYTES)
+        return fm_error_at(err, FM_ERR_LIMIT, name, 0, 0, "tool table larger than %u bytes",
+                           FM_TOOLTABLE_MAX_BYTES);
+    if (len >= 4 && !memcmp(data, "PK\x03\x04", 4)) return tt_fusion_zip(&r, data, len, out);
+    size_t p = 0;
+    while (p < len && isspace((unsigned char)data[p])) p++;
+    if (p >= len || data[p] != '{') return fm_tooltable_parse_tbl(data, len, name, out, err);
+    json_error_t je;
+    json_t *root = json_loadb(data, len, JSON_REJECT_DUPLICATES, &je);
+    if (!root)
+        return fm_error_at(err, FM_ERR_INPUT, name, je.line > 0 ? je.line : 0,
+                           je.column > 0 ? je.column : 0, "invalid JSON: %s", je.text);
+    fm_status st;
+    switch (json_format(root)) {
+    case TT_FUSION: st = tt_fusion_json(&r, root, out); break;
+    case TT_FREECAD_LIBRARY: st = tt_freecad_library(&r, root, dir, out); break;
+    case TT_CAMOTICS: st = tt_camotics(&r, root, out); break;
+    case TT_FREECAD_BIT: {
+        fm_tool_spec s;
+        size_t cap = 0;
+        tt_warn(&r, "%s: a single FreeCAD tool bit: taken as tool 1", name);
+        st = tt_freecad_bit(&r, root, 1, &s, "bit");
+        if (!st) st = tt_push(&r, out, &cap, &s, "bit");
+        if (st) fm_tool_table_free(out);
+        break;
+    }
+    default: st = fm_tooltable_parse_json(data, len, name, out, err); break;
+    }
+    json_decref(root);
     return st;
+}
+
+fm_status fm_tooltable_parse(const char *data, size_t len, const char *name,
+                             const fm_tooltable_options *opt, fm_tool_table *out, fm_error *err)
+{
+    fm_error local;
+    if (!err) err = &local;
+    fm_error_clear(err);
+    return parse_any(data, len, name, NULL, opt, out, err);
+}
+
+fm_status fm_tooltable_load_with(const char *path, const fm_tooltable_options *opt,
+                                 fm_tool_table *out, fm_error *err)
+{
+    fm_error local;
+    if (!err) err = &local;
+    fm_error_clear(err);
+    out->count = 0;
+    out->tools = NULL;
+    char *text;
+    size_t len;
+    fm_status st = tt_read_file(path, FM_TOOLTABLE_MAX_BYTES, &text, &len, err);
+    if (st) return st;
+    char dir[1024];
+    const char *slash = strrchr(path, '/');
+    if (!slash) tt_copy(dir, sizeof dir, ".");
+    else if (slash == path) tt_copy(dir, sizeof dir, "/");
+    else snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+    st = parse_any(text, len, path, dir, opt, out, err);
+    free(text);
+    return st;
+}
+
+fm_status fm_tooltable_load(const char *path, fm_tool_table *out, fm_error *err)
+{
+    return fm_tooltable_load_with(path, NULL, out, err);
 }
