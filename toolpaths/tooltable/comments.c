@@ -56,17 +56,6 @@ static size_t number_at(const char *p, double *out)
     return (size_t)(end - p);
 }
 
-static int has_word(const char *lower, const char *word)
-{
-    size_t n = strlen(word);
-    for (const char *p = lower; (p = strstr(p, word)); p++) {
-        int before = p == lower || !isalnum((unsigned char)p[-1]);
-        int after = !isalnum((unsigned char)p[n]);
-        if (before && after) return 1;
-    }
-    return 0;
-}
-
 static void append(char *buf, size_t size, const char *text)
 {
     size_t n = strlen(buf);
@@ -137,7 +126,7 @@ static int parse_comment(const fm_tooltable_comments *c, const char *text, size_
     double crmm = cr > 0 ? cr * unit : 0;
     char g[96];
     /* the shape: named by the description, else by the corner radius */
-    if (has_word(lower, "drill")) {
+    if (tt_has_word(lower, "drill")) {
         s->shape = FM_TOOL_DRILL;
         /* Fusion's TAPER of a drill is its point angle */
         if (taper > 0 && taper < 180) s->point_angle = taper;
@@ -145,9 +134,9 @@ static int parse_comment(const fm_tooltable_comments *c, const char *text, size_
             s->point_angle = 118;
             append(t->guessed, sizeof t->guessed, "point_angle 118");
         }
-    } else if (has_word(lower, "chamfer") || has_word(lower, "countersink") ||
-               has_word(lower, "sink") || has_word(lower, "vbit") || has_word(lower, "v-bit") ||
-               has_word(lower, "engraving")) {
+    } else if (tt_has_word(lower, "chamfer") || tt_has_word(lower, "countersink") ||
+               tt_has_word(lower, "sink") || tt_has_word(lower, "vbit") || tt_has_word(lower, "v-bit") ||
+               tt_has_word(lower, "engraving")) {
         s->shape = FM_TOOL_VBIT;
         /* a chamfer mill's TAPER is per side */
         if (taper > 0 && taper < 90) s->angle = 2 * taper;
@@ -155,9 +144,9 @@ static int parse_comment(const fm_tooltable_comments *c, const char *text, size_
             s->angle = 90;
             append(t->guessed, sizeof t->guessed, "angle 90");
         }
-    } else if (has_word(lower, "ball") || (crmm > 0 && fabs(crmm - r) < 1e-9)) {
+    } else if (tt_has_word(lower, "ball") || (crmm > 0 && fabs(crmm - r) < 1e-9)) {
         s->shape = FM_TOOL_BALL;
-    } else if (has_word(lower, "bull") || has_word(lower, "bullnose") || crmm > 0) {
+    } else if (tt_has_word(lower, "bull") || tt_has_word(lower, "bullnose") || crmm > 0) {
         if (crmm > 0) { /* lib/tools refuses one larger than the radius */
             s->shape = FM_TOOL_BULL;
             s->corner_radius = crmm;
@@ -167,7 +156,7 @@ static int parse_comment(const fm_tooltable_comments *c, const char *text, size_
             snprintf(g, sizeof g, "corner_radius %g mm (D / 8)", r / 4);
             append(t->guessed, sizeof t->guessed, g);
         }
-    } else if (has_word(lower, "tapered") && taper > 0 && taper < 90) {
+    } else if (tt_has_word(lower, "tapered") && taper > 0 && taper < 90) {
         s->shape = FM_TOOL_TAPERED;
         s->taper_angle = taper;
     } else {

@@ -330,7 +330,7 @@ fm_status fm_tooltable_parse_json(const char *text, size_t len, const char *name
 /* ------------------------------------------------------------------ */
 /* LinuxCNC .tbl                                                       */
 
-static int word_in(const char *comment, const char *word)
+int tt_has_word(const char *comment, const char *word)
 {
     size_t n = strlen(word);
     for (const char *p = comment; (p = strstr(p, word)); p++) {
@@ -446,14 +446,14 @@ fm_status fm_tooltable_parse_tbl(const char *text, size_t len, const char *name,
         size_t n = strlen(s.comment);
         for (size_t q = 0; q <= n; q++) lower[q] = (char)tolower((unsigned char)s.comment[q]);
         s.shape = FM_TOOL_FLAT;
-        if (word_in(lower, "ball")) s.shape = FM_TOOL_BALL;
-        else if (word_in(lower, "bull")) {
+        if (tt_has_word(lower, "ball")) s.shape = FM_TOOL_BALL;
+        else if (tt_has_word(lower, "bull")) {
             s.shape = FM_TOOL_BULL;
             s.corner_radius = s.diameter / 4;
-        } else if (word_in(lower, "vbit") || word_in(lower, "v-bit") || word_in(lower, "chamfer")) {
+        } else if (tt_has_word(lower, "vbit") || tt_has_word(lower, "v-bit") || tt_has_word(lower, "chamfer")) {
             s.shape = FM_TOOL_VBIT;
             s.angle = 90;
-        } else if (word_in(lower, "drill")) {
+        } else if (tt_has_word(lower, "drill")) {
             s.shape = FM_TOOL_DRILL;
             s.point_angle = 118;
         }

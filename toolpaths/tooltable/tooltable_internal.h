@@ -36,6 +36,9 @@ fm_status tt_validate(const tt_reader *r, const fm_tool_spec *s, const char *whe
 /* Copy a label into a fixed buffer, cut at its size. */
 void tt_copy(char *dst, size_t size, const char *src);
 
+/* Does text hold word as a whole word (not inside a longer one)? */
+int tt_has_word(const char *text, const char *word);
+
 /* Case-insensitive equality of ASCII names. */
 int tt_same(const char *a, const char *b);
 
