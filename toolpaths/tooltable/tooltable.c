@@ -233,8 +233,9 @@ static fm_status parse_tool(jctx *c, json_t *t, fm_tool_spec *s)
     return FM_OK;
 }
 
-fm_status fm_tooltable_from_json(json_t *root, const char *name, fm_tool_table *out,
-                                 fm_error *err)
+/* frepmill's own JSON form, already parsed. */
+static fm_status frepmill_from_json(json_t *root, const char *name, fm_tool_table *out,
+                                    fm_error *err)
 {
     fm_error local;
     if (!err) err = &local;
@@ -322,7 +323,7 @@ fm_status fm_tooltable_parse_json(const char *text, size_t len, const char *name
     if (!root)
         return fm_error_at(err, FM_ERR_INPUT, name, je.line > 0 ? je.line : 0,
                            je.column > 0 ? je.column : 0, "invalid JSON: %s", je.text);
-    fm_status st = fm_tooltable_from_json(root, name, out, err);
+    fm_status st = frepmill_from_json(root, name, out, err);
     json_decref(root);
     return st;
 }
@@ -632,6 +633,49 @@ static tt_format json_format(json_t *root)
     return TT_FREPMILL;
 }
 
+/* A JSON document in any of the formats; dir as parse_any's. */
+static fm_status json_any(json_t *root, const char *name, const char *dir,
+                          const fm_tooltable_options *opt, fm_tool_table *out, fm_error *err)
+{
+    out->count = 0;
+    out->tools = NULL;
+    if (!name) name = "";
+    tt_reader r = {name, opt, err};
+    fm_status st;
+    switch (json_format(root)) {
+    case TT_FUSION: st = tt_fusion_json(&r, root, out); break;
+    case TT_FREECAD_LIBRARY: st = tt_freecad_library(&r, root, dir, out); break;
+    case TT_CAMOTICS: st = tt_camotics(&r, root, out); break;
+    case TT_FREECAD_BIT: {
+        fm_tool_spec s;
+        size_t cap = 0;
+        tt_warn(&r, "%s: a single FreeCAD tool bit: taken as tool 1", name);
+        st = tt_freecad_bit(&r, root, 1, &s, "bit");
+        if (!st) st = tt_push(&r, out, &cap, &s, "bit");
+        if (st) fm_tool_table_free(out);
+        break;
+    }
+    default: st = frepmill_from_json(root, name, out, err); break;
+    }
+    return st;
+}
+
+fm_status fm_tooltable_from_json_with(json_t *root, const char *name,
+                                      const fm_tooltable_options *opt, fm_tool_table *out,
+                                      fm_error *err)
+{
+    fm_error local;
+    if (!err) err = &local;
+    fm_error_clear(err);
+    return json_any(root, name, NULL, opt, out, err);
+}
+
+fm_status fm_tooltable_from_json(json_t *root, const char *name, fm_tool_table *out,
+                                 fm_error *err)
+{
+    return fm_tooltable_from_json_with(root, name, NULL, out, err);
+}
+
 /* Content in memory; dir: the folder of the file it came from (NULL: not a
  * file). */
 static fm_status parse_any(const char *data, size_t len, const char *name, const char *dir,
@@ -653,22 +697,7 @@ static fm_status parse_any(const char *data, size_t len, const char *name, const
     if (!root)
         return fm_error_at(err, FM_ERR_INPUT, name, je.line > 0 ? je.line : 0,
                            je.column > 0 ? je.column : 0, "invalid JSON: %s", je.text);
-    fm_status st;
-    switch (json_format(root)) {
-    case TT_FUSION: st = tt_fusion_json(&r, root, out); break;
-    case TT_FREECAD_LIBRARY: st = tt_freecad_library(&r, root, dir, out); break;
-    case TT_CAMOTICS: st = tt_camotics(&r, root, out); break;
-    case TT_FREECAD_BIT: {
-        fm_tool_spec s;
-        size_t cap = 0;
-        tt_warn(&r, "%s: a single FreeCAD tool bit: taken as tool 1", name);
-        st = tt_freecad_bit(&r, root, 1, &s, "bit");
-        if (!st) st = tt_push(&r, out, &cap, &s, "bit");
-        if (st) fm_tool_table_free(out);
-        break;
-    }
-    default: st = fm_tooltable_parse_json(data, len, name, out, err); break;
-    }
+    fm_status st = json_any(root, name, dir, opt, out, err);
     json_decref(root);
     return st;
 }

@@ -54,11 +54,17 @@ void fm_tooltable_comments_free(fm_tooltable_comments *c);
 /* Parse text held by the caller; name is used in error messages. */
 fm_status fm_tooltable_parse_json(const char *text, size_t len, const char *name,
                                   fm_tool_table *out, fm_error *err);
-/* The JSON form already parsed (a job document's "tools", read once with
- * the document): the same validation, no text in between; a reference to
+/* A table already parsed (a job document's "tools", read once with the
+ * document), in any JSON format (frepmill's, a Fusion library, a FreeCAD
+ * bit, a CAMotics project or table; a FreeCAD library, which names files,
+ * is refused): the same validation, no text in between; a reference to
  * root is not taken. */
 fm_status fm_tooltable_from_json(json_t *root, const char *name, fm_tool_table *out,
                                  fm_error *err);
+/* The same with warnings (opt may be NULL). */
+fm_status fm_tooltable_from_json_with(json_t *root, const char *name,
+                                      const fm_tooltable_options *opt, fm_tool_table *out,
+                                      fm_error *err);
 fm_status fm_tooltable_parse_tbl(const char *text, size_t len, const char *name,
                                  fm_tool_table *out, fm_error *err);
 
