@@ -22,7 +22,8 @@
 static void usage(FILE *out)
 {
     fprintf(out,
-            "usage: frepmill check PROGRAM --stock SPEC --tools TOOLS [--fixture FILE]...\n"
+            "usage: frepmill check PROGRAM --stock SPEC --tools TOOLS|--tools-from-program\n"
+            "                      [--fixture FILE]...\n"
             "                      [--machine FILE.json] [--clearance MM] [--report FILE]\n"
             "                      [--voxel MM] [--tolerance MM] [--rapid-clearance MM]\n"
             "                      [--max-ramp DEG] [--rapid-rate MM_PER_MIN]\n"
@@ -31,7 +32,10 @@ static void usage(FILE *out)
             "\n"
             "PROGRAM      G-code, or a parametric trajectory (.json)\n"
             "SPEC         box:X0,Y0,Z0,X1,Y1,Z1 | cylinder:X,Y,Z0,Z1,R | FILE.hf | FILE.stl | FILE.vdb\n"
-            "TOOLS        JSON tool table or LinuxCNC .tbl file\n"
+            "TOOLS        tool table: frepmill JSON, LinuxCNC .tbl, Fusion 360 .json or .tools,\n"
+            "             FreeCAD .fctl or .fctb, CAMotics project or tool table (docs/tooltable.md)\n"
+            "--tools-from-program  no table: the tools the program's comments name, as CAM\n"
+            "             posts write them ((T1 D=6. CR=0. - FLAT END MILL)); guesses are warned\n"
             "--fixture    clamp, vise or table: HyperFun model (.hf) or closed STL mesh (.stl)\n"
             "--machine    travel limits, rapid rate, start position, rotary axes, head and\n"
             "             components (docs/check.md)\n"
@@ -81,6 +85,7 @@ static const fm_job_flag CHECK_FLAGS[] = {
     {"PROGRAM", "program.file", FM_JOB_FLAG_TEXT},
     {"--stock", "stock", FM_JOB_FLAG_TEXT},
     {"--tools", "tools", FM_JOB_FLAG_TEXT},
+    {"--tools-from-program", "options.tools_from_program", FM_JOB_FLAG_SWITCH},
     {"--fixture", "fixtures", FM_JOB_FLAG_FIXTURE},
     {"--machine", "machine", FM_JOB_FLAG_TEXT},
     {"--clearance", "options.check.clearance", FM_JOB_FLAG_NUMBER},
@@ -120,7 +125,9 @@ int fm_cmd_check(int argc, char **argv)
     }
     const char *missing = !fm_job_flags_value(&flags, "PROGRAM") ? "no PROGRAM given"
                           : !fm_job_flags_value(&flags, "--stock") ? "no --stock given"
-                          : !fm_job_flags_value(&flags, "--tools") ? "no --tools given"
+                          : !fm_job_flags_value(&flags, "--tools") &&
+                                      !fm_job_flags_value(&flags, "--tools-from-program")
+                                  ? "no --tools (nor --tools-from-program) given"
                                                                    : NULL;
     if (missing) {
         fprintf(stderr, "frepmill check: %s\n", missing);

@@ -26,7 +26,8 @@
 static void usage(FILE *out)
 {
     fprintf(out,
-            "usage: frepmill simulate PROGRAM --stock SPEC --tools TOOLS [--voxel MM]\n"
+            "usage: frepmill simulate PROGRAM --stock SPEC --tools TOOLS|--tools-from-program\n"
+            "                         [--voxel MM]\n"
             "       frepmill simulate --job FILE.json\n"
             "                         [--out FILE]... [--report FILE.json] [--progress]\n"
             "                         [--band VOXELS] [--memory-budget MB] [--threads N]\n"
@@ -46,7 +47,10 @@ static void usage(FILE *out)
             "          is false; only output flags (--out, --png, --report, --color, --pose-at,\n"
             "          --progress) and --sweep-evaluations go with it\n"
             "SPEC      box:X0,Y0,Z0,X1,Y1,Z1 | cylinder:X,Y,Z0,Z1,R | FILE.hf | FILE.stl | FILE.vdb\n"
-            "TOOLS     JSON tool table or LinuxCNC .tbl file\n"
+            "TOOLS     tool table: frepmill JSON, LinuxCNC .tbl, Fusion 360 .json or .tools,\n"
+            "          FreeCAD .fctl or .fctb, CAMotics project or tool table (docs/tooltable.md)\n"
+            "--tools-from-program  no table: the tools the program's comments name, as CAM\n"
+            "          posts write them ((T1 D=6. CR=0. - FLAT END MILL)); guesses are warned\n"
             "--voxel   voxel edge in mm (default 0.1)\n"
             "--out     final stock; format by extension: %s (may be given several times)\n"
             "--report  JSON report (default: none; `-` for standard output)\n"
@@ -257,6 +261,7 @@ static const fm_job_flag SIMULATE_FLAGS[] = {
     {"PROGRAM", "program.file", FM_JOB_FLAG_TEXT},
     {"--stock", "stock", FM_JOB_FLAG_TEXT},
     {"--tools", "tools", FM_JOB_FLAG_TEXT},
+    {"--tools-from-program", "options.tools_from_program", FM_JOB_FLAG_SWITCH},
     {"--voxel", "voxel", FM_JOB_FLAG_NUMBER},
     {"--band", "options.band", FM_JOB_FLAG_INTEGER},
     {"--memory-budget", "options.memory_budget_mb", FM_JOB_FLAG_NUMBER},
@@ -387,7 +392,9 @@ static int simulate(int argc, char **argv, job_file *jf)
     } else {
         const char *missing = !fm_job_flags_value(&flags, "PROGRAM") ? "no PROGRAM given"
                               : !fm_job_flags_value(&flags, "--stock") ? "no --stock given"
-                              : !fm_job_flags_value(&flags, "--tools") ? "no --tools given"
+                              : !fm_job_flags_value(&flags, "--tools") &&
+                                      !fm_job_flags_value(&flags, "--tools-from-program")
+                                  ? "no --tools (nor --tools-from-program) given"
                                                                        : NULL;
         if (missing) {
             fprintf(stderr, "frepmill simulate: %s\n", missing);

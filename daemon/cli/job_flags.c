@@ -162,7 +162,16 @@ int fm_job_flags_document(const fm_job_flags *f, json_t *base, fm_job_doc **out)
     fm_error_clear(&err);
     fm_status st = fm_job_doc_from_json(base, &rules, out, &err);
     json_decref(base);
-    if (st == FM_OK) return 0;
+    if (st == FM_OK) {
+        /* the tool table's warnings: a bounding solid, a guessed field */
+        for (const char *w = (*out)->warnings; w && *w;) {
+            const char *e = strchr(w, '\n');
+            int n = e ? (int)(e - w) : (int)strlen(w);
+            fprintf(stderr, "%s: warning: %.*s\n", f->command, n, w);
+            w = e ? e + 1 : w + n;
+        }
+        return 0;
+    }
     char buf[1024];
     int i = refused_flag(f, err.message);
     const int number = i >= 0 && (f->given[i]->kind == FM_JOB_FLAG_NUMBER ||

@@ -215,6 +215,15 @@ typedef struct fm_job_result {
     int stopped;               /* a hook stopped the job */
     size_t tool_count;
     fm_stock_tool_volume tools[64];
+    /* What the tool table says of each of tools[] (same order), for the
+     * report: the description as the library names it, its flutes and
+     * presets (feeds and speeds; Fusion 360's start values). */
+    struct {
+        char description[128];
+        int flute_count;
+        int preset_count;
+        fm_tool_preset presets[FM_TOOL_MAX_PRESETS];
+    } tool_info[64];
     size_t top_block_count;
     fm_stock_block top_blocks[FM_JOB_TOP_BLOCKS];
     /* Work of all cuts summed (fm_stock_cut_stats), and how many cuts (a
@@ -302,6 +311,17 @@ fm_status fm_job_program_options(const fm_job_spec *spec, const fm_tool_table *t
 fm_status fm_job_program_run(const fm_job_spec *spec, const fm_gcode_options *gcode,
                              const fm_traj_options *traj, fm_motion_sink sink, void *user,
                              fm_error *err);
+
+/* The tools the program's comments name (--tools-from-program,
+ * options.tools_from_program): the spec's G-code interpreted once with no
+ * table and no stock, every comment handed to toolpaths/tooltable's reader
+ * of CAM posts' tool headers (docs/tooltable.md); warnings (each guessed
+ * field) to opt. FM_ERR_INPUT when the program is not G-code or no comment
+ * names a tool. */
+struct fm_tooltable_options;
+fm_status fm_job_tools_from_program(const fm_job_spec *spec,
+                                    const struct fm_tooltable_options *opt, fm_tool_table *out,
+                                    fm_error *err);
 
 /* Parse and create the stock of a spec string (also used by `frepmill
  * check`). */

@@ -231,9 +231,24 @@ static fm_status parse_stock(fm_job_doc *doc, json_t *stock, const fm_job_doc_ru
     return model_of(stock, "stock", "bad_stock", 0, &doc->stock_model, err);
 }
 
+/* A tool table reader's warning, kept with the document (one a line). */
+static void doc_warning(void *user, const char *message)
+{
+    fm_job_doc *doc = user;
+    size_t have = doc->warnings ? strlen(doc->warnings) : 0, add = strlen(message);
+    if (have + add > 65536) return; /* enough to read; the rest are alike */
+    char *w = realloc(doc->warnings, have + add + 2);
+    if (!w) return;
+    memcpy(w + have, message, add);
+    w[have + add] = '\n';
+    w[have + add + 1] = '\0';
+    doc->warnings = w;
+}
+
 static fm_status parse_tools(fm_job_doc *doc, json_t *tools, const fm_job_doc_rules *rules,
                              fm_error *err)
 {
+    const fm_tooltable_options topt = {doc_warning, doc};
     if (json_is_string(tools)) {
         /* a tool table file (JSON or LinuxCNC .tbl): the CLI's --tools */
         fm_status st = text_ok(tools, "tools", DOC_STOCK_TEXT_MAX, err);
@@ -246,18 +261,18 @@ static fm_status parse_tools(fm_job_doc *doc, json_t *tools, const fm_job_doc_ru
         if (!(doc->tools_path = dup_bytes(path, strlen(path))))
             return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
         /* the loader's own error: file:line:column, and I/O for a missing file */
-        if ((st = fm_tooltable_load(path, &doc->tools, err)) != FM_OK) return st;
+        if ((st = fm_tooltable_load_with(path, &topt, &doc->tools, err)) != FM_OK) return st;
         if (doc->tools.count == 0)
             return refuse(err, "bad_tools", "the tool table %s has no tools", path);
         doc->spec.tools_path = doc->tools_path;
         return FM_OK;
     }
     if (!json_is_object(tools))
-        return refuse(err, "bad_type", "tools must be the JSON tool table (an object)");
+        return refuse(err, "bad_type", "tools must be a JSON tool table (an object) or a file");
     /* parsed once, with the document: no text in between */
     fm_error terr;
     fm_error_clear(&terr);
-    fm_status st = fm_tooltable_from_json(tools, "tools", &doc->tools, &terr);
+    fm_status st = fm_tooltable_from_json_with(tools, "tools", &topt, &doc->tools, &terr);
     if (st != FM_OK) return refuse(err, "bad_tools", "tools: %s", terr.message);
     if (doc->tools.count == 0) return refuse(err, "bad_tools", "tools: the table has no tools");
     for (size_t i = 0; i < doc->tools.count && !rules->allow_files; i++)
@@ -269,6 +284,28 @@ static fm_status parse_tools(fm_job_doc *doc, json_t *tools, const fm_job_doc_ru
                           "over the network",
                           doc->tools.tools[i].number);
     return FM_OK;
+}
+
+/* No table: the program's comments name the tools (with the options the
+ * program runs with: dialect, subroutines, machine). Parsed once, here, so
+ * that every entrance sees the same tools; a live program has none. */
+static fm_status tools_from_program(fm_job_doc *doc, fm_error *err)
+{
+    if (doc->spec.program_kind == FM_PROGRAM_LIVE)
+        return refuse(err, "bad_tools", "options.tools_from_program: a live program has no "
+                      "comments to read; give \"tools\"");
+    const fm_tooltable_options topt = {doc_warning, doc};
+    fm_job_spec probe = doc->spec;
+    probe.machine = doc->has_machine ? &doc->check.options.machine.chain : NULL;
+    fm_error terr;
+    fm_error_clear(&terr);
+    fm_status st = fm_job_tools_from_program(&probe, &topt, &doc->tools, &terr);
+    if (st == FM_ERR_INPUT) {
+        char buf[700];
+        return refuse(err, "bad_tools", "%s", fm_error_format(&terr, buf, sizeof buf));
+    }
+    if (st != FM_OK) *err = terr;
+    return st;
 }
 
 static fm_status parse_program(fm_job_doc *doc, json_t *program, const fm_job_doc_rules *rules,
@@ -506,7 +543,8 @@ static fm_status parse_options(fm_job_doc *doc, json_t *options, const fm_job_do
                                        "rapid_rate", "memory_budget_mb", "threads",
                                        "check",   "color",   "dialect",
                                        "subroutine_path", "calculator_input",
-                                       "tolerance", "stop_at", "sweep_evaluations", NULL};
+                                       "tolerance", "stop_at", "sweep_evaluations",
+                                       "tools_from_program", NULL};
     st = only_keys(options, keys, "options", err);
     if (st != FM_OK) return st;
     json_t *v;
@@ -521,6 +559,11 @@ static fm_status parse_options(fm_job_doc *doc, json_t *options, const fm_job_do
                           "options.color must be \"tool\" (colour the meshes by the tool that "
                           "cut last) or \"none\"");
         doc->color_tool = !strcmp(json_string_value(v), "tool");
+    }
+    if ((v = json_object_get(options, "tools_from_program"))) {
+        if (!json_is_boolean(v))
+            return refuse(err, "bad_type", "options.tools_from_program must be true or false");
+        doc->tools_from_program = json_is_true(v);
     }
     if ((v = json_object_get(options, "band")) &&
         (st = integer_in(v, "options.band", 2, 32, &spec->stock.band_voxels, err)))
@@ -617,6 +660,7 @@ void fm_job_doc_free(fm_job_doc *doc)
     free(doc->program);
     free(doc->program_file);
     free(doc->tools_path);
+    free(doc->warnings);
     free(doc->stock_text);
     free(doc->subroutine_path);
     free(doc->stock_model.data);
@@ -641,9 +685,13 @@ fm_status fm_job_doc_from_json(json_t *job, const fm_job_doc_rules *rules_in, fm
     fm_status st = only_keys(job, keys, "job", err);
     if (st != FM_OK) return st;
     static const char *const required[] = {"stock", "tools", "program"};
+    json_t *from_program = json_object_get(json_object_get(job, "options"), "tools_from_program");
+    if (from_program && !json_is_boolean(from_program))
+        return refuse(err, "bad_type", "options.tools_from_program must be true or false");
     for (int i = 0; i < 3; i++)
-        if (!json_object_get(job, required[i]))
-            return refuse(err, "missing_key", "the job has no \"%s\"", required[i]);
+        if (!json_object_get(job, required[i]) && !(i == 1 && json_is_true(from_program)))
+            return refuse(err, "missing_key", "the job has no \"%s\"%s", required[i],
+                          i == 1 ? " (nor options.tools_from_program)" : "");
 
     fm_job_doc *doc = calloc(1, sizeof *doc);
     if (!doc) return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
@@ -656,7 +704,8 @@ fm_status fm_job_doc_from_json(json_t *job, const fm_job_doc_rules *rules_in, fm
     if ((v = json_object_get(job, "voxel")) &&
         (st = number_in(v, "voxel", FM_JOB_DOC_VOXEL_MIN, 100, &doc->spec.stock.voxel_mm, err)))
         goto fail;
-    if ((st = parse_tools(doc, json_object_get(job, "tools"), rules, err))) goto fail;
+    json_t *tools = json_object_get(job, "tools");
+    if (tools && (st = parse_tools(doc, tools, rules, err))) goto fail;
     if ((st = parse_program(doc, json_object_get(job, "program"), rules, err))) goto fail;
     if ((v = json_object_get(job, "fixtures")) && (st = parse_fixtures(doc, v, rules, err))) goto fail;
     if ((v = json_object_get(job, "machine")) && (st = parse_machine(doc, v, "machine", rules, err)))
@@ -677,6 +726,12 @@ fm_status fm_job_doc_from_json(json_t *job, const fm_job_doc_rules *rules_in, fm
         doc->spec.machine = &doc->check.options.machine.chain;
     }
 
+    /* An explicit table always wins over the program's comments. */
+    if (tools && doc->tools_from_program)
+        doc_warning(doc, "options.tools_from_program: a tool table is given, it wins; the "
+                         "program's comments are not read");
+    if (!tools && (st = tools_from_program(doc, err))) goto fail;
+
     /* The run spec's pointers into the document. */
     doc->spec.tools = &doc->tools;
     doc->spec.stock_spec = doc->stock_text; /* NULL for an inline model until it has a file */
@@ -690,7 +745,7 @@ fm_status fm_job_doc_from_json(json_t *job, const fm_job_doc_rules *rules_in, fm
     if (!doc->json ||
         json_object_set(doc->json, "stock", json_object_get(job, "stock")) ||
         json_object_set_new(doc->json, "voxel", json_real(doc->spec.stock.voxel_mm)) ||
-        json_object_set(doc->json, "tools", json_object_get(job, "tools")) ||
+        (tools && json_object_set(doc->json, "tools", tools)) ||
         json_object_set(doc->json, "program", json_object_get(job, "program")) ||
         json_object_set_new(doc->json, "fixtures", fixtures ? json_incref(fixtures) : json_array()) ||
         json_object_set_new(doc->json, "options", options ? json_incref(options) : json_object()) ||

@@ -12,7 +12,10 @@
  *                | {"hyperfun": TEXT} | {"stl_base64": BASE64}         (inline models)
  *                | "FILE.hf" | "FILE.stl" | "FILE.vdb"                 (files: CLI only)
  *     "voxel":   MM                                  (default 0.1; 0.0001..100)
- *     "tools":   {...}                               (the JSON tool table, docs/tooltable.md)
+ *     "tools":   {...}                               (a tool table in any JSON format
+ *                                                    docs/tooltable.md reads; a file with the
+ *                                                    CLI's rules; absent with
+ *                                                    options.tools_from_program)
  *                | "FILE"                            (a JSON or .tbl file: CLI only)
  *     "program": {"gcode": TEXT} | {"trajectory": {...}}               (docs/trajectory.md)
  *                | {"file": FILE}                    (G-code, or a .json trajectory: CLI only)
@@ -111,6 +114,10 @@ typedef struct fm_job_doc {
     char *program;             /* G-code text or the trajectory's JSON */
     char *program_file;        /* program.file (files rules only) */
     char *tools_path;          /* "tools" given as a file (files rules only) */
+    int tools_from_program;    /* options.tools_from_program: the program's comments are the
+                                  tools when "tools" is absent */
+    char *warnings;            /* what the tool table's reader warns of (a bounding solid, a
+                                  guessed field, a skipped entry), one a line; NULL: none */
     size_t program_length;
     char *stock_text;          /* the spec string, or the materialized model's path */
     char dialect[16];          /* spec.dialect's storage */

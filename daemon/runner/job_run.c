@@ -123,6 +123,15 @@ static void fill_result(const job_cutter *c, const job_survey *sv, fm_job_result
     size_t n = fm_stock_tool_volumes(stock, result->tools,
                                      sizeof result->tools / sizeof result->tools[0]);
     result->tool_count = n < 64 ? n : 64;
+    for (size_t i = 0; i < result->tool_count; i++) {
+        const fm_tool_spec *ts = fm_tool_table_find(c->tools->use, result->tools[i].tool);
+        if (!ts) continue;
+        snprintf(result->tool_info[i].description, sizeof result->tool_info[i].description, "%s",
+                 ts->comment);
+        result->tool_info[i].flute_count = ts->flute_count;
+        result->tool_info[i].preset_count = ts->preset_count;
+        memcpy(result->tool_info[i].presets, ts->presets, sizeof ts->presets);
+    }
     result->top_block_count = fm_stock_blocks(stock, result->top_blocks, FM_JOB_TOP_BLOCKS);
     if (result->top_block_count > FM_JOB_TOP_BLOCKS) result->top_block_count = FM_JOB_TOP_BLOCKS;
     result->cut_stats = c->stats;

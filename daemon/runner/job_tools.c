@@ -1,6 +1,7 @@
 /* job_tools.c: the job's tool table built into cutters: the standard
  * shapes by lib/tools, custom cutters from their HyperFun models (a file
  * named relative to the tool table's). */
+#include <ctype.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -89,6 +90,75 @@ fm_status job_tools_load(const fm_job_spec *spec, job_tools *t, fm_error *err)
         }
     }
     return FM_OK;
+}
+
+/* Does the G-code select inches (a G20 word outside comments)? The text,
+ * or the first MiB of the program's file: posts write G20 in the header,
+ * with the tool comments. */
+static int gcode_selects_inch(const char *text, size_t len)
+{
+    int depth = 0, line_comment = 0;
+    for (size_t i = 0; i < len; i++) {
+        char c = text[i];
+        if (c == '\n') line_comment = depth = 0;
+        else if (line_comment) continue;
+        else if (c == '(') depth++;
+        else if (c == ')' && depth) depth--;
+        else if (depth) continue;
+        else if (c == ';') line_comment = 1;
+        else if ((c == 'G' || c == 'g') && !(i > 0 && isalpha((unsigned char)text[i - 1]))) {
+            size_t j = i + 1;
+            while (j < len && text[j] == ' ') j++;
+            while (j < len && text[j] == '0') j++; /* G020 */
+            if (j + 1 < len && text[j] == '2' && text[j + 1] == '0' &&
+                (j + 2 >= len || (!isdigit((unsigned char)text[j + 2]) && text[j + 2] != '.')))
+                return 1;
+        }
+    }
+    return 0;
+}
+
+static int ignore_motion(void *user, const fm_motion *motion)
+{
+    (void)user;
+    (void)motion;
+    return 0;
+}
+
+fm_status fm_job_tools_from_program(const fm_job_spec *spec, const fm_tooltable_options *opt,
+                                    fm_tool_table *out, fm_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (job_program_kind(spec) != FM_PROGRAM_GCODE)
+        return fm_error_set(err, FM_ERR_INPUT, "tools from the program: the program is not G-code "
+                            "(only G-code programs carry the tool comments CAM posts write)");
+    const char *name = spec->program_path ? spec->program_path
+                                          : spec->program_name ? spec->program_name : "program";
+    int inch = 0;
+    if (spec->program_text) {
+        inch = gcode_selects_inch(spec->program_text, spec->program_length);
+    } else if (spec->program_path) {
+        FILE *f = fopen(spec->program_path, "rb");
+        char *head = f ? malloc(1 << 20) : NULL;
+        if (head) inch = gcode_selects_inch(head, fread(head, 1, 1 << 20, f));
+        free(head);
+        if (f) fclose(f);
+    }
+    fm_tooltable_comments *c = fm_tooltable_comments_new(name, inch);
+    if (!c) return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    fm_gcode_options gopt;
+    fm_traj_options topt;
+    fm_status st = fm_job_program_options(spec, NULL, &gopt, &topt, err);
+    gopt.comment = fm_tooltable_comments_add;
+    gopt.comment_user = c;
+    if (st == FM_OK) st = fm_job_program_run(spec, &gopt, &topt, ignore_motion, NULL, err);
+    if (st == FM_OK) st = fm_tooltable_comments_finish(c, opt, out, err);
+    fm_tooltable_comments_free(c);
+    if (st == FM_OK && out->count == 0)
+        st = fm_error_at(err, FM_ERR_INPUT, name, 0, 0,
+                         "tools from the program: no comment names a tool (\"T1 D=6. CR=0. - "
+                         "FLAT END MILL\", \"T1 D6\"); give a tool table");
+    return st;
 }
 
 /* The tool that cuts for a motion: the spindle's, or the table's only tool

@@ -62,9 +62,28 @@ static json_t *thin_json(const fm_stock_thin_report *t)
 json_t *fm_job_report_json(const fm_job_result *r)
 {
     json_t *tools = json_array();
-    for (size_t i = 0; i < r->tool_count; i++)
-        json_array_append_new(tools, json_pack("{s:i, s:f}", "tool", r->tools[i].tool,
-                                               "removed_volume_mm3", r->tools[i].removed_mm3));
+    for (size_t i = 0; i < r->tool_count; i++) {
+        /* the tool as its library names it, and the library's presets */
+        json_t *t = json_pack("{s:i, s:f, s:s}", "tool", r->tools[i].tool, "removed_volume_mm3",
+                              r->tools[i].removed_mm3, "description",
+                              r->tool_info[i].description);
+        if (t && r->tool_info[i].flute_count > 0)
+            json_object_set_new(t, "flutes", json_integer(r->tool_info[i].flute_count));
+        if (t && r->tool_info[i].preset_count > 0) {
+            json_t *presets = json_array();
+            for (int k = 0; k < r->tool_info[i].preset_count && k < FM_TOOL_MAX_PRESETS; k++) {
+                const fm_tool_preset *p = &r->tool_info[i].presets[k];
+                json_array_append_new(
+                    presets, json_pack("{s:s, s:f, s:f, s:f, s:f, s:f}", "name", p->name,
+                                       "spindle_rpm", p->spindle_rpm, "cutting_speed_m_per_min",
+                                       p->cutting_speed, "feed_mm_per_min", p->feed,
+                                       "plunge_feed_mm_per_min", p->plunge_feed,
+                                       "feed_per_tooth_mm", p->feed_per_tooth));
+            }
+            json_object_set_new(t, "presets", presets);
+        }
+        json_array_append_new(tools, t);
+    }
     json_t *blocks = json_array();
     for (size_t i = 0; i < r->top_block_count; i++) {
         const fm_stock_block *b = &r->top_blocks[i];

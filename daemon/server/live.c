@@ -310,7 +310,12 @@ fm_status fm_live_document(const fm_live_config *cfg, const job *src, const fm_j
                        access(s, R_OK) == 0);
             if (ok) snprintf(stock_spec, sizeof stock_spec, "%s", s);
         }
-        if (ok && !tools) tools_json = json_incref(json_object_get(src->doc->json, "tools"));
+        if (ok && !tools) {
+            /* a job whose tools came from its program's comments has no
+             * table to hand on: not usable for live mode */
+            tools_json = json_incref(json_object_get(src->doc->json, "tools"));
+            ok = tools_json != NULL;
+        }
         if (!ok) {
             json_decref(tools_json);
             return fm_error_set(err, FM_ERR_INPUT,

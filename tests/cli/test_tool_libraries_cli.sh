@@ -10,7 +10,11 @@
 # the same tools removes. A Fusion holder met by a deep plunge: its first
 # segment's face, 10 mm above the tip (LB), plunged to Z-14 into a stock
 # whose top is Z0, is 14 - 10 = 4 mm deep: `frepmill check` reports a
-# holder contact on the plunge's line, 4 mm deep.
+# holder contact on the plunge's line, 4 mm deep. Without a table,
+# --tools-from-program takes the tools the program's comments name (Fusion's
+# Haas post): the slots remove what the table's tools remove, each guessed
+# field warned; a table given as well wins. The report names each tool as
+# the library does, with its flutes and presets.
 # usage: test_tool_libraries_cli.sh FREPMILL
 set -u
 frepmill=$1
@@ -81,7 +85,41 @@ for lib in lib.json lib.tools Tools/Library/mill.fctl project.camotics; do
     check "$lib runs ($(tail -1 "$dir/err"))" $?
     [ -n "$base" ] && [ "$(removed "$dir/r.json")" = "$base" ]
     check "$lib removes $(removed "$dir/r.json") mm3, what the JSON table removes" $?
+    [ "$lib" = lib.json ] && cp "$dir/r.json" "$dir/fusion_report.json"
 done
+# the report names each tool as the library does, with its presets
+python3 - "$dir/fusion_report.json" <<'EOF2'
+import json, sys
+tools = {t["tool"]: t for t in json.load(open(sys.argv[1]))["tools"]}
+t1, t2 = tools.get(1, {}), tools.get(2, {})
+ok = t1.get("description") == "6 mm flat" and t1.get("flutes") == 3 \
+    and t1.get("presets") == [{"name": "alu", "spindle_rpm": 12000, "cutting_speed_m_per_min": 0,
+                               "feed_mm_per_min": 1500, "plunge_feed_mm_per_min": 0,
+                               "feed_per_tooth_mm": 0}] \
+    and t2.get("description") == "6 mm ball" and "presets" not in t2
+print("report tools:", tools)
+sys.exit(0 if ok else 1)
+EOF2
+check "the report gives each tool's description, flutes and presets as the library names them" $?
+
+# no table: the tools the program's comments name, as Fusion's Haas post
+# writes them (Fanuc dialect); the same slots remove what the table's tools
+# remove (the guessed lengths are above the cuts)
+printf '%%\nO1001 (SLOTS)\n(T1 D=6. CR=0. - ZMIN=-2. - FLAT END MILL)\n(T2 D=6. CR=3. - ZMIN=-3. - BALL END MILL)\nG21 G17 G90\nT1 M6\nG00 Z5.\nG00 X10. Y20.\nG01 Z-2. F300.\nG01 X50. F600.\nG00 Z5.\nT2 M6\nG00 X10. Y32.\nG01 Z-3. F300.\nG01 X50. F600.\nG00 Z5.\nM30\n%%\n' >"$dir/slots.nc"
+"$frepmill" simulate "$dir/slots.nc" --dialect fanuc --stock box:0,0,-10,60,50,0 --tools-from-program \
+    --voxel 0.1 --report "$dir/r.json" 2>"$dir/err"
+check "--tools-from-program runs ($(tail -1 "$dir/err"))" $?
+[ -n "$base" ] && [ "$(removed "$dir/r.json")" = "$base" ]
+check "--tools-from-program removes $(removed "$dir/r.json") mm3, what the JSON table removes" $?
+grep -q 'warning: .*slots.nc:3: T1 "FLAT END MILL" from the program.s comment, guessed: flute_length 18 mm (3 x D), length 24 mm (flute length + D), shank_diameter = D, no holder' "$dir/err"
+check "each guessed field of T1 in a warning" $?
+grep -q 'slots.nc:4: T2 "BALL END MILL"' "$dir/err"
+check "and of T2" $?
+"$frepmill" simulate "$dir/slots.nc" --dialect fanuc --stock box:0,0,-10,60,50,0 --tools-from-program \
+    --tools "$dir/tools.json" --voxel 0.1 --report "$dir/r.json" 2>"$dir/err"
+check "a table and --tools-from-program run" $?
+grep -q 'a tool table is given, it wins' "$dir/err" && ! grep -q 'guessed' "$dir/err"
+check "the explicit table wins (warned), no comment read" $?
 
 # the holder: 10 mm of flutes and no shank (LB = LCF), a 16 mm segment 5 mm
 # tall, then a 30 mm one

@@ -644,6 +644,74 @@ static void test_file_forms(void)
     rmdir(dir);
 }
 
+/* options.tools_from_program: no "tools", the program's comments name them
+ * (the G-code interpreted once by the document's parser: a comment inside
+ * an O-word call body counts as the interpreter reads it), each guessed
+ * field in the document's warnings; an explicit table wins (a warning);
+ * without either the document is refused; a trajectory has no comments; a
+ * Fusion library inline is read as such. */
+static void test_tools_from_program(void)
+{
+    const char *prog =
+        "(T1 D=6. CR=0. - ZMIN=-5. - FLAT END MILL)\\n(T4 D=10. CR=2. - ZMIN=-8. - BULL NOSE END MILL)\\n"
+        "T1 M6\\nG0 X0 Y0 Z5\\nM2\\n";
+    char text[2048];
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-30,100,60,0\", \"program\": {\"gcode\": \"%s\"},"
+             " \"options\": {\"tools_from_program\": true}}", prog);
+    fm_error err;
+    fm_job_doc *doc = parse(text, &err);
+    if (!doc) fprintf(stderr, "  %s\n", err.message);
+    CHECK(doc != NULL);
+    if (doc) {
+        /* by hand: flutes 3 D (18, 30), stick-out one D more */
+        CHECK(doc->tools.count == 2 && doc->spec.tools == &doc->tools);
+        const fm_tool_spec *t1 = fm_tool_table_find(&doc->tools, 1);
+        const fm_tool_spec *t4 = fm_tool_table_find(&doc->tools, 4);
+        CHECK(t1 && t1->shape == FM_TOOL_FLAT && t1->diameter == 6 && t1->flute_length == 18 &&
+              t1->length == 24);
+        CHECK(t4 && t4->shape == FM_TOOL_BULL && t4->corner_radius == 2 && t4->flute_length == 30);
+        CHECK_STR_CONTAINS(doc->warnings, "program:1: T1 \"FLAT END MILL\" from the program's comment, "
+                                          "guessed: flute_length 18 mm");
+        CHECK_STR_CONTAINS(doc->warnings, "program:2: T4 \"BULL NOSE END MILL\"");
+        CHECK(!json_object_get(doc->json, "tools"));
+        /* the canonical form parses to the same tools */
+        char *again = json_dumps(doc->json, JSON_COMPACT);
+        fm_job_doc *doc2 = parse(again, &err);
+        CHECK(doc2 && doc2->tools.count == 2 && json_equal(doc->json, doc2->json));
+        fm_job_doc_free(doc2);
+        free(again);
+        fm_job_doc_free(doc);
+    }
+    /* an explicit table wins */
+    snprintf(text, sizeof text,
+             "{\"stock\": \"box:0,0,-30,100,60,0\", \"tools\": %s, \"program\": {\"gcode\": \"%s\"},"
+             " \"options\": {\"tools_from_program\": true}}", TOOLS, prog);
+    doc = parse(text, &err);
+    CHECK(doc && doc->tools.count == 1 && fm_tool_table_find(&doc->tools, 1)->flute_length == 20);
+    CHECK(doc && doc->warnings && strstr(doc->warnings, "a tool table is given, it wins"));
+    fm_job_doc_free(doc);
+    /* neither: refused; no tool comment: refused; a trajectory: refused */
+    expect_error("{\"stock\": \"box:0,0,-30,100,60,0\", \"program\": {\"gcode\": \"G0 X1\"}}", 400,
+                 "missing_key");
+    expect_error("{\"stock\": \"box:0,0,-30,100,60,0\", \"program\": {\"gcode\": \"(HELLO)\\nG0 X1\"},"
+                 " \"options\": {\"tools_from_program\": true}}", 400, "bad_tools");
+    expect_error("{\"stock\": \"box:0,0,-30,100,60,0\", \"program\": {\"trajectory\": {\"segments\": []}},"
+                 " \"options\": {\"tools_from_program\": true}}", 400, "bad_tools");
+    expect_error("{\"stock\": \"box:0,0,-30,100,60,0\", \"program\": {\"gcode\": \"(T1 D=6.)\"},"
+                 " \"options\": {\"tools_from_program\": 1}}", 400, "bad_type");
+    /* a Fusion library inline: its description, warnings for its bounding
+     * solids */
+    doc = parse("{\"stock\": \"box:0,0,-30,100,60,0\", \"program\": {\"gcode\": \"G0 X1\"},"
+                " \"tools\": {\"data\": [{\"type\": \"thread mill\", \"description\": \"M6 thread mill\","
+                " \"unit\": \"millimeters\", \"post-process\": {\"number\": 3},"
+                " \"geometry\": {\"DC\": 4.8, \"LCF\": 12, \"LB\": 30}}]}}", &err);
+    if (!doc) fprintf(stderr, "  %s\n", err.message);
+    CHECK(doc && doc->tools.count == 1 && !strcmp(doc->tools.tools[0].comment, "M6 thread mill"));
+    CHECK(doc && doc->warnings && strstr(doc->warnings, "bounding solid of revolution"));
+    fm_job_doc_free(doc);
+}
+
 int main(void)
 {
     test_job_ok();
@@ -657,5 +725,6 @@ int main(void)
     test_base64();
     test_materialize();
     test_file_forms();
+    test_tools_from_program();
     return test_summary("job_doc");
 }
