@@ -1,9 +1,8 @@
 /* comp.c: cutter radius compensation in the Fanuc dialect: G40, G41 and G42
  * with D (the offset number: tool D's radius, half the table's diameter, or
  * what G10 set), handed to the machine's compensation C (machine.h,
- * gc_comp_c_*), the codes a control refuses while compensating, and the
- * front end's moves, arcs and dwells routed through compensation while it
- * runs. */
+ * gc_comp_c_*) and the codes a control refuses while compensating; moves
+ * go through compensation by the machine's gc_frame_* (transform.c). */
 #include "fanuc.h"
 
 #include <string.h>
@@ -72,28 +71,10 @@ fm_status gc_fanuc_comp_mode(gc_interp *g, const gc_fanuc_block *fb, int code, i
         if (g->plane != GC_PLANE_XY && g->plane != GC_PLANE_XZ && g->plane != GC_PLANE_YZ)
             return gc_fail(g, FM_ERR_INPUT, col, "cutter radius compensation without a plane");
         /* a mirror of one plane axis (G51.1) turns G41 into G42 (haas.c) */
-        int left = (code == GC_G41) != (gc_fanuc_mirror_sense(g) < 0);
+        int left = (code == GC_G41) != (gc_frame_mirror_sense(g) < 0);
         return gc_comp_c_start(g, left, radius, col);
     }
     /* a D word alone in offset mode: the new radius from the next element */
     if (b->has[L('d')] && gc_comp_c_on(g)) return gc_comp_c_radius(g, radius, dcol);
     return FM_OK;
-}
-
-fm_status gc_fanuc_line(gc_interp *g, int rapid, const double work[3])
-{
-    if (gc_comp_c_routing(g)) return gc_comp_c_line(g, rapid, work, FANUC(g)->motion_col);
-    return gc_move_line(g, rapid, work);
-}
-
-fm_status gc_fanuc_arc(gc_interp *g, const double work[3], const double center_ab[2], int turn)
-{
-    if (gc_comp_c_routing(g)) return gc_comp_c_arc(g, work, center_ab, turn, FANUC(g)->motion_col);
-    return gc_move_arc(g, work, center_ab, turn);
-}
-
-fm_status gc_fanuc_dwell(gc_interp *g, double seconds)
-{
-    if (gc_comp_c_routing(g)) return gc_comp_c_dwell(g, seconds);
-    return gc_dwell(g, seconds);
 }

@@ -124,8 +124,8 @@ fm_status gc_fanuc_exec_cycle(gc_interp *g, const gc_fanuc_block *fb, int code, 
     for (long rep = 0; rep < reps && !g->stop; rep++) {
         double end[3], work[3];
         gc_fanuc_target(g, fb, end);
-        end[k.c] = f->prog[k.c];
-        gc_fanuc_to_work(g, end, work);
+        end[k.c] = g->frame.prog[k.c];
+        gc_frame_to_work(g, end, work);
         k.aa = work[k.a];
         k.bb = work[k.b];
         /* position at the current level (a move only if the hole is
@@ -225,10 +225,10 @@ fm_status gc_fanuc_exec_cycle(gc_interp *g, const gc_fanuc_block *fb, int code, 
             default: break;
             }
         }
-        f->prog[k.a] = end[k.a];
-        f->prog[k.b] = end[k.b];
-        gc_fanuc_from_work(g, g->pos, work);
-        f->prog[k.c] = work[k.c];
+        g->frame.prog[k.a] = end[k.a];
+        g->frame.prog[k.b] = end[k.b];
+        gc_frame_from_work(g, g->pos, work);
+        g->frame.prog[k.c] = work[k.c];
     }
     return FM_OK;
 }

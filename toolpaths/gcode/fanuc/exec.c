@@ -1,17 +1,17 @@
 /* exec.c: executing a Fanuc block: feed, speed, tool and M
  * codes, plane and units, tool length (G43/G44 H with Fanuc's move of the
  * offset), work offsets (G54-G59, G54.1 P, G52, G92, G10 L2/L20), the
- * programmed-point transforms (G16 polar, G51 uniform scaling, G68
- * rotation), dwells (X seconds, P milliseconds), G27/G28/G30/G53, lines and
+ * words of the programmed-point transforms (G16 polar, G51 uniform scaling,
+ * G68 rotation: the machine's program frame, transform.c), dwells (X seconds, P milliseconds), G27/G28/G30/G53, lines and
  * arcs (I J K always incremental; R, and Fanuc's rule that a full circle
  * cannot be given with R). The interpreter's motion output (motion.c)
  * turns the work coordinates into machine millimetres.
  *
  * Two points are kept: g->pos, where the tool is in work coordinates (as in
  * the LinuxCNC dialect, shifted by a new tool length offset until the next
- * move), and fanuc->prog, the programmed point before polar coordinates,
- * scaling and rotation, from which the next absolute or incremental end point
- * is computed. */
+ * move), and g->frame.prog, the programmed point before polar coordinates,
+ * scaling, rotation and mirror, from which the next absolute or incremental
+ * end point is computed. */
 #include "fanuc.h"
 
 #include <math.h>
@@ -55,66 +55,11 @@ double gc_fanuc_dwell_seconds(const gc_interp *g, const gc_fanuc_block *fb, char
     return v;
 }
 
-/* ---- transforms: program frame <-> work coordinates ---- */
-
-static void scale_point(const gc_fanuc *f, double p[3])
-{
-    for (int i = 0; i < 3; i++) p[i] = f->scale_center[i] + f->scale * (p[i] - f->scale_center[i]);
-}
-
-void gc_fanuc_to_work(const gc_interp *g, const double prog[3], double work[3])
-{
-    const gc_fanuc *f = FANUC(g);
-    memcpy(work, prog, 3 * sizeof *work);
-    if (f->scaling) scale_point(f, work);
-    if (f->rotation) {
-        int a, b, c;
-        gc_plane_axes(f->rot_plane, &a, &b, &c);
-        double ca = f->rot_center[0], cb = f->rot_center[1];
-        if (f->scaling) {
-            ca = f->scale_center[a] + f->scale * (ca - f->scale_center[a]);
-            cb = f->scale_center[b] + f->scale * (cb - f->scale_center[b]);
-        }
-        double da = work[a] - ca, db = work[b] - cb;
-        work[a] = ca + f->rot_cos * da - f->rot_sin * db;
-        work[b] = cb + f->rot_sin * da + f->rot_cos * db;
-    }
-    /* G51.1 reflects all the rest (haas.c): given first, it mirrors what the
-     * program's own G51 and G68 make, so a G68 turns the other way */
-    gc_fanuc_mirror_point(f, work);
-}
-
-void gc_fanuc_from_work(const gc_interp *g, const double work[3], double prog[3])
-{
-    const gc_fanuc *f = FANUC(g);
-    memcpy(prog, work, 3 * sizeof *prog);
-    gc_fanuc_mirror_point(f, prog);
-    if (f->rotation) {
-        int a, b, c;
-        gc_plane_axes(f->rot_plane, &a, &b, &c);
-        double ca = f->rot_center[0], cb = f->rot_center[1];
-        if (f->scaling) {
-            ca = f->scale_center[a] + f->scale * (ca - f->scale_center[a]);
-            cb = f->scale_center[b] + f->scale * (cb - f->scale_center[b]);
-        }
-        double da = prog[a] - ca, db = prog[b] - cb;
-        prog[a] = ca + f->rot_cos * da + f->rot_sin * db;
-        prog[b] = cb - f->rot_sin * da + f->rot_cos * db;
-    }
-    if (f->scaling)
-        for (int i = 0; i < 3; i++)
-            prog[i] = f->scale_center[i] + (prog[i] - f->scale_center[i]) / f->scale;
-}
-
-/* The current point in the program frame after a coordinate change that
- * does not move the machine (work offsets, G92, G68, G51, units). */
-static void reprogram(gc_interp *g) { gc_fanuc_from_work(g, g->pos, FANUC(g)->prog); }
-
 void gc_fanuc_apply_work_offset(gc_interp *g)
 {
     gc_fanuc *f = FANUC(g);
     double work[3];
-    gc_fanuc_to_work(g, f->prog, work);
+    gc_frame_to_work(g, g->frame.prog, work);
     for (int i = 0; i < 3; i++) {
         double table = f->ext_cs ? f->ext_offsets[f->ext_cs - 1][i]
                                  : g->params[5201 + 20 * g->cs + i];
@@ -126,7 +71,7 @@ void gc_fanuc_apply_work_offset(gc_interp *g)
     }
     /* a pending tool length move stays pending: shift the programmed point
      * by the same amount rather than recomputing it from pos */
-    gc_fanuc_from_work(g, work, f->prog);
+    gc_frame_from_work(g, work, g->frame.prog);
 }
 
 /* ---- end points and moves ---- */
@@ -135,55 +80,25 @@ static const char axis_letter[3] = {'x', 'y', 'z'};
 
 void gc_fanuc_target(gc_interp *g, const gc_fanuc_block *fb, double end[3])
 {
-    gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     int a, bb, c;
     gc_plane_axes(g->plane, &a, &bb, &c);
     /* A B C in degrees: the rotary axes (rotary.c) */
-    int rgiven[3];
-    double rvalue[3];
+    int rgiven[3], given[3];
+    double rvalue[3], value[3];
     for (int i = 0; i < 3; i++) {
         rgiven[i] = b->has[L("abc"[i])];
         rvalue[i] = rgiven[i] ? gc_fanuc_angle(g, fb, "abc"[i]) : 0;
     }
     gc_rot_target(g, rgiven, rvalue);
+    /* in G16 the plane's second axis is the angle */
     for (int i = 0; i < 3; i++) {
-        char l = axis_letter[i];
-        if (f->polar && (i == a || i == bb)) continue;
-        if (!b->has[L(l)]) end[i] = f->prog[i];
-        else if (g->absolute) end[i] = gc_fanuc_length(g, fb, l);
-        else end[i] = f->prog[i] + gc_fanuc_length(g, fb, l);
+        given[i] = b->has[L(axis_letter[i])];
+        value[i] = !given[i] ? 0
+                   : g->frame.polar && i == bb ? gc_fanuc_angle(g, fb, axis_letter[i])
+                                               : gc_fanuc_length(g, fb, axis_letter[i]);
     }
-    if (f->polar) {
-        char la = axis_letter[a], lb = axis_letter[bb];
-        if (!b->has[L(la)] && !b->has[L(lb)]) {
-            end[a] = f->prog[a];
-            end[bb] = f->prog[bb];
-            return;
-        }
-        /* Fanuc G16: a radius given in G90 is measured from the work zero,
-         * in G91 from the current point; without a radius the last radius
-         * and origin stay. The angle is absolute in G90, added to the last
-         * one in G91. */
-        if (b->has[L(la)]) {
-            f->polar_radius = gc_fanuc_length(g, fb, la);
-            f->polar_origin[0] = g->absolute ? 0.0 : f->prog[a];
-            f->polar_origin[1] = g->absolute ? 0.0 : f->prog[bb];
-        }
-        if (b->has[L(lb)])
-            f->polar_angle = (g->absolute ? 0.0 : f->polar_angle) + gc_fanuc_angle(g, fb, lb);
-        double r = f->polar_radius, ang = f->polar_angle * GC_PI / 180.0;
-        end[a] = f->polar_origin[0] + r * cos(ang);
-        end[bb] = f->polar_origin[1] + r * sin(ang);
-    }
-}
-
-fm_status gc_fanuc_move(gc_interp *g, int rapid, const double prog_end[3])
-{
-    double work[3];
-    gc_fanuc_to_work(g, prog_end, work);
-    memcpy(FANUC(g)->prog, prog_end, sizeof FANUC(g)->prog);
-    return gc_fanuc_line(g, rapid, work);
+    gc_frame_target(g, given, value, end);
 }
 
 static int has_plane_word(const gc_block *b)
@@ -195,7 +110,6 @@ static int has_plane_word(const gc_block *b)
 
 static fm_status exec_arc(gc_interp *g, const gc_fanuc_block *fb, int code, int col)
 {
-    gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     char name[8];
     gc_g_name(code, name, sizeof name);
@@ -207,7 +121,7 @@ static fm_status exec_arc(gc_interp *g, const gc_fanuc_block *fb, int code, int 
     if (st) return st;
     double end[3], cen[3];
     gc_fanuc_target(g, fb, end);
-    const double *s = f->prog;
+    const double *s = g->frame.prog;
     double tol = g->unit == 1.0 ? 0.005 : 0.0005; /* as LinuxCNC; Fanuc's is a parameter (3410) */
     double ca, cb;
     if (b->has[L('r')]) {
@@ -217,8 +131,8 @@ static fm_status exec_arc(gc_interp *g, const gc_fanuc_block *fb, int code, int 
         if (chord <= 1e-9 * (1 + fabs(radius))) {
             /* Fanuc: a full circle cannot be given with R; start = end is an
              * arc of 0 degrees and the tool does not move in the plane */
-            if (end[c] != s[c]) return gc_fanuc_move(g, 0, end);
-            memcpy(f->prog, end, sizeof f->prog);
+            if (end[c] != s[c]) return gc_frame_move(g, 0, end);
+            memcpy(g->frame.prog, end, sizeof g->frame.prog);
             return FM_OK;
         }
         double ar = fabs(radius), half = chord / 2;
@@ -259,12 +173,7 @@ static fm_status exec_arc(gc_interp *g, const gc_fanuc_block *fb, int code, int 
     cen[a] = ca;
     cen[bb] = cb;
     cen[c] = s[c];
-    double wend[3], wcen[3];
-    gc_fanuc_to_work(g, end, wend);
-    gc_fanuc_to_work(g, cen, wcen);
-    double cab[2] = {wcen[a], wcen[bb]};
-    memcpy(f->prog, end, sizeof f->prog);
-    return gc_fanuc_arc(g, wend, cab, (code == GC_G2 ? -1 : 1) * gc_fanuc_mirror_sense(g));
+    return gc_frame_arc(g, end, cen, code == GC_G3, 1);
 }
 
 /* ---- modal state ---- */
@@ -274,27 +183,14 @@ static void set_units(gc_interp *g, double unit)
     gc_fanuc *f = FANUC(g);
     if (unit == g->unit) return;
     double k = g->unit / unit;
-    for (int i = 0; i < 3; i++) {
-        g->pos[i] *= k;
-        g->g5x[i] *= k;
-        g->g92[i] *= k;
-        g->tlo[i] *= k;
-        f->prog[i] *= k;
-        f->local_offset[i] *= k;
-        f->scale_center[i] *= k;
-    }
-    f->rot_center[0] *= k;
-    f->rot_center[1] *= k;
-    f->polar_radius *= k;
+    for (int i = 0; i < 3; i++) f->local_offset[i] *= k;
     f->cycle_z *= k;
     f->cycle_r *= k;
     f->level_z *= k;
     f->level_r *= k;
-    f->polar_origin[0] *= k;
-    f->polar_origin[1] *= k;
     f->cycle_q *= k;
     g->cycle_il *= k;
-    g->unit = unit;
+    gc_set_units(g, unit);
 }
 
 static fm_status whole_word(gc_interp *g, const gc_block *b, char c, long lo, long hi, long *out)
@@ -390,7 +286,7 @@ static fm_status exec_g92(gc_interp *g, const gc_fanuc_block *fb, int col)
     const gc_block *b = &fb->b;
     if (!has_plane_word(b))
         return gc_fail(g, FM_ERR_INPUT, col, "G92: no axis words; expected X, Y or Z values");
-    if (FANUC(g)->rotation || FANUC(g)->scaling || FANUC(g)->mirror[0] || FANUC(g)->mirror[1])
+    if (gc_frame_transformed(g))
         return gc_fail(g, FM_ERR_INPUT, col, "G92 in G68, G51 or G51.1 mode; cancel them first");
     for (int i = 0; i < 3; i++) {
         char c = axis_letter[i];
@@ -399,7 +295,7 @@ static fm_status exec_g92(gc_interp *g, const gc_fanuc_block *fb, int col)
         g->g92[i] = g->pos[i] + g->g92[i] - w;
         g->pos[i] = w;
     }
-    reprogram(g);
+    gc_frame_reprogram(g);
     return FM_OK;
 }
 
@@ -423,7 +319,7 @@ static fm_status exec_reference(gc_interp *g, const gc_fanuc_block *fb, int code
     (void)col;
     double mid[3];
     gc_fanuc_target(g, fb, mid);
-    if ((st = gc_fanuc_move(g, 1, mid))) return st;
+    if ((st = gc_frame_move(g, 1, mid))) return st;
     double to[3];
     for (int i = 0; i < 3; i++) {
         if (b->has[L(axis_letter[i])])
@@ -432,7 +328,7 @@ static fm_status exec_reference(gc_interp *g, const gc_fanuc_block *fb, int code
             to[i] = g->pos[i];
     }
     if ((st = gc_move_line(g, 1, to))) return st;
-    reprogram(g);
+    gc_frame_reprogram(g);
     (void)f;
     return FM_OK;
 }
@@ -450,40 +346,34 @@ static fm_status exec_g53(gc_interp *g, const gc_fanuc_block *fb, int col)
     }
     fm_status st = gc_move_line(g, 1, to); /* G53 positions at rapid traverse */
     if (st) return st;
-    reprogram(g);
+    gc_frame_reprogram(g);
     return FM_OK;
+}
+
+/* Axis i of a G51/G68/G51.1 centre: the block's (G90/G91) or the
+ * programmed point's. */
+static double centre_coord(gc_interp *g, const gc_fanuc_block *fb, int i)
+{
+    char l = axis_letter[i];
+    if (!fb->b.has[L(l)]) return g->frame.prog[i];
+    double v = gc_fanuc_length(g, fb, l);
+    return g->absolute ? v : g->frame.prog[i] + v;
 }
 
 static fm_status exec_rotation(gc_interp *g, const gc_fanuc_block *fb, int col)
 {
-    gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     int a, bb, c;
     gc_plane_axes(g->plane, &a, &bb, &c);
     if (!b->has[L('r')])
         return gc_fail(g, FM_ERR_INPUT, col, "G68: R missing; expected the angle R in degrees");
-    double cen[2];
-    int ax[2] = {a, bb};
-    for (int k = 0; k < 2; k++) {
-        char l = axis_letter[ax[k]];
-        if (!b->has[L(l)]) cen[k] = f->prog[ax[k]];
-        else if (g->absolute) cen[k] = gc_fanuc_length(g, fb, l);
-        else cen[k] = f->prog[ax[k]] + gc_fanuc_length(g, fb, l);
-    }
-    f->rotation = 1;
-    f->rot_plane = g->plane;
-    f->rot_center[0] = cen[0];
-    f->rot_center[1] = cen[1];
-    f->rot_angle = gc_fanuc_angle(g, fb, 'r');
-    f->rot_cos = cos(f->rot_angle * GC_PI / 180.0);
-    f->rot_sin = sin(f->rot_angle * GC_PI / 180.0);
-    reprogram(g);
+    double cen[2] = {centre_coord(g, fb, a), centre_coord(g, fb, bb)};
+    gc_frame_rotate(g, 1, cen, gc_fanuc_angle(g, fb, 'r'));
     return FM_OK;
 }
 
 static fm_status exec_scaling(gc_interp *g, const gc_fanuc_block *fb, int col)
 {
-    gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     double k = 0;
     int have = 0;
@@ -521,18 +411,12 @@ static fm_status exec_scaling(gc_interp *g, const gc_fanuc_block *fb, int col)
                        "G51: factor %g; expected a positive factor (mirroring is not supported)", k);
     if (g->motion >= GC_G73)
         return gc_fail(g, FM_ERR_INPUT, col, "G51 in a canned cycle mode; cancel it (G80) first");
-    if (f->rotation)
+    if (g->frame.rotation)
         return gc_fail(g, FM_ERR_INPUT, col, "G51 in G68 mode; Fanuc scales first: give G51 "
                        "before G68");
-    for (int i = 0; i < 3; i++) {
-        char l = axis_letter[i];
-        if (!b->has[L(l)]) f->scale_center[i] = f->prog[i];
-        else if (g->absolute) f->scale_center[i] = gc_fanuc_length(g, fb, l);
-        else f->scale_center[i] = f->prog[i] + gc_fanuc_length(g, fb, l);
-    }
-    f->scale = k;
-    f->scaling = 1;
-    reprogram(g);
+    double cen[3];
+    for (int i = 0; i < 3; i++) cen[i] = centre_coord(g, fb, i);
+    gc_frame_scale(g, k, cen);
     return FM_OK;
 }
 
@@ -653,9 +537,9 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
     /* plane, units */
     code = gc_block_g(b, GC_GROUP_PLANE, &col);
     if (code != GC_G_NONE) {
-        if (f->rotation && code / 10 != (int)f->rot_plane)
+        if (g->frame.rotation && code / 10 != (int)g->frame.rot_plane)
             return gc_fail(g, FM_ERR_INPUT, col, "plane change in G68 mode; cancel G68 first");
-        if ((f->mirror[0] || f->mirror[1]) && code != GC_G17)
+        if ((g->frame.mirror[0] || g->frame.mirror[1]) && code != GC_G17)
             return gc_fail(g, FM_ERR_INPUT, col, "plane change in G51.1 mode; cancel G51.1 "
                            "(G50.1) first");
         g->plane = (gc_plane)(code / 10);
@@ -672,16 +556,7 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
     if (code == GC_G98) g->retract_r = 0;
     else if (code == GC_G99) g->retract_r = 1;
     code = gc_block_g(b, GC_GROUP_POLAR, NULL);
-    if (code == GC_G16 && !f->polar) {
-        int a, bb, c;
-        gc_plane_axes(g->plane, &a, &bb, &c);
-        f->polar = 1;
-        f->polar_radius = hypot(f->prog[a], f->prog[bb]);
-        f->polar_angle = atan2(f->prog[bb], f->prog[a]) * 180.0 / GC_PI;
-        f->polar_origin[0] = f->polar_origin[1] = 0;
-    } else if (code == GC_G15) {
-        f->polar = 0;
-    }
+    if (code == GC_G16 || code == GC_G15) gc_frame_polar(g, code == GC_G16);
 
     /* dwell */
     int nonmodal = gc_block_g(b, GC_GROUP_NON_MODAL, &col);
@@ -695,7 +570,7 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
         else if (b->has[L('u')]) sec = b->v[L('u')];
         if (sec < 0)
             return gc_fail(g, FM_ERR_INPUT, nonmodal_col, "G04: negative dwell time %g s", sec);
-        if ((st = gc_fanuc_dwell(g, sec))) return st;
+        if ((st = gc_frame_dwell(g, sec))) return st;
     }
 
     /* motion mode of this block */
@@ -732,7 +607,7 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
         f->cycle_data = 0;
         g->cycle_il_flag = 0;
     } else if (ccode != GC_G_NONE) {
-        if (f->scaling)
+        if (g->frame.scaling)
             return gc_fail(g, FM_ERR_INPUT, ccol,
                            "canned cycle in G51 scaling mode is not supported; cancel G51 first");
     }
@@ -750,7 +625,7 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
     if (tl_changed && !will_move) {
         int rapid = f->group1 == 0 || motion >= GC_G73;
         if (!rapid && (st = gc_check_feed(g, "tool length offset move", col))) return st;
-        if ((st = gc_fanuc_move(g, rapid, f->prog))) return st;
+        if ((st = gc_frame_move(g, rapid, g->frame.prog))) return st;
     }
 
     /* work offsets */
@@ -765,14 +640,12 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
     /* mirror, scaling and rotation (their axis words are centres) */
     if (mirror != GC_G_NONE && (st = gc_fanuc_mirror(g, fb, mirror, mirror_col))) return st;
     if (scaling == GC_G50) {
-        f->scaling = 0;
-        reprogram(g);
+        gc_frame_scale(g, 0, NULL);
     } else if (scaling == GC_G51 && (st = exec_scaling(g, fb, scaling_col))) {
         return st;
     }
     if (rotation == GC_G69) {
-        f->rotation = 0;
-        reprogram(g);
+        gc_frame_rotate(g, 0, NULL, 0);
     } else if (rotation == GC_G68 && (st = exec_rotation(g, fb, rotation_col))) {
         return st;
     }
@@ -783,7 +656,7 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
     case GC_G27: {
         double to[3];
         gc_fanuc_target(g, fb, to);
-        if ((st = gc_fanuc_move(g, 1, to))) return st;
+        if ((st = gc_frame_move(g, 1, to))) return st;
         break;
     }
     case GC_G28: case GC_G30:
@@ -812,7 +685,7 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
                 if (b->has[i] && (!best || b->col[i] < best)) best = b->col[i];
             mcol = best;
         }
-        f->motion_col = mcol;
+        g->motion_col = mcol;
         if (motion == GC_G0 || motion == GC_G1) {
             if (motion == GC_G1) {
                 if ((st = gc_check_feed(g, "G01", mcol))) return st;
@@ -823,7 +696,7 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
             }
             double end[3];
             gc_fanuc_target(g, fb, end);
-            if ((st = gc_fanuc_move(g, motion == GC_G0, end))) return st;
+            if ((st = gc_frame_move(g, motion == GC_G0, end))) return st;
         } else if (is_arc) {
             if (g->inverse_time && !b->has[L('f')])
                 return gc_fail(g, FM_ERR_INPUT, mcol,

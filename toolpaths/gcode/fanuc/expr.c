@@ -51,13 +51,13 @@ static double modal_info(gc_interp *g, int group)
     case 8: return g_value(f->tool_length_mode);
     case 9: return g->motion == GC_G80 || g->motion < GC_G73 ? 80 : g_value(g->motion);
     case 10: return g->retract_r ? 99 : 98;
-    case 11: return f->scaling ? 51 : 50;
+    case 11: return g->frame.scaling ? 51 : 50;
     case 12: return gc_fanuc_modal_call_on(f) ? 66 : 67;
     case 13: return 97;
     case 14: return f->ext_cs ? (f->ext_g154 ? 154 : 54.1) : 53 + g->cs;
     case 15: return 64;
-    case 16: return f->rotation ? 68 : 69;
-    case 17: return f->polar ? 16 : 15;
+    case 16: return g->frame.rotation ? 68 : 69;
+    case 17: return g->frame.polar ? 16 : 15;
     case 18: return 40.1;
     case 19: return 50.1;
     default: return GC_VACANT;
@@ -111,7 +111,7 @@ fm_status gc_fanuc_get_var(gc_interp *g, long n, int col, double *out)
         }
     } else if (n >= 5001 && n <= 5006) {
         double w[3];
-        gc_fanuc_to_work(g, f->prog, w);
+        gc_frame_to_work(g, g->frame.prog, w);
         *out = n <= 5003 ? w[n - 5001] : 0.0;
     } else if (n >= 5021 && n <= 5026) {
         *out = n <= 5023 ? g->pos[n - 5021] + g->g5x[n - 5021] + g->g92[n - 5021] +

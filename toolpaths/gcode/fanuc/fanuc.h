@@ -107,14 +107,6 @@ typedef struct gc_fanuc {
     int ext_cs;          /* G54.1 or G154 P number in use, 0 for G54-G59 */
     int ext_g154;        /* it was selected with G154 (#4014 reads 154) */
     double local_offset[3]; /* G52, program units */
-    double prog[3];      /* the programmed point: before polar, scaling and rotation */
-    int polar;           /* G16 */
-    double polar_radius, polar_angle, polar_origin[2];
-    int rotation;        /* G68 */
-    double rot_center[2], rot_angle, rot_cos, rot_sin;
-    gc_plane rot_plane;
-    int scaling;         /* G51 */
-    double scale_center[3], scale;
     /* hole data: R and Z as written until the first hole turns them into
      * levels (G91: from the initial level and from R), Q, P (seconds) */
     double cycle_z, cycle_r, cycle_q, cycle_p;
@@ -122,12 +114,8 @@ typedef struct gc_fanuc {
     double level_r, level_z;
     double block_end[3]; /* #5001-#5003: where the previous block ended */
 
-    int motion_col;      /* column of the block's motion, for compensation's errors */
-
     /* Haas and the codes CAM posts write (haas.c) */
     int css;             /* G96 constant surface speed (S is not rpm: G95 is refused) */
-    int mirror[3];       /* G51.1: the axis is mirrored */
-    double mirror_center[3]; /* program frame, program units */
     /* G66 modal calls, one per level of locals (the level of the G66
      * block): a move at that level calls it, so a G66 given in the called
      * macro nests (its moves call the inner macro); the macro's return ends
@@ -205,12 +193,9 @@ double gc_fanuc_length(const gc_interp *g, const gc_fanuc_block *fb, char c);
 double gc_fanuc_angle(const gc_interp *g, const gc_fanuc_block *fb, char c);
 /* P or X of a dwell: seconds. */
 double gc_fanuc_dwell_seconds(const gc_interp *g, const gc_fanuc_block *fb, char c);
-/* The block's end point in the program frame (G90/G91, G16), and that
- * point in work coordinates (G51 scaling, G68 rotation). */
+/* The block's end point in the program frame (G90/G91, G16: the machine's
+ * gc_frame_target) from its words. */
 void gc_fanuc_target(gc_interp *g, const gc_fanuc_block *fb, double prog_end[3]);
-void gc_fanuc_to_work(const gc_interp *g, const double prog[3], double work[3]);
-void gc_fanuc_from_work(const gc_interp *g, const double work[3], double prog[3]);
-fm_status gc_fanuc_move(gc_interp *g, int rapid, const double prog_end[3]);
 /* The work offset in use (G54-G59 or G54.1 P, plus the external offset and
  * G52) into g->g5x; the current point keeps its machine position. */
 void gc_fanuc_apply_work_offset(gc_interp *g);
@@ -220,10 +205,6 @@ void gc_fanuc_apply_work_offset(gc_interp *g);
 fm_status gc_fanuc_comp_mode(gc_interp *g, const gc_fanuc_block *fb, int code, int col);
 /* What a control refuses while compensating; motion is the block's motion mode. */
 fm_status gc_fanuc_comp_check(gc_interp *g, const gc_fanuc_block *fb, int motion);
-/* Moves, arcs and dwells in work coordinates, through compensation while it runs. */
-fm_status gc_fanuc_line(gc_interp *g, int rapid, const double work[3]);
-fm_status gc_fanuc_arc(gc_interp *g, const double work[3], const double center_ab[2], int turn);
-fm_status gc_fanuc_dwell(gc_interp *g, double seconds);
 
 /* ---- cycle.c ---- */
 fm_status gc_fanuc_exec_cycle(gc_interp *g, const gc_fanuc_block *fb, int code, int col);
@@ -242,10 +223,6 @@ fm_status gc_fanuc_circular_pocket(gc_interp *g, const gc_fanuc_block *fb, int c
 fm_status gc_fanuc_feed_mode(gc_interp *g, const gc_block *b);
 /* G50.1/G51.1 of the block. */
 fm_status gc_fanuc_mirror(gc_interp *g, const gc_fanuc_block *fb, int code, int col);
-/* Mirror a program-frame point (its own inverse). */
-void gc_fanuc_mirror_point(const gc_fanuc *f, double p[3]);
-/* -1 when an odd number of the plane's axes is mirrored (G02 <-> G03), else 1. */
-int gc_fanuc_mirror_sense(const gc_interp *g);
 /* G66 (store the call at this level) and G67 of the block (cancel this
  * level's, or else the most recent). */
 fm_status gc_fanuc_modal_call_set(gc_interp *g, const gc_fanuc_block *fb, int code, int col);

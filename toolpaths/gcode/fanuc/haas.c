@@ -69,23 +69,8 @@ fm_status gc_fanuc_feed_mode(gc_interp *g, const gc_block *b)
 
 static const char axis_letter[3] = {'x', 'y', 'z'};
 
-void gc_fanuc_mirror_point(const gc_fanuc *f, double p[3])
-{
-    for (int i = 0; i < 3; i++)
-        if (f->mirror[i]) p[i] = 2 * f->mirror_center[i] - p[i];
-}
-
-int gc_fanuc_mirror_sense(const gc_interp *g)
-{
-    const gc_fanuc *f = FANUC(g);
-    int a, b, c;
-    gc_plane_axes(g->plane, &a, &b, &c);
-    return (f->mirror[a] ^ f->mirror[b]) ? -1 : 1;
-}
-
 fm_status gc_fanuc_mirror(gc_interp *g, const gc_fanuc_block *fb, int code, int col)
 {
-    gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     int any = 0;
     for (int i = 0; i < 3; i++) any |= b->has[L(axis_letter[i])];
@@ -93,11 +78,13 @@ fm_status gc_fanuc_mirror(gc_interp *g, const gc_fanuc_block *fb, int code, int 
         return gc_fail(g, FM_ERR_INPUT, col,
                        "%s with cutter radius compensation on; expected G40 and its cancel move "
                        "first", code == GC_G50_1 ? "G50.1" : "G51.1");
+    int axes[3];
+    double centre[3] = {0, 0, 0};
     if (code == GC_G50_1) {
         /* the axes given are cancelled (their values are ignored, as Fanuc);
          * G50.1 alone cancels every axis */
-        for (int i = 0; i < 3; i++)
-            if (!any || b->has[L(axis_letter[i])]) f->mirror[i] = 0;
+        for (int i = 0; i < 3; i++) axes[i] = !any || b->has[L(axis_letter[i])];
+        gc_frame_mirror(g, axes, centre, 0);
     } else {
         if (!any)
             return gc_fail(g, FM_ERR_INPUT, col,
@@ -109,21 +96,17 @@ fm_status gc_fanuc_mirror(gc_interp *g, const gc_fanuc_block *fb, int code, int 
         if (g->plane != GC_PLANE_XY)
             return gc_fail(g, FM_ERR_INPUT, col,
                            "G51.1 in G%d: mirror image is supported in G17 only", g->plane);
-        if (f->scaling || f->rotation)
+        if (g->frame.scaling || g->frame.rotation)
             return gc_fail(g, FM_ERR_INPUT, col,
                            "G51.1 in G51 or G68 mode: Fanuc mirrors first; give G51.1 before G51 "
                            "and G68");
-        for (int i = 0; i < 2; i++) {
-            char l = axis_letter[i];
-            if (!b->has[L(l)]) continue;
-            double v = gc_fanuc_length(g, fb, l);
-            f->mirror_center[i] = g->absolute ? v : f->prog[i] + v;
-            f->mirror[i] = 1;
+        for (int i = 0; i < 3; i++) {
+            axes[i] = b->has[L(axis_letter[i])];
+            double v = axes[i] ? gc_fanuc_length(g, fb, axis_letter[i]) : 0;
+            centre[i] = g->absolute ? v : g->frame.prog[i] + v;
         }
+        gc_frame_mirror(g, axes, centre, 1);
     }
-    /* the tool stays where it is: its programmed point is seen through the
-     * new mirror */
-    gc_fanuc_from_work(g, g->pos, f->prog);
     return FM_OK;
 }
 
@@ -183,13 +166,7 @@ int gc_fanuc_modal_call_on(const gc_fanuc *f)
  * mirror), about cen, to end. */
 static fm_status pocket_arc(gc_interp *g, const double end[3], const double cen[3], int ccw)
 {
-    gc_fanuc *f = FANUC(g);
-    double wend[3], wcen[3];
-    gc_fanuc_to_work(g, end, wend);
-    gc_fanuc_to_work(g, cen, wcen);
-    double cab[2] = {wcen[0], wcen[1]};
-    memcpy(f->prog, end, sizeof f->prog);
-    return gc_move_arc(g, wend, cab, (ccw ? 1 : -1) * gc_fanuc_mirror_sense(g));
+    return gc_frame_arc(g, end, cen, ccw, 0);
 }
 
 /* From radius r0 on one side of the centre (side = +1: +X, -1: -X) to
@@ -217,7 +194,7 @@ fm_status gc_fanuc_circular_pocket(gc_interp *g, const gc_fanuc_block *fb, int c
         return gc_fail(g, FM_ERR_INPUT, col,
                        "%s with cutter radius compensation on (the cycle compensates by its D); "
                        "expected G40 and its cancel move first", name);
-    if (f->scaling)
+    if (g->frame.scaling)
         return gc_fail(g, FM_ERR_INPUT, col, "%s in G51 scaling mode is not supported; cancel G51 "
                        "first", name);
     if (g->inverse_time)
@@ -267,17 +244,17 @@ fm_status gc_fanuc_circular_pocket(gc_interp *g, const gc_fanuc_block *fb, int c
     double target[3];
     gc_fanuc_target(g, fb, target);
     double c[2] = {target[0], target[1]};
-    double z0 = f->prog[2];
+    double z0 = g->frame.prog[2];
     double dz = b->has[L('z')] ? target[2] - z0 : 0;
-    if (c[0] != f->prog[0] || c[1] != f->prog[1]) {
+    if (c[0] != g->frame.prog[0] || c[1] != g->frame.prog[1]) {
         double to[3] = {c[0], c[1], z0};
-        if ((st = gc_fanuc_move(g, 1, to))) return st;
+        if ((st = gc_frame_move(g, 1, to))) return st;
     }
     for (long rep = 0; rep < reps && !g->stop; rep++) {
         double z = b->has[L('z')] ? (g->absolute ? target[2] : z0 + (rep + 1) * dz) : z0;
-        if (z != f->prog[2]) {
+        if (z != g->frame.prog[2]) {
             double to[3] = {c[0], c[1], z};
-            if ((st = gc_fanuc_move(g, 0, to))) return st;
+            if ((st = gc_frame_move(g, 0, to))) return st;
         }
         /* circles from I out to K in steps of Q, each a full turn, joined
          * by half turns; the tool centre runs the tool's radius inside */

@@ -773,9 +773,9 @@ static fm_status fanuc_init(gc_interp *g)
     g->motion = GC_G0;
     g->retract_r = 0;
     f->tool_length_mode = GC_G49;
-    f->scale = 1;
+    g->frame.scale = 1;
     /* the machine has returned to its (first) reference point after power-on */
-    for (int i = 0; i < 3; i++) g->pos[i] = f->prog[i] = g->opt.reference_points[0][i] / g->unit;
+    for (int i = 0; i < 3; i++) g->pos[i] = g->frame.prog[i] = g->opt.reference_points[0][i] / g->unit;
     gc_to_machine(g, g->pos, g->mpos);
     memcpy(g->canon, g->mpos, sizeof g->canon);
     return FM_OK;

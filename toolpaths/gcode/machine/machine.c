@@ -72,6 +72,7 @@ void gc_set_units(gc_interp *g, double unit)
         g->tlo[i] *= f;
     }
     gc_comp_scale(g, f);
+    gc_frame_scale_units(g, f);
     g->unit = unit;
 }
 

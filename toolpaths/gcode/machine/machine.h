@@ -17,6 +17,8 @@
  *   sync.c      G33/G33.1 spindle-synchronized moves, G38.x probing
  *   rotary.c    rotary axes A B C, TCP, the joint values of each motion
  *   expr.c      the one expression engine, driven by a dialect's table
+ *   transform.c the ISO program frame: G16 polar, G51 scaling, G68 rotation,
+ *               G51.1 mirror, and moves through it and compensation C
  * docs/gcode.md has the map of the front ends. */
 #ifndef FM_GCODE_MACHINE_H
 #define FM_GCODE_MACHINE_H
@@ -204,6 +206,21 @@ typedef struct gc_line {
     int msg_kind;
 } gc_line;
 
+/* The program frame of the ISO dialects (transform.c): the programmed
+ * point and the transforms from it to work coordinates, program units. */
+typedef struct gc_program_frame {
+    double prog[3];      /* the programmed point: before polar, scaling, rotation, mirror */
+    int polar;           /* G16 */
+    double polar_radius, polar_angle, polar_origin[2];
+    int rotation;        /* G68 */
+    double rot_center[2], rot_angle, rot_cos, rot_sin;
+    gc_plane rot_plane;
+    int scaling;         /* G51 */
+    double scale_center[3], scale;
+    int mirror[3];       /* G51.1: the axis is mirrored about mirror_center */
+    double mirror_center[3];
+} gc_program_frame;
+
 typedef struct gc_interp {
     /* program */
     const char *text;
@@ -288,6 +305,11 @@ typedef struct gc_interp {
     int ended;
     int cur_line_for_motion;
     long cur_block;
+
+    /* the ISO program frame (transform.c), and the column of the block's
+     * motion for compensation C's errors */
+    gc_program_frame frame;
+    int motion_col;
 } gc_interp;
 
 /* A dialect's front end: gcode.c picks one by fm_gcode_options.dialect. init
@@ -493,6 +515,46 @@ fm_status gc_exec_g92(gc_interp *g, const gc_block *b, int code, int col);
 fm_status gc_exec_home(gc_interp *g, const gc_block *b, int code);
 void gc_store_home(gc_interp *g, int code);
 fm_status gc_exec_tool_length(gc_interp *g, const gc_block *b, int code, int col);
+
+/* ---- the ISO program frame (transform.c) ----
+ * Program frame -> work coordinates: scaling, rotation, then mirror (G51.1
+ * reflects what the others make). */
+
+void gc_frame_to_work(const gc_interp *g, const double prog[3], double work[3]);
+void gc_frame_from_work(const gc_interp *g, const double work[3], double prog[3]);
+/* The programmed point from the tool's (g->pos) after a change that does
+ * not move the machine (offsets, G92, a transform, units). */
+void gc_frame_reprogram(gc_interp *g);
+/* 1 while G68, G51 or G51.1 is on. */
+int gc_frame_transformed(const gc_interp *g);
+/* -1 when an odd number of the plane's axes is mirrored (G02 <-> G03). */
+int gc_frame_mirror_sense(const gc_interp *g);
+/* A block's end point in the program frame from the axes given (values in
+ * program units, G90/G91); in G16 the plane's second axis is the angle in
+ * degrees (the polar state follows the block). */
+void gc_frame_target(gc_interp *g, const int given[3], const double value[3], double end[3]);
+/* G16 (on: polar from the programmed point) and G15. */
+void gc_frame_polar(gc_interp *g, int on);
+/* G51 (k > 0: factor k about center) and G50 (k = 0). */
+void gc_frame_scale(gc_interp *g, double k, const double center[3]);
+/* G68 (on: degrees about center in the current plane) and G69. */
+void gc_frame_rotate(gc_interp *g, int on, const double center[2], double degrees);
+/* G51.1 (on) and G50.1 of the axes given. */
+void gc_frame_mirror(gc_interp *g, const int axes[3], const double center[3], int on);
+/* G20/G21: the frame's lengths times k (gc_set_units). */
+void gc_frame_scale_units(gc_interp *g, double k);
+/* Lines, arcs and dwells in work coordinates through compensation C while
+ * it runs (gc_comp_c_routing), else straight to the motions. */
+fm_status gc_frame_line_work(gc_interp *g, int rapid, const double work[3]);
+fm_status gc_frame_arc_work(gc_interp *g, const double work[3], const double center_ab[2],
+                            int turn);
+fm_status gc_frame_dwell(gc_interp *g, double seconds);
+/* To prog_end (program frame): the programmed point becomes it. */
+fm_status gc_frame_move(gc_interp *g, int rapid, const double prog_end[3]);
+/* An arc in the program frame (ccw before any mirror); compensate: through
+ * compensation C while it runs. */
+fm_status gc_frame_arc(gc_interp *g, const double prog_end[3], const double prog_center[3],
+                       int ccw, int compensate);
 
 /* ---- rotary axes A, B, C (rotary.c) ---- */
 
