@@ -78,27 +78,52 @@ void gc_fanuc_apply_work_offset(gc_interp *g)
 
 static const char axis_letter[3] = {'x', 'y', 'z'};
 
-void gc_fanuc_target(gc_interp *g, const gc_fanuc_block *fb, double end[3])
+void gc_fanuc_axis_words(const gc_interp *g, const gc_fanuc_block *fb, gc_axis_words *w)
 {
     const gc_block *b = &fb->b;
     int a, bb, c;
     gc_plane_axes(g->plane, &a, &bb, &c);
-    /* A B C in degrees: the rotary axes (rotary.c) */
-    int rgiven[3], given[3];
-    double rvalue[3], value[3];
     for (int i = 0; i < 3; i++) {
-        rgiven[i] = b->has[L("abc"[i])];
-        rvalue[i] = rgiven[i] ? gc_fanuc_angle(g, fb, "abc"[i]) : 0;
+        /* A B C in degrees: the rotary axes (rotary.c) */
+        w->rgiven[i] = b->has[L("abc"[i])];
+        w->rvalue[i] = w->rgiven[i] ? gc_fanuc_angle(g, fb, "abc"[i]) : 0;
+        /* in G16 the plane's second axis is the angle */
+        w->given[i] = b->has[L(axis_letter[i])];
+        w->value[i] = !w->given[i] ? 0
+                      : g->frame.polar && i == bb ? gc_fanuc_angle(g, fb, axis_letter[i])
+                                                  : gc_fanuc_length(g, fb, axis_letter[i]);
     }
-    gc_rot_target(g, rgiven, rvalue);
-    /* in G16 the plane's second axis is the angle */
-    for (int i = 0; i < 3; i++) {
-        given[i] = b->has[L(axis_letter[i])];
-        value[i] = !given[i] ? 0
-                   : g->frame.polar && i == bb ? gc_fanuc_angle(g, fb, axis_letter[i])
-                                               : gc_fanuc_length(g, fb, axis_letter[i]);
+}
+
+void gc_fanuc_target(gc_interp *g, const gc_fanuc_block *fb, double end[3])
+{
+    gc_axis_words w;
+    gc_fanuc_axis_words(g, fb, &w);
+    gc_frame_target(g, &w, end);
+}
+
+/* A canned cycle block: its hole data as values for the machine's ISO
+ * cycles (cycles_iso.c). */
+static fm_status exec_cycle(gc_interp *g, const gc_fanuc_block *fb, int code, int col)
+{
+    const gc_block *b = &fb->b;
+    gc_hole_block h;
+    memset(&h, 0, sizeof h);
+    gc_fanuc_axis_words(g, fb, &h.at);
+    h.has_r = b->has[L('r')];
+    h.has_q = b->has[L('q')];
+    h.has_p = b->has[L('p')];
+    if (h.has_r) h.r = gc_fanuc_length(g, fb, 'r');
+    if (h.has_q) h.q = fabs(gc_fanuc_length(g, fb, 'q'));
+    if (h.has_p) h.p = gc_fanuc_dwell_seconds(g, fb, 'p');
+    h.r_col = b->col[L('r')];
+    h.q_col = b->col[L('q')];
+    h.rep_letter = b->has[L('k')] ? 'k' : b->has[L('l')] ? 'l' : 0;
+    if (h.rep_letter) {
+        h.rep_value = b->v[L(h.rep_letter)];
+        h.rep_col = b->col[L(h.rep_letter)];
     }
-    gc_frame_target(g, given, value, end);
+    return gc_cycle_iso(g, code, &h, col);
 }
 
 static int has_plane_word(const gc_block *b)
@@ -184,12 +209,7 @@ static void set_units(gc_interp *g, double unit)
     if (unit == g->unit) return;
     double k = g->unit / unit;
     for (int i = 0; i < 3; i++) f->local_offset[i] *= k;
-    f->cycle_z *= k;
-    f->cycle_r *= k;
-    f->level_z *= k;
-    f->level_r *= k;
-    f->cycle_q *= k;
-    g->cycle_il *= k;
+    gc_cycle_iso_scale_units(g, k);
     gc_set_units(g, unit);
 }
 
@@ -599,13 +619,11 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
     if (mcode != GC_G_NONE) {
         f->group1 = mcode / 10;
         g->motion = (gc_gcode)mcode;
-        f->cycle_data = 0;
-        g->cycle_il_flag = 0;
+        gc_cycle_iso_cancel(g);
     }
     if (ccode == GC_G80) {
         g->motion = (gc_gcode)(f->group1 * 10);
-        f->cycle_data = 0;
-        g->cycle_il_flag = 0;
+        gc_cycle_iso_cancel(g);
     } else if (ccode != GC_G_NONE) {
         if (g->frame.scaling)
             return gc_fail(g, FM_ERR_INPUT, ccol,
@@ -704,11 +722,11 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
                                "feed line", motion / 10);
             if ((st = exec_arc(g, fb, motion, mcol))) return st;
         } else if (motion >= GC_G73 && motion != GC_G80) {
-            if ((st = gc_fanuc_exec_cycle(g, fb, motion, mcol))) return st;
+            if ((st = exec_cycle(g, fb, motion, mcol))) return st;
         }
     } else if (ccode != GC_G_NONE && ccode != GC_G80) {
         /* a cycle code without a position: its data are kept for later blocks */
-        if ((st = gc_fanuc_exec_cycle(g, fb, ccode, ccol))) return st;
+        if ((st = exec_cycle(g, fb, ccode, ccol))) return st;
     }
     for (int i = 0; i < 3; i++) f->block_end[i] = g->pos[i];
     /* G66: the macro is called after each block that moved */

@@ -10,8 +10,7 @@
  *   block.c    words of a block, Fanuc's G-code groups, the decimal point
  *              and rounding rules of addresses
  *   exec.c     executing a block: modal state, offsets, G68/G51/G16, lines,
- *              arcs, dwells, G28/G30/G53
- *   cycle.c    canned cycles G73 G74 G76 G81-G89
+ *              arcs, dwells, G28/G30/G53, canned cycles' words
  *   haas.c     what Haas adds and CAM posts write: G154 P1-P99 work offsets
  *              (#14001..), G12/G13 circular pockets, G95 feed per revolution,
  *              G50.1/G51.1 mirror image, G66/G67 modal macro calls */
@@ -98,7 +97,6 @@ typedef struct gc_fanuc {
 
     /* modal state Fanuc has beyond LinuxCNC's */
     int group1;          /* 0 1 2 3: G00-G03, the motion after G80 */
-    int cycle_data;      /* canned cycle Z/R valid (cleared by G80 and G00-G03) */
     int tool_length_mode; /* GC_G43, GC_G44 or GC_G49 */
     int h;               /* the offset number in use (modal H) */
     int d;               /* modal D (read only by #4107) */
@@ -107,11 +105,6 @@ typedef struct gc_fanuc {
     int ext_cs;          /* G54.1 or G154 P number in use, 0 for G54-G59 */
     int ext_g154;        /* it was selected with G154 (#4014 reads 154) */
     double local_offset[3]; /* G52, program units */
-    /* hole data: R and Z as written until the first hole turns them into
-     * levels (G91: from the initial level and from R), Q, P (seconds) */
-    double cycle_z, cycle_r, cycle_q, cycle_p;
-    int cycle_z_word, cycle_r_word, cycle_z_abs, cycle_r_abs; /* pending words and their mode */
-    double level_r, level_z;
     double block_end[3]; /* #5001-#5003: where the previous block ended */
 
     /* Haas and the codes CAM posts write (haas.c) */
@@ -196,6 +189,8 @@ double gc_fanuc_dwell_seconds(const gc_interp *g, const gc_fanuc_block *fb, char
 /* The block's end point in the program frame (G90/G91, G16: the machine's
  * gc_frame_target) from its words. */
 void gc_fanuc_target(gc_interp *g, const gc_fanuc_block *fb, double prog_end[3]);
+/* The block's X Y Z A B C as values (gc_fanuc_length, gc_fanuc_angle). */
+void gc_fanuc_axis_words(const gc_interp *g, const gc_fanuc_block *fb, gc_axis_words *w);
 /* The work offset in use (G54-G59 or G54.1 P, plus the external offset and
  * G52) into g->g5x; the current point keeps its machine position. */
 void gc_fanuc_apply_work_offset(gc_interp *g);
@@ -205,9 +200,6 @@ void gc_fanuc_apply_work_offset(gc_interp *g);
 fm_status gc_fanuc_comp_mode(gc_interp *g, const gc_fanuc_block *fb, int code, int col);
 /* What a control refuses while compensating; motion is the block's motion mode. */
 fm_status gc_fanuc_comp_check(gc_interp *g, const gc_fanuc_block *fb, int motion);
-
-/* ---- cycle.c ---- */
-fm_status gc_fanuc_exec_cycle(gc_interp *g, const gc_fanuc_block *fb, int code, int col);
 
 /* ---- fanuc/haas.c ---- */
 

@@ -19,6 +19,7 @@
  *   expr.c      the one expression engine, driven by a dialect's table
  *   transform.c the ISO program frame: G16 polar, G51 scaling, G68 rotation,
  *               G51.1 mirror, and moves through it and compensation C
+ *   cycles_iso.c the ISO canned cycles (G73 G74 G76 G81-G89, Fanuc's)
  * docs/gcode.md has the map of the front ends. */
 #ifndef FM_GCODE_MACHINE_H
 #define FM_GCODE_MACHINE_H
@@ -221,6 +222,25 @@ typedef struct gc_program_frame {
     double mirror_center[3];
 } gc_program_frame;
 
+/* A block's axis words as values: X Y Z in program units (in G16 the
+ * plane's second axis is the angle in degrees), A B C in degrees. */
+typedef struct gc_axis_words {
+    int given[3];
+    double value[3];
+    int rgiven[3];
+    double rvalue[3];
+} gc_axis_words;
+
+/* The hole data of the ISO canned cycles (cycles_iso.c): R and Z as
+ * written until the first hole turns them into levels (G91: from the
+ * initial level and from R), Q, P (seconds); program units. */
+typedef struct gc_hole_data {
+    int valid;           /* set by a cycle block, cleared by gc_cycle_iso_cancel */
+    double z, r, q, p;
+    int z_word, r_word, z_abs, r_abs; /* pending words and their mode */
+    double level_r, level_z;
+} gc_hole_data;
+
 typedef struct gc_interp {
     /* program */
     const char *text;
@@ -310,6 +330,7 @@ typedef struct gc_interp {
      * motion for compensation C's errors */
     gc_program_frame frame;
     int motion_col;
+    gc_hole_data hole;   /* the ISO canned cycles' (cycles_iso.c) */
 } gc_interp;
 
 /* A dialect's front end: gcode.c picks one by fm_gcode_options.dialect. init
@@ -529,10 +550,9 @@ void gc_frame_reprogram(gc_interp *g);
 int gc_frame_transformed(const gc_interp *g);
 /* -1 when an odd number of the plane's axes is mirrored (G02 <-> G03). */
 int gc_frame_mirror_sense(const gc_interp *g);
-/* A block's end point in the program frame from the axes given (values in
- * program units, G90/G91); in G16 the plane's second axis is the angle in
- * degrees (the polar state follows the block). */
-void gc_frame_target(gc_interp *g, const int given[3], const double value[3], double end[3]);
+/* A block's end point in the program frame from its axis words (G90/G91,
+ * G16: the polar state follows the block); the rotary axes' targets too. */
+void gc_frame_target(gc_interp *g, const gc_axis_words *w, double end[3]);
 /* G16 (on: polar from the programmed point) and G15. */
 void gc_frame_polar(gc_interp *g, int on);
 /* G51 (k > 0: factor k about center) and G50 (k = 0). */
@@ -555,6 +575,28 @@ fm_status gc_frame_move(gc_interp *g, int rapid, const double prog_end[3]);
  * compensation C while it runs. */
 fm_status gc_frame_arc(gc_interp *g, const double prog_end[3], const double prog_center[3],
                        int ccw, int compensate);
+
+/* ---- the ISO canned cycles (cycles_iso.c) ---- */
+
+/* A cycle block's words as values: the hole position (the hole axis' word
+ * is the bottom Z), R, Q (>= 0) in program units, P in seconds, the
+ * repeat word (K or L; 0: none) as written. Columns for errors. */
+typedef struct gc_hole_block {
+    gc_axis_words at;
+    int has_r, has_q, has_p;
+    double r, q, p;
+    char rep_letter;
+    double rep_value;
+    int r_col, q_col, rep_col;
+} gc_hole_block;
+
+/* G73 G74 G76 G81-G89 (code) with this block's words; a block without a
+ * position, or with zero repeats, only stores the data. */
+fm_status gc_cycle_iso(gc_interp *g, int code, const gc_hole_block *h, int col);
+/* G80 and G00-G03: the hole data and the initial level are gone. */
+void gc_cycle_iso_cancel(gc_interp *g);
+/* G20/G21: the hole data's lengths times k. */
+void gc_cycle_iso_scale_units(gc_interp *g, double k);
 
 /* ---- rotary axes A, B, C (rotary.c) ---- */
 

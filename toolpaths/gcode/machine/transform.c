@@ -79,9 +79,12 @@ int gc_frame_mirror_sense(const gc_interp *g)
     return (g->frame.mirror[a] ^ g->frame.mirror[b]) ? -1 : 1;
 }
 
-void gc_frame_target(gc_interp *g, const int given[3], const double value[3], double end[3])
+void gc_frame_target(gc_interp *g, const gc_axis_words *w, double end[3])
 {
     gc_program_frame *f = &g->frame;
+    const int *given = w->given;
+    const double *value = w->value;
+    gc_rot_target(g, w->rgiven, w->rvalue);
     int a, bb, c;
     gc_plane_axes(g->plane, &a, &bb, &c);
     for (int i = 0; i < 3; i++) {

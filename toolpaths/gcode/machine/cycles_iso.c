@@ -1,18 +1,21 @@
-/* cycle.c: Fanuc's canned cycles for drilling, tapping and
- * boring in the selected plane (G17: holes along Z): G73 high-speed peck
- * (retract d after each peck of Q), G74 left-hand and G84 right-hand
- * tapping, G76 fine boring (oriented stop, shift Q, retract), G81 drilling,
- * G82 with a dwell, G83 peck drilling (back to R after each peck, down again
- * to d above the last depth), G85 and G89 boring out at feed, G86 with the
- * spindle stopped, G87 back boring, G88 boring with a manual retract (here a
- * rapid). Hole data (Z, R, Q, P) stay until G80 or a G00-G03; K (or L)
- * repeats the hole, at increments in G91; K0 stores the data only. In G90, R
- * and Z are levels; in G91, R is measured from the initial level and Z from
- * R (in the mode they are written in; later holes keep the levels). G98
- * returns to the initial level (where the cycle mode began), G99 to R.
- * The shift of G76 and G87 is along +X of the plane (Fanuc's parameter
- * default). */
-#include "fanuc.h"
+/* cycles_iso.c: the canned cycles of the ISO dialects (Fanuc, Haas and
+ * the controls that follow them) for drilling, tapping and boring in the
+ * selected plane (G17: holes along Z): G73 high-speed peck (retract
+ * fm_gcode_options.peck_retract after each peck of Q), G74 left-hand and G84
+ * right-hand tapping, G76 fine boring (oriented stop, shift Q, retract), G81
+ * drilling, G82 with a dwell, G83 peck drilling (back to R after each peck,
+ * down again to peck_clearance above the last depth), G85 and G89 boring out
+ * at feed, G86 with the spindle stopped, G87 back boring, G88 boring with a
+ * manual retract (here a rapid). Hole data (Z, R, Q, P) stay until the front
+ * end cancels them (G80, G00-G03); repeats drill the hole again, at
+ * increments in G91; zero repeats store the data only. In G90, R and Z are
+ * levels; in G91, R is measured from the initial level and Z from R (in the
+ * mode they are written in; later holes keep the levels). G98 returns to the
+ * initial level (where the cycle mode began), G99 to R. The shift of G76 and
+ * G87 is along +X of the plane (Fanuc's parameter default). The positions go
+ * through the program frame (transform.c). LinuxCNC's cycles (rs274's
+ * semantics: G76 threading, its own G87 and levels) are motion.c's. */
+#include "machine.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -33,59 +36,57 @@ static fm_status mv(cyc *k, int rapid, double da, double cc)
     return gc_move_line(k->g, rapid, to);
 }
 
-fm_status gc_fanuc_exec_cycle(gc_interp *g, const gc_fanuc_block *fb, int code, int col)
+fm_status gc_cycle_iso(gc_interp *g, int code, const gc_hole_block *h, int col)
 {
-    gc_fanuc *f = FANUC(g);
-    const gc_block *b = &fb->b;
+    gc_hole_data *f = &g->hole;
     char name[8];
     gc_g_name(code, name, sizeof name);
     cyc k = {g, 0, 0, 0, 0, 0};
     gc_plane_axes(g->plane, &k.a, &k.b, &k.c);
-    static const char axl[3] = {'x', 'y', 'z'};
-    char la = axl[k.a], lb = axl[k.b], lc = axl[k.c];
+    char lc = "xyz"[k.c];
     fm_status st;
 
     /* hole data */
-    int first = !f->cycle_data;
-    if (b->has[L(lc)]) {
-        f->cycle_z = gc_fanuc_length(g, fb, lc);
-        f->cycle_z_word = 1;
-        f->cycle_z_abs = g->absolute;
+    int first = !f->valid;
+    int has_z = h->at.given[k.c];
+    if (has_z) {
+        f->z = h->at.value[k.c];
+        f->z_word = 1;
+        f->z_abs = g->absolute;
     }
-    if (b->has[L('r')]) {
-        f->cycle_r = gc_fanuc_length(g, fb, 'r');
-        f->cycle_r_word = 1;
-        f->cycle_r_abs = g->absolute;
+    if (h->has_r) {
+        f->r = h->r;
+        f->r_word = 1;
+        f->r_abs = g->absolute;
     }
-    if (b->has[L('q')]) f->cycle_q = fabs(gc_fanuc_length(g, fb, 'q'));
-    if (b->has[L('p')]) f->cycle_p = gc_fanuc_dwell_seconds(g, fb, 'p');
-    if (first && (!b->has[L(lc)] || !b->has[L('r')]))
+    if (h->has_q) f->q = h->q;
+    if (h->has_p) f->p = h->p;
+    if (first && (!has_z || !h->has_r))
         return gc_fail(g, FM_ERR_INPUT, col,
                        "%s: %s missing; expected the hole bottom %c and the R point on the first "
                        "block of a canned cycle", name,
-                       !b->has[L(lc)] ? (b->has[L('r')] ? "the hole bottom" : "hole bottom and R")
-                                      : "R", lc - 32);
-    f->cycle_data = 1;
+                       !has_z ? (h->has_r ? "the hole bottom" : "hole bottom and R") : "R",
+                       lc - 32);
+    f->valid = 1;
     g->motion = (gc_gcode)code;
     long reps = 1;
-    char kl = b->has[L('k')] ? 'k' : b->has[L('l')] ? 'l' : 0;
-    if (kl) {
-        double v = b->v[L(kl)];
+    if (h->rep_letter) {
+        double v = h->rep_value;
         if (floor(v) != v || v < 0 || v > 9999)
-            return gc_fail(g, FM_ERR_INPUT, b->col[L(kl)],
+            return gc_fail(g, FM_ERR_INPUT, h->rep_col,
                            "%s %c%g: expected a whole number of repeats from 0 to 9999", name,
-                           kl - 32, v);
+                           h->rep_letter - 32, v);
         reps = (long)v;
     }
-    int drill = b->has[L(la)] || b->has[L(lb)] || b->has[L(lc)] || b->has[L('r')];
+    int drill = h->at.given[k.a] || h->at.given[k.b] || has_z || h->has_r;
     if (!drill || reps == 0) return FM_OK; /* K0 or no position: the data are kept */
 
     if (g->inverse_time)
         return gc_fail(g, FM_ERR_INPUT, col, "%s: canned cycles need G94, not inverse time G93",
                        name);
     if ((st = gc_check_feed(g, name, col))) return st;
-    if ((code == GC_G73 || code == GC_G83) && !(f->cycle_q > 0))
-        return gc_fail(g, FM_ERR_INPUT, b->has[L('q')] ? b->col[L('q')] : col,
+    if ((code == GC_G73 || code == GC_G83) && !(f->q > 0))
+        return gc_fail(g, FM_ERR_INPUT, h->has_q ? h->q_col : col,
                        "%s: peck depth Q missing or zero; expected Q > 0", name);
     if (code == GC_G87 && g->retract_r)
         return gc_fail(g, FM_ERR_INPUT, col,
@@ -98,16 +99,16 @@ fm_status gc_fanuc_exec_cycle(gc_interp *g, const gc_fanuc_block *fb, int code, 
     double initial = g->cycle_il;
     /* R and Z become levels when a hole is drilled with them, in the mode
      * they were written in; later holes keep those levels */
-    if (f->cycle_r_word) {
-        f->level_r = f->cycle_r_abs ? f->cycle_r : initial + f->cycle_r;
-        f->cycle_r_word = 0;
+    if (f->r_word) {
+        f->level_r = f->r_abs ? f->r : initial + f->r;
+        f->r_word = 0;
     }
-    if (f->cycle_z_word) {
-        f->level_z = f->cycle_z_abs ? f->cycle_z : f->level_r + f->cycle_z;
-        f->cycle_z_word = 0;
+    if (f->z_word) {
+        f->level_z = f->z_abs ? f->z : f->level_r + f->z;
+        f->z_word = 0;
     }
     double r = f->level_r, z = f->level_z;
-    int rcol = b->has[L('r')] ? b->col[L('r')] : col;
+    int rcol = h->has_r ? h->r_col : col;
     if (code == GC_G87 && !(r < z))
         return gc_fail(g, FM_ERR_INPUT, rcol,
                        "G87: R (%g) not below %c (%g); back boring starts at R under the part "
@@ -117,13 +118,13 @@ fm_status gc_fanuc_exec_cycle(gc_interp *g, const gc_fanuc_block *fb, int code, 
                        "%s: R (%g) below the hole bottom %c (%g); expected R above the hole", name,
                        r, lc - 32, z);
     double ret = g->retract_r ? r : initial;
-    double q = f->cycle_q, p = f->cycle_p;
+    double q = f->q, p = f->p;
     double d73 = g->opt.peck_retract / g->unit, d83 = g->opt.peck_clearance / g->unit;
     int spindle = g->spindle_dir;
 
     for (long rep = 0; rep < reps && !g->stop; rep++) {
         double end[3], work[3];
-        gc_fanuc_target(g, fb, end);
+        gc_frame_target(g, &h->at, end);
         end[k.c] = g->frame.prog[k.c];
         gc_frame_to_work(g, end, work);
         k.aa = work[k.a];
@@ -231,4 +232,21 @@ fm_status gc_fanuc_exec_cycle(gc_interp *g, const gc_fanuc_block *fb, int code, 
         g->frame.prog[k.c] = work[k.c];
     }
     return FM_OK;
+}
+
+void gc_cycle_iso_cancel(gc_interp *g)
+{
+    g->hole.valid = 0;
+    g->cycle_il_flag = 0;
+}
+
+void gc_cycle_iso_scale_units(gc_interp *g, double k)
+{
+    gc_hole_data *f = &g->hole;
+    f->z *= k;
+    f->r *= k;
+    f->level_z *= k;
+    f->level_r *= k;
+    f->q *= k;
+    g->cycle_il *= k;
 }
