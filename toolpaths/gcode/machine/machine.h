@@ -20,6 +20,7 @@
  *   transform.c the ISO program frame: G16 polar, G51 scaling, G68 rotation,
  *               G51.1 mirror, and moves through it and compensation C
  *   cycles_iso.c the ISO canned cycles (G73 G74 G76 G81-G89, Fanuc's)
+ *   pocket.c    G12/G13 circular pockets (Haas)
  * docs/gcode.md has the map of the front ends. */
 #ifndef FM_GCODE_MACHINE_H
 #define FM_GCODE_MACHINE_H
@@ -597,6 +598,22 @@ fm_status gc_cycle_iso(gc_interp *g, int code, const gc_hole_block *h, int col);
 void gc_cycle_iso_cancel(gc_interp *g);
 /* G20/G21: the hole data's lengths times k. */
 void gc_cycle_iso_scale_units(gc_interp *g, double k);
+
+/* ---- circular pockets (pocket.c) ---- */
+
+/* G12 (clockwise) / G13 (ccw) circular pocket: the centre's X Y (and the
+ * depth Z if has_z) in the program frame; radii first to last in steps of
+ * step (0: one circle at last), program units, checked by the front end
+ * (first > tool_radius, last >= first); passes >= 1. */
+typedef struct gc_pocket {
+    int ccw;
+    double target[3];
+    int has_z;
+    double first, last, step, tool_radius;
+    long passes;
+} gc_pocket;
+
+fm_status gc_circular_pocket(gc_interp *g, const gc_pocket *p);
 
 /* ---- rotary axes A, B, C (rotary.c) ---- */
 
