@@ -55,25 +55,6 @@ double gc_fanuc_dwell_seconds(const gc_interp *g, const gc_fanuc_block *fb, char
     return v;
 }
 
-void gc_fanuc_apply_work_offset(gc_interp *g)
-{
-    gc_fanuc *f = FANUC(g);
-    double work[3];
-    gc_frame_to_work(g, g->frame.prog, work);
-    for (int i = 0; i < 3; i++) {
-        double table = f->ext_cs ? f->ext_offsets[f->ext_cs - 1][i]
-                                 : g->params[5201 + 20 * g->cs + i];
-        double w = table + g->params[5201 + i] + f->local_offset[i];
-        double shift = g->g5x[i] - w;
-        g->pos[i] += shift;
-        work[i] += shift;
-        g->g5x[i] = w;
-    }
-    /* a pending tool length move stays pending: shift the programmed point
-     * by the same amount rather than recomputing it from pos */
-    gc_frame_from_work(g, work, g->frame.prog);
-}
-
 /* ---- end points and moves ---- */
 
 static const char axis_letter[3] = {'x', 'y', 'z'};
@@ -124,6 +105,15 @@ static fm_status exec_cycle(gc_interp *g, const gc_fanuc_block *fb, int code, in
         h.rep_col = b->col[L(h.rep_letter)];
     }
     return gc_cycle_iso(g, code, &h, col);
+}
+
+/* X Y Z of the block as lengths (G52, G53: never polar). */
+static void lengths(const gc_interp *g, const gc_fanuc_block *fb, int given[3], double value[3])
+{
+    for (int i = 0; i < 3; i++) {
+        given[i] = fb->b.has[L(axis_letter[i])];
+        value[i] = given[i] ? gc_fanuc_length(g, fb, axis_letter[i]) : 0;
+    }
 }
 
 static int has_plane_word(const gc_block *b)
@@ -203,12 +193,12 @@ static fm_status exec_arc(gc_interp *g, const gc_fanuc_block *fb, int code, int 
 
 /* ---- modal state ---- */
 
+/* G20/G21: the machine's lengths and the ISO hole data (LinuxCNC keeps
+ * its cycle levels as written). */
 static void set_units(gc_interp *g, double unit)
 {
-    gc_fanuc *f = FANUC(g);
     if (unit == g->unit) return;
     double k = g->unit / unit;
-    for (int i = 0; i < 3; i++) f->local_offset[i] *= k;
     gc_cycle_iso_scale_units(g, k);
     gc_set_units(g, unit);
 }
@@ -253,22 +243,13 @@ static fm_status tool_length(gc_interp *g, const gc_fanuc_block *fb, int code, i
 
 static fm_status select_work_offset(gc_interp *g, const gc_fanuc_block *fb, int code, int col)
 {
-    gc_fanuc *f = FANUC(g);
-    const gc_block *b = &fb->b;
-    if (code == GC_G54_1 || code == GC_G154) {
-        fm_status st = gc_fanuc_select_ext_offset(g, b, code, col);
-        if (st) return st;
-    } else {
-        f->ext_cs = 0;
-        g->cs = (code - GC_G54) / 10 + 1;
-    }
-    gc_fanuc_apply_work_offset(g);
+    if (code == GC_G54_1 || code == GC_G154) return gc_fanuc_select_ext_offset(g, &fb->b, code, col);
+    gc_work_offset_select(g, (code - GC_G54) / 10 + 1, 0);
     return FM_OK;
 }
 
 static fm_status exec_g10(gc_interp *g, const gc_fanuc_block *fb, int col)
 {
-    gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     long l, pn;
     fm_status st;
@@ -287,17 +268,17 @@ static fm_status exec_g10(gc_interp *g, const gc_fanuc_block *fb, int col)
                        l);
     if (!b->has[L('p')])
         return gc_fail(g, FM_ERR_INPUT, col, "G10 L%ld: P missing", l);
-    if ((st = whole_word(g, b, 'p', l == 2 ? 0 : 1, l == 2 ? 6 : GC_FANUC_EXT_OFFSETS, &pn)))
+    if ((st = whole_word(g, b, 'p', l == 2 ? 0 : 1, l == 2 ? 6 : GC_EXT_OFFSETS, &pn)))
         return st;
     for (int i = 0; i < 3; i++) {
         char c = axis_letter[i];
         if (!b->has[L(c)]) continue;
         double v = gc_fanuc_length(g, fb, c);
-        double *slot = l == 2 ? &g->params[5201 + 20 * pn + i] : &f->ext_offsets[pn - 1][i];
+        double *slot = l == 2 ? &g->params[5201 + 20 * pn + i] : &g->ext_offsets[pn - 1][i];
         /* G90 sets the offset, G91 adds to it */
         *slot = g->absolute ? v : *slot + v;
     }
-    gc_fanuc_apply_work_offset(g);
+    gc_work_offset_apply(g);
     return FM_OK;
 }
 
@@ -323,7 +304,6 @@ static fm_status exec_g92(gc_interp *g, const gc_fanuc_block *fb, int col)
  * reference point of those axes; the others stay. */
 static fm_status exec_reference(gc_interp *g, const gc_fanuc_block *fb, int code, int col)
 {
-    gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     int ref = 0;
     fm_status st;
@@ -339,35 +319,18 @@ static fm_status exec_reference(gc_interp *g, const gc_fanuc_block *fb, int code
     (void)col;
     double mid[3];
     gc_fanuc_target(g, fb, mid);
-    if ((st = gc_frame_move(g, 1, mid))) return st;
-    double to[3];
-    for (int i = 0; i < 3; i++) {
-        if (b->has[L(axis_letter[i])])
-            to[i] = g->opt.reference_points[ref][i] / g->unit - g->g5x[i] - g->g92[i] - g->tlo[i];
-        else
-            to[i] = g->pos[i];
-    }
-    if ((st = gc_move_line(g, 1, to))) return st;
-    gc_frame_reprogram(g);
-    (void)f;
-    return FM_OK;
+    int given[3] = {b->has[L('x')], b->has[L('y')], b->has[L('z')]};
+    return gc_move_reference(g, ref, given, mid);
 }
 
 static fm_status exec_g53(gc_interp *g, const gc_fanuc_block *fb, int col)
 {
-    const gc_block *b = &fb->b;
     if (!g->absolute)
         return gc_fail(g, FM_ERR_INPUT, col, "G53 in incremental mode (G91); expected G90");
-    double to[3];
-    for (int i = 0; i < 3; i++) {
-        char c = axis_letter[i];
-        to[i] = b->has[L(c)] ? gc_fanuc_length(g, fb, c) - g->g5x[i] - g->g92[i] - g->tlo[i]
-                             : g->pos[i];
-    }
-    fm_status st = gc_move_line(g, 1, to); /* G53 positions at rapid traverse */
-    if (st) return st;
-    gc_frame_reprogram(g);
-    return FM_OK;
+    int given[3];
+    double value[3];
+    lengths(g, fb, given, value);
+    return gc_move_machine(g, given, value);
 }
 
 /* Axis i of a G51/G68/G51.1 centre: the block's (G90/G91) or the
@@ -680,12 +643,13 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
     case GC_G28: case GC_G30:
         if ((st = exec_reference(g, fb, nonmodal, nonmodal_col))) return st;
         break;
-    case GC_G52:
-        for (int i = 0; i < 3; i++)
-            if (b->has[L(axis_letter[i])])
-                f->local_offset[i] = gc_fanuc_length(g, fb, axis_letter[i]);
-        gc_fanuc_apply_work_offset(g);
+    case GC_G52: {
+        int given[3];
+        double value[3];
+        lengths(g, fb, given, value);
+        gc_work_offset_local(g, given, value);
         break;
+    }
     case GC_G53: if ((st = exec_g53(g, fb, nonmodal_col))) return st; break;
     case GC_G12: case GC_G13:
         if ((st = gc_fanuc_circular_pocket(g, fb, nonmodal, nonmodal_col))) return st;

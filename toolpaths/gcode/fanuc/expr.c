@@ -54,7 +54,7 @@ static double modal_info(gc_interp *g, int group)
     case 11: return g->frame.scaling ? 51 : 50;
     case 12: return gc_fanuc_modal_call_on(f) ? 66 : 67;
     case 13: return 97;
-    case 14: return f->ext_cs ? (f->ext_g154 ? 154 : 54.1) : 53 + g->cs;
+    case 14: return g->ext_cs ? (f->ext_g154 ? 154 : 54.1) : 53 + g->cs;
     case 15: return 64;
     case 16: return g->frame.rotation ? 68 : 69;
     case 17: return g->frame.polar ? 16 : 15;
@@ -101,7 +101,7 @@ fm_status gc_fanuc_get_var(gc_interp *g, long n, int col, double *out)
         case 4113: *out = f->last_m; break;
         case 4114: *out = (double)f->sequence; break;
         case 4115: {
-            long pn = f->programs[f->cur_program].number;
+            long pn = g->progs.programs[f->cur_program].number;
             *out = pn < 0 ? 0 : (double)pn;
             break;
         }
@@ -123,7 +123,7 @@ fm_status gc_fanuc_get_var(gc_interp *g, long n, int col, double *out)
         *out = n <= 5083 ? g->tlo[n - 5081] : 0.0;
     } else if (offset_var(n, &table, &axis)) {
         *out = axis < 3 ? g->params[n] : 0.0;
-    } else if (gc_fanuc_ext_offset_var(f, n, &slot)) {
+    } else if (gc_fanuc_ext_offset_var(g, n, &slot)) {
         *out = slot ? *slot : 0.0;
     } else {
         return bad_var(g, n, col,
@@ -182,12 +182,12 @@ fm_status gc_fanuc_set_var(gc_interp *g, long n, double v, int col)
     } else if (offset_var(n, &table, &axis)) {
         if (axis < 3) {
             g->params[n] = isnan(v) ? 0.0 : v;
-            gc_fanuc_apply_work_offset(g);
+            gc_work_offset_apply(g);
         }
-    } else if (gc_fanuc_ext_offset_var(f, n, &slot)) {
+    } else if (gc_fanuc_ext_offset_var(g, n, &slot)) {
         if (slot) {
             *slot = isnan(v) ? 0.0 : v;
-            gc_fanuc_apply_work_offset(g);
+            gc_work_offset_apply(g);
         }
     } else {
         double dummy;

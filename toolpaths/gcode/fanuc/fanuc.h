@@ -26,37 +26,11 @@
 #define GC_FANUC_LOCALS 34     /* #1 .. #33 */
 #define GC_FANUC_COMMON_LO 100 /* #100 .. #999 */
 #define GC_FANUC_COMMON_HI 999
-#define GC_FANUC_EXT_OFFSETS 99 /* Haas G154 P1 .. P99; G54.1 P1 .. P48 are the same table */
 #define GC_FANUC_G54_1_OFFSETS 48 /* G54.1 P1 .. P48 (Fanuc's 48 sets; #7001-#7960) */
-#define GC_FANUC_MAX_TEXTS 64  /* the program and the subprogram files it loads */
 
 /* A vacant (null) variable is stored as NaN: no computed value is NaN, since
  * every operation's result is checked to be finite. */
 #define GC_VACANT NAN
-
-/* One text: the program file or a subprogram file loaded from the path. */
-typedef struct gc_fanuc_text {
-    char *name;          /* for messages */
-    const char *text;
-    size_t len;
-    size_t *line_start;  /* nlines + 1 offsets */
-    size_t nlines;
-    char *owned;         /* the text, when loaded here */
-    /* the line a loop statement jumps to, found once by scanning: END m ->
-     * its DO m, WHILE [..] DO m -> past its END m (0: not looked up yet) */
-    size_t *loop_jump;
-} gc_fanuc_text;
-
-/* A program of a text: from its O line (or the text's start) to the next O
- * line or '%'. */
-typedef struct gc_fanuc_program {
-    long number;         /* -1: the text before any O number */
-    int text;
-    size_t first, end;   /* lines [first, end) */
-    long *seq;           /* sorted (N number, line) pairs, built at the first jump */
-    size_t nseq;
-    int seq_built;
-} gc_fanuc_program;
 
 typedef enum gc_call_kind { GC_CALL_M98, GC_CALL_M97, GC_CALL_G65 } gc_call_kind;
 
@@ -72,14 +46,8 @@ typedef struct gc_fanuc_frame {
 } gc_fanuc_frame;
 
 typedef struct gc_fanuc {
-    gc_fanuc_text texts[GC_FANUC_MAX_TEXTS];
-    int ntexts;
-    gc_fanuc_program *programs;
-    int nprograms, capprograms;
-    int cur_program;     /* the program running now */
-    int cur_text;        /* the text of that program */
+    int cur_program;     /* the program running now (g->progs) */
     int jumped;          /* the line just run set g->cur (jump, call, return) */
-    size_t loaded_bytes; /* all texts, against max_program_bytes */
 
     gc_fanuc_frame frames[GC_FANUC_FRAMES];
     int nframes;
@@ -89,9 +57,6 @@ typedef struct gc_fanuc {
     /* variables (GC_VACANT when vacant) */
     double locals[GC_FANUC_LEVELS][GC_FANUC_LOCALS];
     double common[GC_FANUC_COMMON_HI + 1 - GC_FANUC_COMMON_LO];
-    /* G54.1 P / G154 P: #7001.. (P1-P48) and #14001.. (P1-P99), 20 per P,
-     * program units */
-    double ext_offsets[GC_FANUC_EXT_OFFSETS][3];
     double timer_base_ms, timer_base_h;          /* #3001, #3002 set by the program */
     double sys3003, sys3004, parts[2];           /* #3003 #3004 #3901 #3902 */
 
@@ -102,9 +67,7 @@ typedef struct gc_fanuc {
     int d;               /* modal D (read only by #4107) */
     int last_m;          /* #4113 */
     long sequence;       /* #4114 */
-    int ext_cs;          /* G54.1 or G154 P number in use, 0 for G54-G59 */
     int ext_g154;        /* it was selected with G154 (#4014 reads 154) */
-    double local_offset[3]; /* G52, program units */
     double block_end[3]; /* #5001-#5003: where the previous block ended */
 
     /* Haas and the codes CAM posts write (haas.c) */
@@ -191,9 +154,6 @@ double gc_fanuc_dwell_seconds(const gc_interp *g, const gc_fanuc_block *fb, char
 void gc_fanuc_target(gc_interp *g, const gc_fanuc_block *fb, double prog_end[3]);
 /* The block's X Y Z A B C as values (gc_fanuc_length, gc_fanuc_angle). */
 void gc_fanuc_axis_words(const gc_interp *g, const gc_fanuc_block *fb, gc_axis_words *w);
-/* The work offset in use (G54-G59 or G54.1 P, plus the external offset and
- * G52) into g->g5x; the current point keeps its machine position. */
-void gc_fanuc_apply_work_offset(gc_interp *g);
 
 /* ---- comp.c ---- */
 /* G40/G41/G42 and D of a block (code GC_G_NONE: only D). */
@@ -206,8 +166,9 @@ fm_status gc_fanuc_comp_check(gc_interp *g, const gc_fanuc_block *fb, int motion
 /* #7001-#7960 (G54.1 P1-P48) and #14001-#15966 (G154 P1-P99): 1 if n is
  * one of them; *slot is its value, or NULL for an axis past Z (read 0,
  * written nowhere). */
-int gc_fanuc_ext_offset_var(gc_fanuc *f, long n, double **slot);
-/* G54.1 P1-P48 or G154 P1-P99 of the block into f->ext_cs. */
+int gc_fanuc_ext_offset_var(gc_interp *g, long n, double **slot);
+/* G54.1 P1-P48 or G154 P1-P99 of the block: the machine's extended
+ * offset (gc_work_offset_select). */
 fm_status gc_fanuc_select_ext_offset(gc_interp *g, const gc_block *b, int code, int col);
 /* G12/G13 circular pocket (Haas). */
 fm_status gc_fanuc_circular_pocket(gc_interp *g, const gc_fanuc_block *fb, int code, int col);

@@ -14,22 +14,22 @@
 
 /* ---- G54.1 P / G154 P ---- */
 
-int gc_fanuc_ext_offset_var(gc_fanuc *f, long n, double **slot)
+int gc_fanuc_ext_offset_var(gc_interp *g, long n, double **slot)
 {
     /* 20 numbers per offset, X Y Z first: #7001 is G54.1 P1 X (Fanuc, 48
      * sets), #14001 is G154 P1 X (Haas; Fanuc's 300-set option numbers the
      * same way), so that #14021 is P2 X and #15961 is P99 X */
     long k;
     if (n >= 7001 && n <= 7000 + 20 * GC_FANUC_G54_1_OFFSETS) k = n - 7001;
-    else if (n >= 14001 && n <= 14000 + 20 * GC_FANUC_EXT_OFFSETS) k = n - 14001;
+    else if (n >= 14001 && n <= 14000 + 20 * GC_EXT_OFFSETS) k = n - 14001;
     else return 0;
-    *slot = k % 20 < 3 ? &f->ext_offsets[k / 20][k % 20] : NULL;
+    *slot = k % 20 < 3 ? &g->ext_offsets[k / 20][k % 20] : NULL;
     return 1;
 }
 
 fm_status gc_fanuc_select_ext_offset(gc_interp *g, const gc_block *b, int code, int col)
 {
-    int max = code == GC_G154 ? GC_FANUC_EXT_OFFSETS : GC_FANUC_G54_1_OFFSETS;
+    int max = code == GC_G154 ? GC_EXT_OFFSETS : GC_FANUC_G54_1_OFFSETS;
     const char *name = code == GC_G154 ? "G154" : "G54.1";
     if (!HAS(b, 'p'))
         return gc_fail(g, FM_ERR_INPUT, col, "%s: P missing; expected %s P1 to P%d", name, name,
@@ -38,8 +38,8 @@ fm_status gc_fanuc_select_ext_offset(gc_interp *g, const gc_block *b, int code, 
     if (floor(v) != v || v < 1 || v > max)
         return gc_fail(g, FM_ERR_INPUT, COL(b, 'p'), "P%g: expected a whole number from 1 to %d",
                        v, max);
-    FANUC(g)->ext_cs = (int)v;
     FANUC(g)->ext_g154 = code == GC_G154;
+    gc_work_offset_select(g, g->cs, (int)v);
     return FM_OK;
 }
 

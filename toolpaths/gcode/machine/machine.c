@@ -73,6 +73,7 @@ void gc_set_units(gc_interp *g, double unit)
     }
     gc_comp_scale(g, f);
     gc_frame_scale_units(g, f);
+    for (int i = 0; i < 3; i++) g->local_offset[i] *= f;
     g->unit = unit;
 }
 

@@ -131,6 +131,44 @@ typedef struct gc_source {
     size_t first;        /* index of its first line among all lines */
 } gc_source;
 
+#define GC_EXT_OFFSETS 99  /* extended work offsets: Haas G154 P1-P99, Fanuc G54.1 P1-P48 */
+
+/* The ISO dialects' texts and numbered programs (source.c): the program's
+ * text and the subprogram files loaded for O numbers it calls. */
+#define GC_MAX_TEXTS 64
+
+typedef struct gc_text {
+    char *name;          /* for messages */
+    const char *text;
+    size_t len;
+    size_t *line_start;  /* nlines + 1 offsets */
+    size_t nlines;
+    char *owned;         /* the text, when loaded here */
+    /* the front end's jump cache: the line a loop statement jumps to, plus
+     * one (0: not looked up yet); freed with the text */
+    size_t *jump;
+} gc_text;
+
+/* A program of a text: from its O line (or the text's start) to the next O
+ * line or '%'. */
+typedef struct gc_program {
+    long number;         /* -1: the text before any O number */
+    int text;
+    size_t first, end;   /* lines [first, end) */
+    long *seq;           /* sorted (N number, line) pairs, built at the first jump */
+    size_t nseq;
+    int seq_built;
+} gc_program;
+
+typedef struct gc_programs {
+    gc_text texts[GC_MAX_TEXTS];
+    int ntexts;
+    gc_program *programs;
+    int nprograms, capprograms;
+    int cur_text;        /* the text in use (gc_programs_use_text) */
+    size_t loaded_bytes; /* all texts, against max_program_bytes */
+} gc_programs;
+
 /* Cutter radius compensation (comp.c). Queued motions wait until the
  * next programmed element fixes their end point. Coordinates are those of
  * the compensation plane: u, v in the plane (G18: u = Z, v = X), w along
@@ -332,6 +370,13 @@ typedef struct gc_interp {
     gc_program_frame frame;
     int motion_col;
     gc_hole_data hole;   /* the ISO canned cycles' (cycles_iso.c) */
+    gc_programs progs;   /* the ISO dialects' texts and O-number programs (source.c) */
+    /* the ISO dialects' work offsets (offsets.c): the extended table (G54.1
+     * P, G154 P; program units), the one in use (0: G54-G59 from params),
+     * G52's local offset */
+    double ext_offsets[GC_EXT_OFFSETS][3];
+    int ext_cs;
+    double local_offset[3];
 } gc_interp;
 
 /* A dialect's front end: gcode.c picks one by fm_gcode_options.dialect. init
@@ -448,6 +493,23 @@ void gc_source_range(const gc_interp *g, size_t idx, size_t *lo, size_t *hi);
 fm_status gc_load_subroutine_file(gc_interp *g, const char *name, int col, int *found,
                                   size_t *first);
 void gc_sources_free(gc_interp *g);
+/* The ISO dialects' numbered programs: index the program's text (text 0;
+ * its first program starts at its first line), free them. */
+fm_status gc_programs_init(gc_interp *g);
+void gc_programs_free(gc_interp *g);
+/* 1 if line idx of the current text is a tape's '%' line. */
+int gc_programs_percent_line(const gc_interp *g, size_t idx);
+/* Make text t the current one (g->text, g->line_start, the name). */
+void gc_programs_use_text(gc_interp *g, int t);
+/* Program O<number>: in the texts loaded so far, else from O<number>.nc
+ * (.ngc, .tap; O%04ld, O%05ld, O%ld, either case) in the program's folder or
+ * on the subroutine path; call names the caller in messages. */
+fm_status gc_programs_locate(gc_interp *g, long number, const char *call, int col,
+                             int *program);
+/* The line of N<n> in program pi (the first if there are several); what
+ * names the jump in messages. */
+fm_status gc_programs_find_sequence(gc_interp *g, int pi, long n, const char *what, int col,
+                                    size_t *line);
 
 /* G5, G5.1, G5.2 (a control point) and G5.3 (spline.c); explicit: the
  * code is on the line (not only the modal motion). */
@@ -537,6 +599,20 @@ fm_status gc_exec_g92(gc_interp *g, const gc_block *b, int code, int col);
 fm_status gc_exec_home(gc_interp *g, const gc_block *b, int code);
 void gc_store_home(gc_interp *g, int code);
 fm_status gc_exec_tool_length(gc_interp *g, const gc_block *b, int code, int col);
+/* The ISO dialects' work offset: G54-G59 (#5221.. as cs 1-6) or extended
+ * offset ext (1..GC_EXT_OFFSETS, 0: none), plus the external offset (#5201..)
+ * and G52's local offset, into g->g5x; the current point keeps its machine
+ * position, and a pending tool length move stays pending. */
+void gc_work_offset_apply(gc_interp *g);
+void gc_work_offset_select(gc_interp *g, int cs, int ext);
+/* G52: the local offset of the axes given (program units). */
+void gc_work_offset_local(gc_interp *g, const int given[3], const double value[3]);
+/* G53: at rapid to the given axes' machine coordinates (program units). */
+fm_status gc_move_machine(gc_interp *g, const int given[3], const double value[3]);
+/* The ISO G28/G30: at rapid to the intermediate point mid (program frame),
+ * then to reference point ref (0..3: fm_gcode_options.reference_points) of
+ * the axes given; the others stay. */
+fm_status gc_move_reference(gc_interp *g, int ref, const int given[3], const double mid[3]);
 
 /* ---- the ISO program frame (transform.c) ----
  * Program frame -> work coordinates: scaling, rotation, then mirror (G51.1

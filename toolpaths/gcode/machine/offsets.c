@@ -299,3 +299,66 @@ fm_status gc_exec_tool_length(gc_interp *g, const gc_block *b, int code, int col
     }
     return FM_OK;
 }
+
+/* ---- the ISO dialects' work offsets and reference returns ---- */
+
+void gc_work_offset_apply(gc_interp *g)
+{
+    double work[3];
+    gc_frame_to_work(g, g->frame.prog, work);
+    for (int i = 0; i < 3; i++) {
+        double table = g->ext_cs ? g->ext_offsets[g->ext_cs - 1][i]
+                                 : g->params[5201 + 20 * g->cs + i];
+        double w = table + g->params[5201 + i] + g->local_offset[i];
+        double shift = g->g5x[i] - w;
+        g->pos[i] += shift;
+        work[i] += shift;
+        g->g5x[i] = w;
+    }
+    /* a pending tool length move stays pending: shift the programmed point
+     * by the same amount rather than recomputing it from pos */
+    gc_frame_from_work(g, work, g->frame.prog);
+}
+
+void gc_work_offset_select(gc_interp *g, int cs, int ext)
+{
+    g->ext_cs = ext;
+    if (!ext) g->cs = cs;
+    gc_work_offset_apply(g);
+}
+
+void gc_work_offset_local(gc_interp *g, const int given[3], const double value[3])
+{
+    for (int i = 0; i < 3; i++)
+        if (given[i]) g->local_offset[i] = value[i];
+    gc_work_offset_apply(g);
+}
+
+/* Work coordinates of machine coordinate m (program units) on axis i. */
+static double work_of_machine(const gc_interp *g, int i, double m)
+{
+    return m - g->g5x[i] - g->g92[i] - g->tlo[i];
+}
+
+fm_status gc_move_machine(gc_interp *g, const int given[3], const double value[3])
+{
+    double to[3];
+    for (int i = 0; i < 3; i++) to[i] = given[i] ? work_of_machine(g, i, value[i]) : g->pos[i];
+    fm_status st = gc_move_line(g, 1, to); /* G53 positions at rapid traverse */
+    if (st) return st;
+    gc_frame_reprogram(g);
+    return FM_OK;
+}
+
+fm_status gc_move_reference(gc_interp *g, int ref, const int given[3], const double mid[3])
+{
+    fm_status st = gc_frame_move(g, 1, mid);
+    if (st) return st;
+    double to[3];
+    for (int i = 0; i < 3; i++)
+        to[i] = given[i] ? work_of_machine(g, i, g->opt.reference_points[ref][i] / g->unit)
+                         : g->pos[i];
+    if ((st = gc_move_line(g, 1, to))) return st;
+    gc_frame_reprogram(g);
+    return FM_OK;
+}
