@@ -130,64 +130,26 @@ static fm_status exec_arc(gc_interp *g, const gc_fanuc_block *fb, int code, int 
     gc_g_name(code, name, sizeof name);
     int a, bb, c;
     gc_plane_axes(g->plane, &a, &bb, &c);
-    static const char offl[3] = {'i', 'j', 'k'};
-    char oa = offl[a], ob = offl[bb], oc = offl[c];
     fm_status st = gc_check_feed(g, name, col);
     if (st) return st;
-    double end[3], cen[3];
+    double end[3], cab[2];
     gc_fanuc_target(g, fb, end);
-    const double *s = g->frame.prog;
-    double tol = g->unit == 1.0 ? 0.005 : 0.0005; /* as LinuxCNC; Fanuc's is a parameter (3410) */
-    double ca, cb;
-    if (b->has[L('r')]) {
-        /* R wins over I J K (Fanuc) */
-        double radius = gc_fanuc_length(g, fb, 'r');
-        double chord = hypot(end[a] - s[a], end[bb] - s[bb]);
-        if (chord <= 1e-9 * (1 + fabs(radius))) {
-            /* Fanuc: a full circle cannot be given with R; start = end is an
-             * arc of 0 degrees and the tool does not move in the plane */
-            if (end[c] != s[c]) return gc_frame_move(g, 0, end);
-            memcpy(g->frame.prog, end, sizeof g->frame.prog);
-            return FM_OK;
-        }
-        double ar = fabs(radius), half = chord / 2;
-        if (ar == 0 || half - ar > tol)
-            return gc_fail(g, FM_ERR_INPUT, b->col[L('r')],
-                           "%s R%g: radius too small to reach the end point; expected |R| >= %.6g",
-                           name, radius, half);
-        if (half > ar) half = ar;
-        double mid_a = (end[a] + s[a]) / 2, mid_b = (end[bb] + s[bb]) / 2;
-        /* positive R: the arc of at most 180 degrees; negative: the longer one */
-        double theta = atan2(end[bb] - s[bb], end[a] - s[a]) +
-                       (((code == GC_G2) == (radius > 0)) ? -GC_PI / 2 : GC_PI / 2);
-        double off = sqrt(ar * ar - half * half);
-        ca = mid_a + off * cos(theta);
-        cb = mid_b + off * sin(theta);
-    } else {
-        if (b->has[L(oc)])
-            return gc_fail(g, FM_ERR_INPUT, b->col[L(oc)],
-                           "%s: %c word in the G%d plane; expected %c and %c for the centre", name,
-                           oc - 32, g->plane, oa - 32, ob - 32);
-        if (!b->has[L(oa)] && !b->has[L(ob)])
-            return gc_fail(g, FM_ERR_INPUT, col,
-                           "%s: no centre; expected %c and/or %c (or R) in the G%d plane", name,
-                           oa - 32, ob - 32, g->plane);
-        /* I J K: from the start point, in G90 and G91 alike */
-        ca = s[a] + (b->has[L(oa)] ? gc_fanuc_length(g, fb, oa) : 0);
-        cb = s[bb] + (b->has[L(ob)] ? gc_fanuc_length(g, fb, ob) : 0);
-        double r0 = hypot(ca - s[a], cb - s[bb]), r1 = hypot(ca - end[a], cb - end[bb]);
-        if (r0 < tol / 10)
-            return gc_fail(g, FM_ERR_INPUT, col, "%s: zero-radius arc (centre on the start point)",
-                           name);
-        double err = fabs(r0 - r1);
-        if (err > tol * 20 || (err > tol && err / fmax(r0, r1) > 0.001))
-            return gc_fail(g, FM_ERR_INPUT, col,
-                           "%s: radius to the end point (%.6g) differs from the radius to the "
-                           "start point (%.6g); expected the same circle", name, r1, r0);
+    gc_arc_words w;
+    gc_arc_words_of(b, &w);
+    if (w.has_r) w.r = gc_fanuc_length(g, fb, 'r');
+    for (int i = 0; i < 3; i++)
+        if (w.has[i]) w.v[i] = gc_fanuc_length(g, fb, "ijk"[i]);
+    int no_arc;
+    if ((st = gc_arc_center(g, 1, code, &w, g->frame.prog, end, cab, &no_arc, col))) return st;
+    if (no_arc) {
+        if (end[c] != g->frame.prog[c]) return gc_frame_move(g, 0, end);
+        memcpy(g->frame.prog, end, sizeof g->frame.prog);
+        return FM_OK;
     }
-    cen[a] = ca;
-    cen[bb] = cb;
-    cen[c] = s[c];
+    double cen[3];
+    cen[a] = cab[0];
+    cen[bb] = cab[1];
+    cen[c] = g->frame.prog[c];
     return gc_frame_arc(g, end, cen, code == GC_G3, 1);
 }
 

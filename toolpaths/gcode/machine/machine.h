@@ -587,6 +587,25 @@ fm_status gc_find_ends(gc_interp *g, const gc_block *b, int g53, double end[3]);
 fm_status gc_exec_straight(gc_interp *g, const gc_block *b, int rapid, int g53, int col);
 fm_status gc_move_arc(gc_interp *g, const double to[3], const double center_ab[2], int turns);
 fm_status gc_exec_arc(gc_interp *g, const gc_block *b, int code, int col);
+/* An arc's R and I J K words as values (program units), with columns. */
+typedef struct gc_arc_words {
+    int has_r;
+    double r;
+    int r_col;
+    int has[3];
+    double v[3];
+    int col[3];
+} gc_arc_words;
+void gc_arc_words_of(const gc_block *b, gc_arc_words *w);
+/* The centre (cab, the plane's axes) of a G2/G3 (code) from start to end:
+ * R wins over I J K; |R| must reach the end point. rs274 (iso 0): R with
+ * the end on the start is refused, I J K are absolute in G90.1, neither end
+ * may be the centre. ISO (iso 1, Fanuc's rule): R with the end on the start
+ * is an arc of 0 degrees (*no_arc: the tool does not move in the plane),
+ * I J K are always from the start point. */
+fm_status gc_arc_center(gc_interp *g, int iso, int code, const gc_arc_words *w,
+                        const double start[3], const double end[3], double cab[2], int *no_arc,
+                        int col);
 fm_status gc_exec_cycle(gc_interp *g, const gc_block *b, int code, int col);
 
 /* ---- offsets and coordinate systems (offsets.c) ---- */

@@ -254,59 +254,88 @@ fm_status gc_find_ends(gc_interp *g, const gc_block *b, int g53, double end[3])
 
 /* The centre of an arc block starting at `start` (program coordinates),
  * with LinuxCNC's tolerances (arc_data_r, arc_data_ijk). */
-static fm_status arc_center(gc_interp *g, const gc_block *b, int code, const double start[3],
-                            const double end[3], double cab[2], int col)
+void gc_arc_words_of(const gc_block *b, gc_arc_words *w)
+{
+    w->has_r = HAS(b, 'r');
+    w->r = VAL(b, 'r');
+    w->r_col = COL(b, 'r');
+    for (int i = 0; i < 3; i++) {
+        w->has[i] = HAS(b, "ijk"[i]);
+        w->v[i] = VAL(b, "ijk"[i]);
+        w->col[i] = COL(b, "ijk"[i]);
+    }
+}
+
+fm_status gc_arc_center(gc_interp *g, int iso, int code, const gc_arc_words *w,
+                        const double start[3], const double end[3], double cab[2], int *no_arc,
+                        int col)
 {
     char name[32];
     gc_g_name(code, name, sizeof name);
     int a, bb, c;
     gc_plane_axes(g->plane, &a, &bb, &c);
-    static const char offl[3] = {'i', 'j', 'k'};
-    char oa = offl[a], ob = offl[bb], oc = offl[c];
+    char oa = "ijk"[a], ob = "ijk"[bb], oc = "ijk"[c];
     double ca, cb;
     double tol = g->unit == 1.0 ? 0.005 : 0.0005; /* LinuxCNC's TOLERANCE_MM / _INCH */
-    if (HAS(b, 'r')) {
-        double radius = VAL(b, 'r');
-        if (end[a] == start[a] && end[bb] == start[bb])
-            return gc_fail(g, FM_ERR_INPUT, COL(b, 'r'),
-                           "%s R: the end point equals the start point; a full circle needs "
-                           "the centre (I J K), not R", name);
-        double ar = fabs(radius);
+    *no_arc = 0;
+    if (w->has_r) {
+        /* R wins over I J K */
+        double radius = w->r, ar = fabs(radius), half;
         double mid_a = (end[a] + start[a]) / 2.0, mid_b = (end[bb] + start[bb]) / 2.0;
-        double half = hypot(mid_a - end[a], mid_b - end[bb]);
+        if (iso) {
+            double chord = hypot(end[a] - start[a], end[bb] - start[bb]);
+            /* Fanuc: a full circle cannot be given with R; start = end is
+             * an arc of 0 degrees and the tool does not move in the plane */
+            if (chord <= 1e-9 * (1 + ar)) {
+                *no_arc = 1;
+                return FM_OK;
+            }
+            half = chord / 2;
+        } else {
+            if (end[a] == start[a] && end[bb] == start[bb])
+                return gc_fail(g, FM_ERR_INPUT, w->r_col,
+                               "%s R: the end point equals the start point; a full circle needs "
+                               "the centre (I J K), not R", name);
+            half = hypot(mid_a - end[a], mid_b - end[bb]);
+        }
         if (ar == 0 || half - ar > tol)
-            return gc_fail(g, FM_ERR_INPUT, COL(b, 'r'),
+            return gc_fail(g, FM_ERR_INPUT, w->r_col,
                            "%s R%g: radius too small to reach the end point; expected |R| >= %.6g",
                            name, radius, half);
-        if (half / ar > 1 - 1e-12) half = ar; /* a semicircle within rounding */
+        /* a semicircle within rounding */
+        if (iso ? half > ar : half / ar > 1 - 1e-12) half = ar;
+        /* positive R: the arc of at most 180 degrees; negative: the longer one */
         double theta;
         if ((code == GC_G2 && radius > 0) || (code == GC_G3 && radius < 0))
             theta = atan2(end[bb] - start[bb], end[a] - start[a]) - GC_PI / 2;
         else
             theta = atan2(end[bb] - start[bb], end[a] - start[a]) + GC_PI / 2;
-        double turn2 = asin(half / ar);
-        double off = ar * cos(turn2);
+        double off = iso ? sqrt(ar * ar - half * half) : ar * cos(asin(half / ar));
         ca = mid_a + off * cos(theta);
         cb = mid_b + off * sin(theta);
     } else {
-        if (HAS(b, oc))
-            return gc_fail(g, FM_ERR_INPUT, COL(b, oc),
+        if (w->has[c])
+            return gc_fail(g, FM_ERR_INPUT, w->col[c],
                            "%s: %c word in the G%d plane; expected %c and %c for the centre",
                            name, oc - 32, g->plane, oa - 32, ob - 32);
-        if (!HAS(b, oa) && !HAS(b, ob))
+        if (!w->has[a] && !w->has[bb])
             return gc_fail(g, FM_ERR_INPUT, col,
                            "%s: no centre; expected %c and/or %c (or R) in the G%d plane", name,
                            oa - 32, ob - 32, g->plane);
-        if (g->arc_absolute) {
-            ca = HAS(b, oa) ? VAL(b, oa) : start[a];
-            cb = HAS(b, ob) ? VAL(b, ob) : start[bb];
+        if (g->arc_absolute && !iso) {
+            ca = w->has[a] ? w->v[a] : start[a];
+            cb = w->has[bb] ? w->v[bb] : start[bb];
         } else {
-            ca = start[a] + (HAS(b, oa) ? VAL(b, oa) : 0);
-            cb = start[bb] + (HAS(b, ob) ? VAL(b, ob) : 0);
+            /* I J K from the start point (ISO: in G90 and G91 alike) */
+            ca = start[a] + (w->has[a] ? w->v[a] : 0);
+            cb = start[bb] + (w->has[bb] ? w->v[bb] : 0);
         }
         double r0 = hypot(ca - start[a], cb - start[bb]);
         double r1 = hypot(ca - end[a], cb - end[bb]);
-        if (r0 < tol / 10 || r1 < tol / 10)
+        if (iso && r0 < tol / 10)
+            return gc_fail(g, FM_ERR_INPUT, col, "%s: zero-radius arc (centre on the start point)",
+                           name);
+        if (!iso && (r0 < tol / 10 || r1 < tol / 10))
             return gc_fail(g, FM_ERR_INPUT, col, "%s: zero-radius arc (centre on an end point)",
                            name);
         double abs_err = fabs(r0 - r1);
@@ -390,7 +419,10 @@ fm_status gc_exec_arc(gc_interp *g, const gc_block *b, int code, int col)
                        "%s: the tool radius %.4f is larger than the radius %.4f of this inside "
                        "arc; expected a smaller tool", name, g->comp.radius, fabs(VAL(b, 'r')));
     double cab[2];
-    if ((st = arc_center(g, b, code, start, end, cab, col))) return st;
+    gc_arc_words aw;
+    int no_arc;
+    gc_arc_words_of(b, &aw);
+    if ((st = gc_arc_center(g, 0, code, &aw, start, end, cab, &no_arc, col))) return st;
     int turn = code == GC_G2 ? -turns : turns;
     if (!gc_comp_active(g)) return gc_move_arc(g, end, cab, turn);
     /* compensating: the programmed arc, in the compensation plane */
