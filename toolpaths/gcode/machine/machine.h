@@ -245,6 +245,12 @@ typedef struct gc_interp {
     int tool, selected_tool;
     gc_gcode motion;    /* the active motion mode; GC_G80 = none */
     int retract_r;      /* G99 */
+    /* path control (docs/plan.md "Path modes"): the mode and tolerances in
+     * mm every motion carries; exact_stop_block makes this block's motions
+     * stop (Fanuc G09) */
+    fm_path_mode path_mode;
+    double path_tolerance, naive_tolerance;
+    int exact_stop_block;
     double cycle_r, cycle_cc, cycle_p, cycle_q, cycle_i, cycle_j, cycle_k, cycle_il;
     int cycle_il_flag;
     double rotation;    /* degrees: the active coordinate system's XY rotation (G10 L2 R) */
@@ -482,6 +488,8 @@ fm_status gc_exec_straight(gc_interp *g, const gc_block *b, int rapid, int g53, 
 fm_status gc_move_arc(gc_interp *g, const double to[3], const double center_ab[2], int turns);
 fm_status gc_exec_arc(gc_interp *g, const gc_block *b, int code, int col);
 fm_status gc_exec_cycle(gc_interp *g, const gc_block *b, int code, int col);
+/* The path control mode from here on (tolerances in mm, 0: none). */
+void gc_set_path_mode(gc_interp *g, fm_path_mode mode, double tolerance_mm, double naive_mm);
 
 /* ---- offsets and coordinate systems (offsets.c) ---- */
 
