@@ -30,13 +30,22 @@ static double corner_tolerance(const plan_seg *prev, const plan_seg *next)
     return fmin(T, next->nominal_length * PLAN_TOLERANCE_RATIO);
 }
 
-/* How far along an arc a blend may reach: a third of the arc (two thirds
- * of the one before the corner), at most a quarter turn (LinuxCNC's
- * phi_max for the concave case; docs/plan.md says what is simplified). */
-static double arc_reach(const plan_seg *arc, int before)
+/* An arc's side of a corner (LinuxCNC's blendInit3From*Arc*): convex when
+ * the arc bends on with the corner (arcConvexTest), then the blend may
+ * reach a quarter of the corner's angle along it and is planned on the
+ * secant's direction; concave, up to a quarter turn. Returns the reach
+ * (L), tightens *theta for a convex arc. before: the arc ends at P. */
+static double arc_side(const plan_seg *arc, int before, const double P[3], const double u_other[3],
+                       double theta_tan, double *theta)
 {
-    double phi_max = fmin(arc->angle * (before ? 2.0 / 3.0 : 1.0 / 3.0), PLAN_PI / 2.0);
-    return phi_max * arc->radius;
+    double diff[3] = {P[0] - arc->center[0], P[1] - arc->center[1], P[2] - arc->center[2]};
+    double d = dot3(diff, u_other);
+    int convex = before ? d < 0.0 : !(d < 0.0);
+    double share = before ? 2.0 / 3.0 : 1.0 / 3.0;
+    double phi_max = fmin(arc->angle * share, convex ? theta_tan : PLAN_PI / 2.0);
+    if (!convex) return phi_max * arc->radius;
+    *theta = fmin(*theta, theta_tan - phi_max / 4.0);
+    return sin(phi_max / 4.0) * arc->radius;
 }
 
 int plan_blend_compute(const fm_plan_machine *m, const plan_seg *prev, const plan_seg *next,
@@ -54,9 +63,24 @@ int plan_blend_compute(const fm_plan_machine *m, const plan_seg *prev, const pla
     p.phi = PLAN_PI - 2.0 * p.theta;
     p.tolerance = corner_tolerance(prev, next);
 
-    p.L1 = prev->kind == SEG_ARC ? fmin(arc_reach(prev, 1), prev->length)
-                                 : fmin(prev->length, prev->nominal_length * PLAN_BLEND_DIST_FRACTION);
-    p.L2 = next->kind == SEG_ARC ? arc_reach(next, 0) : next->length * PLAN_BLEND_DIST_FRACTION;
+    /* Arcs: only in the plane of the corner, and no helix (LinuxCNC
+     * refuses the blend arc otherwise). */
+    double theta_tan = p.theta;
+    const plan_seg *arcs[2] = {prev, next};
+    for (int k = 0; k < 2; k++)
+        if (arcs[k]->kind == SEG_ARC &&
+            (fabs(arcs[k]->helix) > 1e-12 || fabs(fabs(dot3(arcs[k]->normal, binormal)) - 1.0) > 1e-6))
+            return -1;
+    p.L1 = prev->kind == SEG_ARC
+               ? fmin(arc_side(prev, 1, prev->p_end, u2, theta_tan, &p.theta), prev->length)
+               : fmin(prev->length, prev->nominal_length * PLAN_BLEND_DIST_FRACTION);
+    p.L2 = next->kind == SEG_ARC ? arc_side(next, 0, prev->p_end, u1, theta_tan, &p.theta)
+                                 : next->length * PLAN_BLEND_DIST_FRACTION;
+    if (prev->kind == SEG_ARC || next->kind == SEG_ARC) {
+        /* LinuxCNC's minimum corner for an arc blend */
+        if (p.theta < (prev->kind == SEG_ARC && next->kind == SEG_ARC ? PLAN_PI / 12.0 : 0.0)) return -1;
+        p.phi = PLAN_PI - 2.0 * p.theta;
+    }
 
     double acc_bounds[3], vel_bounds[3];
     for (int i = 0; i < 3; i++) {

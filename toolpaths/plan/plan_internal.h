@@ -44,6 +44,7 @@ typedef struct plan_seg {
     int finalized;          /* its length will not change any more */
     int pure_rotary;
     int rotary;             /* moves a rotary axis: no blends (LinuxCNC) */
+    int rapid;              /* G0: LinuxCNC never joins a rapid to a feed without a stop */
     double p_start[3], p_end[3];
     double u_start[3], u_end[3]; /* unit tangents at the ends */
     /* Arcs (SEG_ARC) */

@@ -250,7 +250,8 @@ static void finalize(fm_planner *p, plan_seg *s)
 static int join(fm_planner *p, plan_seg *prev, plan_seg *tc, plan_seg *blend)
 {
     if (prev->term == TERM_STOP) return 0;
-    if (prev->kind == SEG_DWELL || tc->kind == SEG_DWELL || prev->rotary || tc->rotary) {
+    if (prev->kind == SEG_DWELL || tc->kind == SEG_DWELL || prev->rotary || tc->rotary ||
+        prev->rapid != tc->rapid) {
         prev->term = TERM_STOP;
         return 0;
     }
@@ -287,6 +288,7 @@ static int join(fm_planner *p, plan_seg *prev, plan_seg *tc, plan_seg *blend)
     if (plan_blend_compute(&p->m, prev, tc, &bp) == 0 && bp.v_plan >= kink_vel) {
         plan_seg b = {0};
         b.kind = SEG_BLEND;
+        b.rapid = prev->rapid;
         b.term = TERM_TANGENT;
         b.kink_vel = -1.0;
         b.tolerance = prev->tolerance;
@@ -471,6 +473,7 @@ static void segment_of_motion(const fm_planner *p, const fm_motion *mo, plan_seg
         s->reqvel = mo->feed / 60.0;
     } else {
         s->kind = SEG_LINE;
+        s->rapid = mo->kind == FM_MOTION_RAPID;
         double d[3] = {mo->end[0] - mo->start[0], mo->end[1] - mo->start[1], mo->end[2] - mo->start[2]};
         plan_line_limits(&p->m, d, r, mo->kind == FM_MOTION_RAPID, &s->length, &s->maxvel,
                          &s->maxaccel);
