@@ -14,13 +14,15 @@
 #include "toolpaths/gcode/gcode.h"
 #include "toolpaths/plan/plan.h"
 #include "toolpaths/tooltable/tooltable.h"
+#include "toolpaths/traj/traj.h"
 
 static void usage(FILE *out)
 {
     fprintf(out,
             "usage: frepmill time PROGRAM [--machine FILE.json] [--dialect linuxcnc|fanuc]\n"
             "                     [--tools TOOLS] [--blocks N] [--json]\n\n"
-            "Plan a G-code program as the controller runs it and print its cycle time\n"
+            "Plan a G-code program (or a parametric trajectory, PROGRAM.json, whose\n"
+            "segments keep their own timing) as the controller runs it and print its cycle time\n"
             "beside the feed-only time (each move's length over its feed): LinuxCNC's\n"
             "trajectory planner (acceleration, look-ahead, G64 P/Q blends, G61 stops,\n"
             "arcs at their normal-acceleration limit) with the machine file's\n"
@@ -194,7 +196,17 @@ int fm_cmd_time(int argc, char **argv)
     clock_gettime(CLOCK_MONOTONIC, &c0);
     fm_plan_totals tot = {0};
     if (!st) {
-        st = fm_gcode_run_file(program, &opt, fm_planner_motion_sink, p, NULL, &err);
+        size_t plen = strlen(program);
+        if (plen >= 5 && !strcmp(program + plen - 5, ".json")) {
+            /* a parametric trajectory (docs/trajectory.md): its segments keep
+             * their own timing, its rapids are planned */
+            fm_traj_options topt;
+            fm_traj_options_default(&topt);
+            topt.rapid_rate = opt.rapid_rate;
+            st = fm_traj_run_file(program, &topt, fm_planner_motion_sink, p, NULL, &err);
+        } else {
+            st = fm_gcode_run_file(program, &opt, fm_planner_motion_sink, p, NULL, &err);
+        }
         if (st && fm_planner_error(p)->code) err = *fm_planner_error(p);
         if (!st) st = fm_planner_finish(p, &tot, &err);
     }

@@ -55,7 +55,7 @@ def limits(ini_path):
             'max_feed_override': g('DISPLAY', 'MAX_FEED_OVERRIDE')}
 
 
-def run(d, prog):
+def run(d, prog, timeout):
     p = os.path.join(d, os.path.basename(prog))
     shutil.copy(prog, p)
     os.chmod(p, 0o644)
@@ -66,7 +66,7 @@ def run(d, prog):
     env = dict(os.environ, RTAPI_UID=os.environ.get('RTAPI_UID', '65534'),
                RTAPI_FIFO_PATH=os.path.join(d, '.rtapi_fifo'))
     subprocess.run(['linuxcnc', os.path.join(d, 'sim.ini')], env=env, stdout=subprocess.DEVNULL,
-                   stderr=subprocess.DEVNULL, timeout=120)
+                   stderr=subprocess.DEVNULL, timeout=timeout)
     text = open(res).read().split()
     if text[0] == 'error' or text[-1] != 'None':
         raise RuntimeError('%s: %s' % (prog, ' '.join(text)))
@@ -76,6 +76,7 @@ def run(d, prog):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     ap.add_argument('--repeat', type=int, default=3, help='runs per program; the table keeps the median')
+    ap.add_argument('--timeout', type=float, default=120, help='seconds a run may take: the machine time plus about 10 s')
     ap.add_argument('--table', default=os.path.join(HERE, 'lcnc_times.json'), help='the table to update')
     ap.add_argument('programs', nargs='*')
     a = ap.parse_args()
@@ -98,12 +99,12 @@ def main():
         runs = []
         for _ in range(a.repeat):
             try:
-                runs.append(run(d, prog))
+                runs.append(run(d, prog, a.timeout))
             except (RuntimeError, subprocess.TimeoutExpired) as ex:
                 # a run that hangs (rarely, the display never connects) is retried once
                 print('%s: %s, once more' % (os.path.basename(prog), ex), flush=True)
                 subprocess.run(['linuxcnc', '-k'], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-                runs.append(run(d, prog))
+                runs.append(run(d, prog, a.timeout))
         name = os.path.basename(prog)
         # the median: on a loaded machine a run can be delayed (a late servo thread) and the
         # display's polling has been seen to stop one early; the middle of three is neither
