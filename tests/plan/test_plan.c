@@ -7,6 +7,7 @@
  * dwell, the feed-only default, and that motions stream out before the
  * program ends. */
 #include "test.h"
+#include "toolpaths/gcode/gcode.h"
 #include "toolpaths/plan/plan_internal.h"
 
 typedef struct collected {
@@ -243,6 +244,54 @@ static void test_streaming(void)
     CHECK(worst_lag <= 2 * (m.lookahead + 8));
 }
 
+/* Fanuc's path modes through the interpreter and the planner (docs/plan.md,
+ * "Fanuc and Haas"): around a 20 mm square's 90 degree corners, Haas G187
+ * P1 blends within 0.1 mm and P3 within 0.01 mm: the blend radius is
+ * T sin(45) / (1 - sin(45)); G64 takes a quarter of the 20 mm side as its
+ * tolerance; G61 and G09 stop (no blend, the motion ends at rest). */
+static void test_fanuc_modes(void)
+{
+    static const struct {
+        const char *code;
+        double tol; /* 0: a stop */
+    } modes[] = {{"G187 P1", 0.1}, {"G187 P3", 0.01}, {"G187 P2", 0.05}, {"G64", 5.0}, {"G61", 0}, {"G09", 0}};
+    double s45 = sin(PLAN_PI / 4.0);
+    for (size_t k = 0; k < sizeof modes / sizeof modes[0]; k++) {
+        char prog[256];
+        snprintf(prog, sizeof prog, "O1\nG21 G90 G17\nG01 X0 Y0 F600\n%s X20.\nY20.\nM30\n", modes[k].code);
+        fm_plan_machine m = machine(100.0, 500.0);
+        collected c = {0};
+        fm_error err = {0};
+        fm_planner *p = fm_planner_new(&m, collect, &c, &err);
+        fm_gcode_options o;
+        fm_gcode_options_default(&o);
+        o.dialect = FM_GCODE_FANUC;
+        CHECK(fm_gcode_run_string(prog, strlen(prog), "t.nc", &o, fm_planner_motion_sink, p, NULL, &err) ==
+              FM_OK);
+        CHECK(fm_planner_finish(p, NULL, &err) == FM_OK);
+        fm_planner_free(p);
+        /* the first block (X0 Y0 from the origin) has no length */
+        CHECK(c.n == 3);
+        if (c.n != 3) continue;
+        const fm_plan_motion *first = &c.m[1];
+        if (modes[k].tol > 0 && modes[k].tol < 1.0) {
+            /* the tolerance bounds the radius (its speed is below the feed) */
+            double d = cos(PLAN_PI / 4.0) * modes[k].tol / (1.0 - s45);
+            CHECK(first->has_blend);
+            CHECK_NEAR(first->blend_out.radius, tan(PLAN_PI / 4.0) * d, 1e-9);
+        } else if (modes[k].tol > 0) {
+            /* G64: the radius a parabolic blend at the feed sweeps, 10 mm/s
+             * for 10 / 250 s over the 90 degree turn */
+            CHECK(first->has_blend);
+            CHECK_NEAR(first->blend_out.radius, 10.0 * (10.0 / 250.0) / (PLAN_PI / 2.0), 1e-9);
+        } else {
+            CHECK(!first->has_blend);
+            CHECK_NEAR(first->v_end, 0.0, 1e-12);
+            CHECK_NEAR(first->motion.t1, rest_to_rest(20.0, 10.0, 500.0), 1e-9);
+        }
+    }
+}
+
 int main(void)
 {
     test_single_moves();
@@ -251,5 +300,6 @@ int main(void)
     test_blend_corner();
     test_dwell_and_feed_only();
     test_streaming();
+    test_fanuc_modes();
     return test_summary("plan");
 }
