@@ -292,6 +292,85 @@ static void test_fanuc_modes(void)
     }
 }
 
+/* Random programs (lines, arcs, helices, rapids, dwells, tool changes,
+ * every path mode and tolerance, zero-length moves and reversals): every
+ * motion comes back once, in order, with finite times that never go
+ * backwards, and the totals keep the feed-only figure. (A run under the
+ * sanitizers is the point: no read out of the queues, no NaN.) */
+static int check_order(void *user, const fm_plan_motion *pm)
+{
+    long *next = user;
+    CHECK(pm->motion.index == *next);
+    CHECK(isfinite(pm->motion.t0) && isfinite(pm->motion.t1));
+    CHECK(pm->motion.t1 >= pm->motion.t0);
+    (*next)++;
+    return 0;
+}
+
+static void test_random_programs(void)
+{
+    fm_plan_machine m = machine(60.0, 800.0);
+    m.linear[2].max_velocity = 20.0;
+    m.linear[2].max_acceleration = 300.0;
+    m.max_feed_override = 1.2;
+    m.tool_change_s = 1.0;
+    for (int prog = 0; prog < 40; prog++) {
+        long next = 0;
+        fm_error err = {0};
+        fm_planner *p = fm_planner_new(&m, check_order, &next, &err);
+        double pos[3] = {0, 0, 0}, t = 0.0;
+        int n = 200 + (int)(test_rand01() * 800);
+        for (int i = 0; i < n; i++) {
+            fm_motion mo = {0};
+            mo.index = i;
+            mo.line = i + 1;
+            mo.axis_start[2] = mo.axis_end[2] = 1.0;
+            memcpy(mo.start, pos, sizeof pos);
+            double r = test_rand01();
+            mo.kind = r < 0.1 ? FM_MOTION_RAPID : r < 0.75 ? FM_MOTION_LINE : r < 0.95 ? FM_MOTION_ARC : FM_MOTION_DWELL;
+            mo.path_mode = (fm_path_mode)(int)(test_rand01() * 3);
+            mo.path_tolerance = test_rand01() < 0.5 ? 0.0 : test_uniform(0.001, 0.5);
+            mo.naive_tolerance = test_rand01() < 0.5 ? 0.0 : mo.path_tolerance;
+            mo.tool = test_rand01() < 0.02 ? 2 : 1;
+            mo.feed = test_uniform(100.0, 6000.0);
+            double len = 0.0;
+            if (mo.kind == FM_MOTION_ARC) {
+                double rad = test_uniform(0.2, 20.0), a0 = test_uniform(0, 2 * PLAN_PI);
+                mo.plane_axis = 2;
+                mo.turns = test_rand01() < 0.5 ? 1 : -1;
+                mo.center[0] = pos[0] - rad * cos(a0);
+                mo.center[1] = pos[1] - rad * sin(a0);
+                mo.center[2] = pos[2];
+                double a1 = a0 + mo.turns * test_uniform(0.05, 2 * PLAN_PI - 0.05);
+                mo.end[0] = mo.center[0] + rad * cos(a1);
+                mo.end[1] = mo.center[1] + rad * sin(a1);
+                mo.end[2] = pos[2] + (test_rand01() < 0.3 ? test_uniform(-2, 2) : 0.0);
+                len = rad * fabs(a1 - a0);
+            } else if (mo.kind != FM_MOTION_DWELL) {
+                double step = test_rand01() < 0.3 ? test_uniform(0.01, 0.5) : test_uniform(0.5, 50.0);
+                if (test_rand01() < 0.05) step = 0.0;
+                for (int k = 0; k < 3; k++) mo.end[k] = pos[k] + step * test_uniform(-1, 1) * (k == 2 ? 0.3 : 1.0);
+                len = sqrt((mo.end[0] - pos[0]) * (mo.end[0] - pos[0]) + (mo.end[1] - pos[1]) * (mo.end[1] - pos[1]) +
+                           (mo.end[2] - pos[2]) * (mo.end[2] - pos[2]));
+            } else {
+                memcpy(mo.end, pos, sizeof pos);
+            }
+            if (mo.kind == FM_MOTION_RAPID) mo.feed = 0.0;
+            mo.t0 = t;
+            t += mo.kind == FM_MOTION_DWELL ? test_uniform(0, 1) : len / (mo.feed > 0 ? mo.feed / 60.0 : 100.0);
+            mo.t1 = t;
+            memcpy(pos, mo.end, sizeof pos);
+            CHECK(fm_planner_push(p, &mo, &err) == FM_OK);
+        }
+        fm_plan_totals tot;
+        CHECK(fm_planner_finish(p, &tot, &err) == FM_OK);
+        fm_planner_free(p);
+        CHECK(next == n);
+        CHECK(isfinite(tot.cycle_time_s) && tot.cycle_time_s > 0.0);
+        CHECK_NEAR(tot.feed_only_s, t, 1e-9);
+    }
+}
+
 int main(void)
 {
     test_single_moves();
@@ -301,5 +380,6 @@ int main(void)
     test_dwell_and_feed_only();
     test_streaming();
     test_fanuc_modes();
+    test_random_programs();
     return test_summary("plan");
 }
