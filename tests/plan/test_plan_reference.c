@@ -67,7 +67,7 @@ int main(int argc, char **argv)
     CHECK(plan_program(path, &m, &base) == 0);
     double lcnc_base = json_number_value(json_object_get(secs, "baseline.ngc"));
     CHECK(lcnc_base > 0.0);
-    printf("%-18s %10s %10s %10s %8s\n", "program", "linuxcnc", "frepmill", "feed-only", "diff");
+    printf("%-22s %10s %10s %10s %8s\n", "program", "linuxcnc", "frepmill", "feed-only", "diff");
     const char *name;
     json_t *v;
     int compared = 0;
@@ -78,7 +78,7 @@ int main(int argc, char **argv)
         CHECK(plan_program(path, &m, &tot) == 0);
         double ref = json_number_value(v) - lcnc_base + base.cycle_time_s;
         double diff = (tot.cycle_time_s - ref) / ref;
-        printf("%-18s %10.3f %10.3f %10.3f %+7.2f%%\n", name, ref, tot.cycle_time_s, tot.feed_only_s,
+        printf("%-22s %10.3f %10.3f %10.3f %+7.2f%%\n", name, ref, tot.cycle_time_s, tot.feed_only_s,
                100.0 * diff);
         CHECK(fabs(diff) <= 0.02);
         compared++;
