@@ -3,16 +3,18 @@
 LinuxCNC reference").
 
 Runs LinuxCNC's simulator (linuxcnc-uspace: its real motion controller and trajectory planner, in real time,
-headless) once per program on a configuration derived from the installed sample sim/axis/axis_mm.ini, and writes
-tests/plan/lcnc_times.json: the limits read back from the generated INI, and per program the measured seconds
-from AUTO_RUN to the end of motion. The program `baseline.ngc` (a 0.01 mm move) measures the fixed cost of a run
-(reading the program, queueing, the display's polling), which test_plan_reference subtracts from the others.
+headless) on each program, three times, on a configuration derived from the installed sample
+sim/axis/axis_mm.ini, and writes tests/plan/lcnc_times.json: the limits read back from the generated INI, and
+per program the median of the measured seconds from AUTO_RUN to the end of motion (and every run). The program
+baseline.ngc (a 2 mm move) measures the fixed cost of a run (reading the program, queueing, the display's
+polling), which test_plan_reference subtracts from the others.
 
-    sudo-less root: RTAPI_UID is set to nobody's uid, as rtapi_app requires
-    python3 tests/plan/lcnc_reference.py [--repeat N] [PROGRAM.ngc ...]
+    as root (rtapi_app then needs RTAPI_UID, set here to nobody's uid):
+    python3 tests/plan/lcnc_reference.py [--repeat N] [--timeout S] [--table T.json] [PROGRAM.ngc ...]
 
-Each program takes its own machine time (all together about 70 s with the restarts). CI does not run this: the
-table is committed, and tests/plan/test_plan_reference.py compares frepmill's planner with it."""
+Each run takes the program's machine time plus a restart of LinuxCNC (all ten programs, three runs each: about
+seven minutes). CI does not run this: the table is committed, and test_plan_reference
+(tests/plan/test_plan_reference.c) compares frepmill's planner with it."""
 import argparse, configparser, json, os, shutil, statistics, subprocess, sys, tempfile, time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
