@@ -12,8 +12,8 @@ polling), which test_plan_reference subtracts from the others.
     as root (rtapi_app then needs RTAPI_UID, set here to nobody's uid):
     python3 tests/plan/lcnc_reference.py [--repeat N] [--timeout S] [--table T.json] [PROGRAM.ngc ...]
 
-Each run takes the program's machine time plus a restart of LinuxCNC (all ten programs, three runs each: about
-seven minutes). CI does not run this: the table is committed, and test_plan_reference
+Each run takes the program's machine time plus a restart of LinuxCNC (all eleven programs, three runs each: about
+eight minutes). CI does not run this: the table is committed, and test_plan_reference
 (tests/plan/test_plan_reference.c) compares frepmill's planner with it."""
 import argparse, configparser, json, os, shutil, statistics, subprocess, sys, tempfile, time
 

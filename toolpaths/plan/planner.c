@@ -283,7 +283,16 @@ static int join(fm_planner *p, plan_seg *prev, plan_seg *tc, plan_seg *blend)
         return 0;
     }
     double kink_vel = v_max * kr / scale;
-    if (prev->term != TERM_BLEND) return 0; /* G61: stops at the corner */
+    if (prev->term != TERM_BLEND) {
+        /* G61 stops at the corner; LinuxCNC has already set the kink's
+         * acceleration reduction on both feed moves and keeps it
+         * (measured: 5 ms more per corner than G61.1, docs/plan.md) */
+        if (!prev->rapid) {
+            prev->kink_reduce = fmax(prev->kink_reduce, kr);
+            tc->kink_reduce_prev = fmax(tc->kink_reduce_prev, kr);
+        }
+        return 0;
+    }
     plan_blend_params bp;
     if (plan_blend_compute(&p->m, prev, tc, &bp) == 0 && bp.v_plan >= kink_vel) {
         plan_seg b = {0};
