@@ -10,11 +10,11 @@
 #include <time.h>
 
 #include "runner/dynamics.h"
+#include "runner/job.h"
 #include "runner/machine.h"
 #include "toolpaths/gcode/gcode.h"
 #include "toolpaths/plan/plan.h"
 #include "toolpaths/tooltable/tooltable.h"
-#include "toolpaths/traj/traj.h"
 
 static void usage(FILE *out)
 {
@@ -121,10 +121,13 @@ static void print_json_string(const char *text)
 
 int fm_cmd_time(int argc, char **argv)
 {
-    const char *program = NULL, *tools_path = NULL, *machine_path = NULL;
+    const char *tools_path = NULL, *machine_path = NULL;
     int json = 0, nblocks = 10;
-    fm_gcode_options opt;
-    fm_gcode_options_default(&opt);
+    /* the program as a job's (the runner's one dispatch: G-code or a
+     * trajectory) */
+    fm_job_spec spec;
+    fm_job_spec_default(&spec);
+    spec.rapid_rate = 0; /* the interpreters' own unless the machine gives one */
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
@@ -145,25 +148,28 @@ int fm_cmd_time(int argc, char **argv)
             }
             nblocks = (int)n;
         } else if (!strcmp(a, "--dialect") && i + 1 < argc) {
-            if (!fm_gcode_dialect_parse(argv[++i], &opt.dialect)) {
+            fm_gcode_dialect dialect;
+            if (!fm_gcode_dialect_parse(argv[++i], &dialect)) {
                 fprintf(stderr, "frepmill time: --dialect '%s'; expected linuxcnc or fanuc\n", argv[i]);
                 return 2;
             }
+            spec.dialect = argv[i];
         } else if (a[0] == '-' && a[1]) {
             fprintf(stderr, "frepmill time: unknown or incomplete option '%s'\n", a);
             usage(stderr);
             return 2;
-        } else if (!program) {
-            program = a;
+        } else if (!spec.program_path) {
+            spec.program_path = a;
         } else {
             fprintf(stderr, "frepmill time: more than one program ('%s')\n", a);
             return 2;
         }
     }
-    if (!program) {
+    if (!spec.program_path) {
         usage(stderr);
         return 2;
     }
+    const char *program = spec.program_path;
     fm_error err = {0};
     char msg[1024];
     fm_plan_machine dyn;
@@ -176,17 +182,18 @@ int fm_cmd_time(int argc, char **argv)
             fprintf(stderr, "%s\n", fm_error_format(&err, msg, sizeof msg));
             return (int)err.code;
         }
-        opt.machine = &machine.chain;
-        memcpy(opt.reference_points, machine.reference_points, sizeof opt.reference_points);
-        opt.rapid_rate = dyn.rapid_rate;
+        spec.machine = &machine.chain;
+        memcpy(spec.reference_points, machine.reference_points, sizeof spec.reference_points);
+        if (machine.rapid_rate > 0) spec.rapid_rate = machine.rapid_rate;
     }
     if (tools_path) {
         if (fm_tooltable_load(tools_path, &table, &err)) {
             fprintf(stderr, "%s\n", fm_error_format(&err, msg, sizeof msg));
             return (int)err.code;
         }
-        opt.tools = &table;
     }
+    /* feed-only rapids at the rate the motions were timed with */
+    if (spec.rapid_rate > 0) dyn.rapid_rate = spec.rapid_rate;
     timing tm = {0};
     tm.maxtop = nblocks;
     tm.top = nblocks ? calloc((size_t)nblocks, sizeof *tm.top) : NULL;
@@ -195,18 +202,11 @@ int fm_cmd_time(int argc, char **argv)
     struct timespec c0, c1;
     clock_gettime(CLOCK_MONOTONIC, &c0);
     fm_plan_totals tot = {0};
+    fm_gcode_options opt;
+    fm_traj_options topt;
+    if (!st) st = fm_job_program_options(&spec, tools_path ? &table : NULL, &opt, &topt, &err);
     if (!st) {
-        size_t plen = strlen(program);
-        if (plen >= 5 && !strcmp(program + plen - 5, ".json")) {
-            /* a parametric trajectory (docs/trajectory.md): its segments keep
-             * their own timing, its rapids are planned */
-            fm_traj_options topt;
-            fm_traj_options_default(&topt);
-            topt.rapid_rate = opt.rapid_rate;
-            st = fm_traj_run_file(program, &topt, fm_planner_motion_sink, p, NULL, &err);
-        } else {
-            st = fm_gcode_run_file(program, &opt, fm_planner_motion_sink, p, NULL, &err);
-        }
+        st = fm_job_program_run(&spec, &opt, &topt, fm_planner_motion_sink, p, &err);
         if (st && fm_planner_error(p)->code) err = *fm_planner_error(p);
         if (!st) st = fm_planner_finish(p, &tot, &err);
     }
