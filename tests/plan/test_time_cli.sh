@@ -61,4 +61,26 @@ check "motions reads a machine file with dynamics" $?
 "$frepmill" time "$dir/nothere.ngc" --machine "$dir/m.json" >/dev/null 2>&1
 [ $? -eq 4 ] || [ $? -eq 2 ]
 check "a missing program is an error" $?
+# the report's cycle_time_s beside the feed-only program_time_s: by flags
+# (--machine) and from a job document whose machine carries the dynamics
+printf '{"units": "mm", "tools": [{"number": 1, "shape": "flat", "diameter": 6, "flute_length": 20, "length": 40}]}\n' >"$dir/tools.json"
+printf 'G21 G90\nT1 M6\nG1 X100 F1200\nM2\n' >"$dir/s.ngc"
+"$frepmill" simulate "$dir/s.ngc" --stock box:0,20,-10,10,30,-5 --tools "$dir/tools.json" --voxel 0.5 \
+    --machine "$dir/m.json" --report "$dir/r.json" >/dev/null 2>&1
+check "simulate with a machine with dynamics runs" $?
+python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert abs(d['cycle_time_s']-5.04)<1e-6 and abs(d['program_time_s']-5.0)<1e-6 and d['cycle_time_planned'] is True, d" "$dir/r.json"
+check "report: cycle_time_s 5.04 (planned) beside program_time_s 5.0 (feed-only)" $?
+"$frepmill" simulate "$dir/s.ngc" --stock box:0,20,-10,10,30,-5 --tools "$dir/tools.json" --voxel 0.5 \
+    --machine "$dir/old.json" --report "$dir/r0.json" >/dev/null 2>&1
+python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d['cycle_time_s']==d['program_time_s'] and d['cycle_time_planned'] is False, d" "$dir/r0.json"
+check "report without dynamics: cycle_time_s is the feed-only figure, not planned" $?
+cat >"$dir/job.json" <<JOB
+{"stock": "box:0,20,-10,10,30,-5", "voxel": 0.5, "tools": $(cat "$dir/tools.json"),
+ "program": {"gcode": "G21 G90\\nT1 M6\\nG1 X100 F1200\\nM2\\n"},
+ "machine": {"dynamics": {"axes": {"x": {"max_velocity": 100, "max_acceleration": 500}}}}}
+JOB
+"$frepmill" simulate --job "$dir/job.json" --report "$dir/rj.json" >/dev/null 2>"$dir/errj"
+check "a job document with the machine's dynamics runs ($(tail -1 "$dir/errj"))" $?
+python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert abs(d['cycle_time_s']-5.04)<1e-6 and d['cycle_time_planned'] is True, d" "$dir/rj.json"
+check "job document: cycle_time_s 5.04" $?
 exit $fail
