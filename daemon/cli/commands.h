@@ -16,5 +16,6 @@ int fm_cmd_eval(int argc, char **argv);
 int fm_cmd_mesh(int argc, char **argv);
 int fm_cmd_motions(int argc, char **argv);
 int fm_cmd_simulate(int argc, char **argv);
+int fm_cmd_time(int argc, char **argv);
 
 #endif

@@ -11,6 +11,7 @@ static const fm_command commands[] = {
     {"mesh", "mesh a HyperFun model (and draw it)", fm_cmd_mesh},
     {"simulate", "cut a program out of a stock and report what was removed", fm_cmd_simulate},
     {"motions", "print the motions of a G-code program or trajectory", fm_cmd_motions},
+    {"time", "a program's cycle time as the controller plans it (docs/plan.md)", fm_cmd_time},
     {NULL, NULL, NULL}};
 
 static void usage(FILE *out)

@@ -14,6 +14,7 @@
 #include "sweep/motion.h"
 #include "tools/tools.h"
 #include "toolpaths/gcode/gcode.h"
+#include "toolpaths/plan/plan.h"
 #include "toolpaths/traj/traj.h"
 
 typedef enum fm_program_kind {
@@ -109,6 +110,10 @@ typedef struct fm_job_spec {
     /* The machine's rotary axes (docs/check.md "Machine file"); NULL: 3-axis.
      * The G-code front end turns A B C words into joint values with it. */
     const fm_machine *machine;
+    /* The machine's dynamics (docs/plan.md; the machine file's "dynamics"):
+     * the survey plans the program's cycle time as the controller runs it.
+     * NULL or not given: the cycle time is the feed-only figure. */
+    const fm_plan_machine *dynamics;
 
     /* The collision check (NULL: none). When resuming, the check's own
      * grid is cut from the start, the motions before skip_motions
@@ -207,7 +212,9 @@ typedef struct fm_job_result {
     double surface_area_mm2;
     long motions;
     long blocks;               /* distinct source lines that cut */
-    double program_time_s;
+    double program_time_s;     /* feed-only: each motion's length over its feed */
+    double cycle_time_s;       /* as the controller plans it; program_time_s when not planned */
+    int cycle_time_planned;    /* 1: from the machine's dynamics (toolpaths/plan) */
     double wall_time_s;
     size_t peak_memory_bytes;  /* peak resident set of the process */
     double voxel_mm;

@@ -28,6 +28,10 @@ int job_survey_sink(void *user, const fm_motion *m)
     if (s->stop.line > 0 && (s->stopped || (s->stopped = job_stop_before(&s->stop, m)))) return 0;
     s->motions++;
     if (m->t1 > s->time_total) s->time_total = m->t1;
+    if (s->planner && !s->plan_failed) {
+        fm_error perr;
+        if (fm_planner_push(s->planner, m, &perr) != FM_OK) s->plan_failed = 1;
+    }
     if (m->line > s->max_line) s->max_line = m->line;
     /* where the tip goes: both ends, an arc's whole circle, a path's bounds */
     double lo[3], hi[3];

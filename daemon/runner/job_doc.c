@@ -12,6 +12,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "dynamics.h"
 #include "machine.h"
 #include "stock_spec.h"
 #include "toolpaths/gcode/gcode.h"
@@ -386,12 +387,17 @@ static fm_status parse_machine(fm_job_doc *doc, json_t *machine, const char *whe
         /* a machine file (docs/check.md): the CLI's --machine; its loader's
          * error as it is (file, and I/O for a missing file) */
         if (fm_check_machine_load(json_string_value(machine), &doc->check.options.machine,
-                                  err) != FM_OK)
+                                  err) != FM_OK ||
+            fm_plan_machine_load(json_string_value(machine), &doc->dynamics, err) != FM_OK)
             return err ? err->code : FM_ERR_INPUT;
     } else if (!json_is_object(machine)) {
         return refuse(err, "bad_type", "%s must be an object", where);
     } else if (fm_check_machine_from_json(machine, where, &doc->check.options.machine, &merr) !=
                FM_OK) {
+        return refuse(err, "bad_value", "%s", merr.message);
+    } else if (json_object_get(machine, "dynamics") &&
+               fm_plan_machine_from_json(json_object_get(machine, "dynamics"), where, &doc->dynamics,
+                                         &merr) != FM_OK) {
         return refuse(err, "bad_value", "%s", merr.message);
     }
     /* a component names a model file on this machine: not from a client */
@@ -724,6 +730,7 @@ fm_status fm_job_doc_from_json(json_t *job, const fm_job_doc_rules *rules_in, fm
         memcpy(doc->spec.reference_points, doc->check.options.machine.reference_points,
                sizeof doc->spec.reference_points);
         doc->spec.machine = &doc->check.options.machine.chain;
+        if (doc->dynamics.given) doc->spec.dynamics = &doc->dynamics;
     }
 
     /* An explicit table always wins over the program's comments. */

@@ -109,6 +109,7 @@ typedef struct fm_job_doc {
     fm_job_check check;
     int check_enabled;
     int has_machine;           /* "machine" (or options.check.machine) was given */
+    fm_plan_machine dynamics;  /* its "dynamics" (docs/plan.md); given = 0 without */
     /* Owned storage behind spec. */
     fm_tool_table tools;
     char *program;             /* G-code text or the trajectory's JSON */

@@ -95,6 +95,9 @@ typedef struct job_survey {
     int stopped;
     fm_job_motions *log; /* the motions kept for the cut and the blame */
     int probing;         /* a G38 move: the cut's motions depend on the stock */
+    fm_planner *planner; /* the machine's dynamics given: the cycle time's planner */
+    int plan_failed;     /* the planner refused a motion: the cycle time stays feed-only */
+    fm_plan_totals plan;
 } job_survey;
 
 int job_survey_sink(void *user, const fm_motion *m);

@@ -66,7 +66,18 @@ static fm_status survey(const fm_job_spec *spec, const job_tools *tools, job_sur
                                : job_motions_new(JOB_MOTIONS_MEMORY, NULL);
     if (!sv->log) return err && err->code ? err->code : FM_ERR_LIMIT;
     result->interpretations++;
+    if (spec->dynamics && spec->dynamics->given) {
+        fm_error perr;
+        sv->planner = fm_planner_new(spec->dynamics, NULL, NULL, &perr);
+        sv->plan_failed = !sv->planner;
+    }
     fm_status st = job_run_program(spec, tools->use, job_survey_sink, sv, job_survey_probe, err);
+    if (sv->planner) {
+        fm_error perr;
+        if (fm_planner_finish(sv->planner, &sv->plan, &perr) != FM_OK) sv->plan_failed = 1;
+        fm_planner_free(sv->planner);
+        sv->planner = NULL;
+    }
     /* a log that cannot serve the toolpath leaves no file to be read */
     if (spec->motion_log) job_motions_keep(sv->log, spec->motion_log, st == FM_OK);
     return st;
@@ -119,6 +130,9 @@ static void fill_result(const job_cutter *c, const job_survey *sv, fm_job_result
     result->motions = live ? c->progress.motions_total : sv->motions;
     result->blocks = c->blocks;
     result->program_time_s = live ? c->progress.program_time_total : sv->time_total;
+    result->cycle_time_planned = !live && c->spec->dynamics && c->spec->dynamics->given &&
+                                 !sv->plan_failed && !sv->probing;
+    result->cycle_time_s = result->cycle_time_planned ? sv->plan.cycle_time_s : result->program_time_s;
     result->voxel_mm = fm_stock_voxel_size(stock);
     size_t n = fm_stock_tool_volumes(stock, result->tools,
                                      sizeof result->tools / sizeof result->tools[0]);

@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "dynamics.h"
 #include "sweep/sweep.h"
 
 static int number(json_t *v, double *out)
@@ -329,12 +330,17 @@ fm_status fm_check_machine_from_json(json_t *root, const char *path, fm_check_ma
             if ((st = read_rotary(val, path, &m->chain, err)) != FM_OK) goto done;
         } else if (!strcmp(key, "head")) {
             if ((st = read_head(val, path, m, err)) != FM_OK) goto done;
+        } else if (!strcmp(key, "dynamics")) {
+            /* the planner's (runner/dynamics.c): checked here so that every
+             * reader of the file refuses the same mistakes */
+            fm_plan_machine dyn;
+            if ((st = fm_plan_machine_from_json(val, path, &dyn, err)) != FM_OK) goto done;
         } else if (!strcmp(key, "components")) {
             /* read after the loop: the chain decides which link is the workpiece's */
         } else if (strcmp(key, "units") && strcmp(key, "name") && strcmp(key, "comment")) {
             st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
                              "unknown member \"%s\" (limits, rapid_rate, start, reference_points, tcp, rotary, "
-                             "head, components, units, name, comment)",
+                             "head, components, dynamics, units, name, comment)",
                              key);
             goto done;
         }

@@ -104,6 +104,10 @@ json_t *fm_job_report_json(const fm_job_result *r)
     /* the budget warning (docs/simulate.md): always there, 0 when the
      * cuts are exact to the sweep's tolerance */
     if (out) {
+        /* the controller's time beside the feed-only program_time_s
+         * (docs/plan.md); without dynamics the two are the same */
+        json_object_set_new(out, "cycle_time_s", json_real(r->cycle_time_s));
+        json_object_set_new(out, "cycle_time_planned", json_boolean(r->cycle_time_planned));
         json_object_set_new(out, "voxels_uncertain", json_integer((json_int_t)r->voxels_uncertain));
         json_object_set_new(out, "uncertain_max_mm", json_real(r->uncertain_max_mm));
         json_object_set_new(out, "uncertain_line", r->voxels_uncertain && r->uncertain_line > 0

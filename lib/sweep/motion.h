@@ -63,6 +63,14 @@ typedef struct fm_machine {
     int frame_up;
 } fm_machine;
 
+/* How the controller joins a motion to the next (docs/plan.md, "Path
+ * modes"); the zero value is LinuxCNC's start-up mode, G64 without P. */
+typedef enum fm_path_mode {
+    FM_PATH_BLEND = 0,   /* G64 (Fanuc G64, Haas G187): blend within path_tolerance */
+    FM_PATH_EXACT_PATH,  /* LinuxCNC G61: stop at corners, flow through tangent joints */
+    FM_PATH_EXACT_STOP   /* LinuxCNC G61.1, Fanuc G61 and G09: stop at the end of the motion */
+} fm_path_mode;
+
 /* Positions are millimetres in machine coordinates: the programmed point plus
  * the active G5x and G92 offsets. The tool tip is start/end + tip_offset
  * (tip_offset is zero when the active tool length offset matches the tool).
@@ -104,6 +112,11 @@ typedef struct fm_motion {
     double rotary_start[3], rotary_end[3];
     int tcp;
     double tool_length;    /* gauge line to tip (the tool's G43 length); head axes without TCP */
+    /* Path control in force for this motion (toolpaths/plan). Tolerances in
+     * mm; 0: none given (LinuxCNC: as fast as possible, no merging). */
+    fm_path_mode path_mode;
+    double path_tolerance;   /* G64 P, Haas G187's tolerance */
+    double naive_tolerance;  /* G64 Q: collinear feed lines within it are merged */
 } fm_motion;
 
 /* Receives motions in program order; return non-zero to stop the producer. */

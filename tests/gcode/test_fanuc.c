@@ -1073,6 +1073,32 @@ static void test_comments(void)
     if (strcmp(buf, "1|MAIN\n4|SUB\n5|IN SUB\n4|SUB\n5|IN SUB\n")) fprintf(stderr, "%s", buf);
 }
 
+/* Path control (docs/plan.md, "Fanuc and Haas"): each mode reaches the
+ * motions it governs. G64 cutting mode blends with no tolerance of its own;
+ * G61 stops at every block; G09 stops at its own block only; Haas G187
+ * P1/P2/P3 blend within 0.1 / 0.05 / 0.01 mm and E gives the tolerance. */
+static void test_path_modes(void)
+{
+    fm_error err = {0};
+    CHECK(run("O1\nG21 G90 G17\nG01 X1. F100.\nG61 X2.\nX3.\nG64 X4.\nG09 X5.\nX6.\n"
+              "G187 P1 X7.\nG187 P2 X8.\nG187 P3 X9.\nG187 P1 E0.02 X10.\nG20 G187 E0.001 X1.\nM30\n",
+              &err) == FM_OK);
+    CHECK(ngot == 11);
+    if (ngot < 11) return;
+    CHECK(got[0].path_mode == FM_PATH_BLEND && got[0].path_tolerance == 0);
+    CHECK(got[1].path_mode == FM_PATH_EXACT_STOP);
+    CHECK(got[2].path_mode == FM_PATH_EXACT_STOP);
+    CHECK(got[3].path_mode == FM_PATH_BLEND && got[3].path_tolerance == 0);
+    CHECK(got[4].path_mode == FM_PATH_EXACT_STOP); /* G09: this block */
+    CHECK(got[5].path_mode == FM_PATH_BLEND);      /* and not the next */
+    CHECK(got[6].path_mode == FM_PATH_BLEND);
+    CHECK_NEAR(got[6].path_tolerance, 0.1, 1e-12);
+    CHECK_NEAR(got[7].path_tolerance, 0.05, 1e-12);
+    CHECK_NEAR(got[8].path_tolerance, 0.01, 1e-12);
+    CHECK_NEAR(got[9].path_tolerance, 0.02, 1e-12);
+    CHECK_NEAR(got[10].path_tolerance, 0.0254, 1e-12); /* E in inches */
+}
+
 int main(void)
 {
     test_reading();
@@ -1097,5 +1123,6 @@ int main(void)
     test_mirror();
     test_modal_call();
     test_comments();
+    test_path_modes();
     return test_summary("test_fanuc");
 }

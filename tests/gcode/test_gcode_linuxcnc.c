@@ -394,8 +394,38 @@ static void test_loop_differences(void)
     CHECK_NEAR(got[3].end[1], 1, 0);
 }
 
+/* Path control (docs/plan.md "Path modes"): LinuxCNC starts in G64 with
+ * no tolerance; G61 is exact path, G61.1 exact stop; G64 P sets the
+ * tolerance and Q the naive-CAM tolerance (Q defaults to P), in program
+ * units; a canned cycle runs in exact path and the mode comes back after
+ * it (rs274's convert_cycle). */
+static void test_path_modes(void)
+{
+    fm_error err = {0};
+    CHECK(run("G21 G90 G17\nG1 X1 F100\nG61 X2\nG61.1 X3\nG64 P0.05 X4\nG64 P0.1 Q0.02 X5\n"
+              "G20 G64 P0.001 X0.25\nG21 G64 X6\nG0 Z5\nG81 X7 Z-1 R1\nG80 G0 X8\nM2\n",
+              &err) == FM_OK);
+    CHECK(ngot >= 11);
+    if (ngot < 11) return;
+    CHECK(got[0].path_mode == FM_PATH_BLEND && got[0].path_tolerance == 0 && got[0].naive_tolerance == 0);
+    CHECK(got[1].path_mode == FM_PATH_EXACT_PATH);
+    CHECK(got[2].path_mode == FM_PATH_EXACT_STOP);
+    CHECK(got[3].path_mode == FM_PATH_BLEND);
+    CHECK_NEAR(got[3].path_tolerance, 0.05, 1e-12);
+    CHECK_NEAR(got[3].naive_tolerance, 0.05, 1e-12);
+    CHECK_NEAR(got[4].path_tolerance, 0.1, 1e-12);
+    CHECK_NEAR(got[4].naive_tolerance, 0.02, 1e-12);
+    CHECK_NEAR(got[5].path_tolerance, 0.0254, 1e-12);
+    CHECK(got[6].path_tolerance == 0 && got[6].naive_tolerance == 0);
+    /* G0 Z5, then the cycle's moves in exact path, then G64 again */
+    CHECK(got[7].path_mode == FM_PATH_BLEND);
+    for (int i = 8; i < ngot - 1; i++) CHECK(got[i].path_mode == FM_PATH_EXACT_PATH);
+    CHECK(got[ngot - 1].path_mode == FM_PATH_BLEND);
+}
+
 int main(void)
 {
+    test_path_modes();
     test_comp_errors();
     test_other_errors();
     test_probe();

@@ -503,6 +503,22 @@ fm_status gc_fanuc_exec_block(gc_interp *g, gc_fanuc_block *fb)
     code = gc_block_g(b, GC_GROUP_POLAR, NULL);
     if (code == GC_G16 || code == GC_G15) gc_frame_polar(g, code == GC_G16);
 
+    /* path control (docs/plan.md, "Fanuc and Haas"): G61 exact stop, G64
+     * cutting mode, Haas G187 P1-P3 (E: the tolerance), G09 for this block */
+    code = gc_block_g(b, GC_GROUP_PATH_MODE, NULL);
+    if (code == GC_G61) gc_set_path_mode(g, FM_PATH_EXACT_STOP, 0, 0);
+    else if (code == GC_G64) gc_set_path_mode(g, FM_PATH_BLEND, 0, 0);
+    if (gc_block_g(b, GC_GROUP_LOOKAHEAD, NULL) == GC_G187) {
+        /* Haas: P1 rough, P2 medium, P3 finish; E the corner tolerance,
+         * else setting 85's 0.05 mm scaled by the smoothness asked for */
+        static const double haas_tolerance_mm[4] = {0.05, 0.1, 0.05, 0.01};
+        int level = b->has[L('p')] ? (int)b->v[L('p')] : 0;
+        if (level < 0 || level > 3) level = 0;
+        double tol = b->has[L('e')] ? b->v[L('e')] * g->unit : haas_tolerance_mm[level];
+        gc_set_path_mode(g, FM_PATH_BLEND, tol, 0);
+    }
+    g->exact_stop_block = gc_block_g(b, GC_GROUP_NON_MODAL, NULL) == GC_G9;
+
     /* dwell */
     int nonmodal = gc_block_g(b, GC_GROUP_NON_MODAL, &col);
     int nonmodal_col = col;

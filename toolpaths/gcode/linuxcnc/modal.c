@@ -132,10 +132,18 @@ fm_status gc_exec_block(gc_interp *g, gc_block *b)
         return st;
     if (tool_length != GC_G_NONE && (st = gc_exec_tool_length(g, b, tool_length, col)))
         return st;
-    /* 13-16: coordinate system, path mode (ignored), distance modes, retract */
+    /* 13-16: coordinate system, path mode, distance modes, retract */
     code = gc_block_g(b, GC_GROUP_COORD_SYSTEM, &col);
     if (code != GC_G_NONE && (st = comp_refuses(g, col, "a coordinate system change"))) return st;
     if (code != GC_G_NONE) gc_set_g5x(g, code <= GC_G59 ? (code - GC_G54) / 10 + 1 : 6 + code - GC_G59);
+    code = gc_block_g(b, GC_GROUP_PATH_MODE, NULL);
+    if (code == GC_G61) gc_set_path_mode(g, FM_PATH_EXACT_PATH, 0, 0);
+    else if (code == GC_G61_1) gc_set_path_mode(g, FM_PATH_EXACT_STOP, 0, 0);
+    else if (code == GC_G64) {
+        /* G64 P- Q-: Q defaults to P (rs274's convert_control_mode) */
+        double p = HAS(b, 'p') ? VAL(b, 'p') * g->unit : 0;
+        gc_set_path_mode(g, FM_PATH_BLEND, p, HAS(b, 'q') ? VAL(b, 'q') * g->unit : p);
+    }
     code = gc_block_g(b, GC_GROUP_DISTANCE, NULL);
     if (code == GC_G90) g->absolute = 1;
     else if (code == GC_G91) g->absolute = 0;

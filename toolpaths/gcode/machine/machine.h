@@ -321,6 +321,12 @@ typedef struct gc_interp {
     int tool, selected_tool;
     gc_gcode motion;    /* the active motion mode; GC_G80 = none */
     int retract_r;      /* G99 */
+    /* path control (docs/plan.md "Path modes"): the mode and tolerances in
+     * mm every motion carries; exact_stop_block makes this block's motions
+     * stop (Fanuc G09) */
+    fm_path_mode path_mode;
+    double path_tolerance, naive_tolerance;
+    int exact_stop_block;
     double cycle_r, cycle_cc, cycle_p, cycle_q, cycle_i, cycle_j, cycle_k, cycle_il;
     int cycle_il_flag;
     double rotation;    /* degrees: the active coordinate system's XY rotation (G10 L2 R) */
@@ -607,6 +613,8 @@ fm_status gc_arc_center(gc_interp *g, int iso, int code, const gc_arc_words *w,
                         const double start[3], const double end[3], double cab[2], int *no_arc,
                         int col);
 fm_status gc_exec_cycle(gc_interp *g, const gc_block *b, int code, int col);
+/* The path control mode from here on (tolerances in mm, 0: none). */
+void gc_set_path_mode(gc_interp *g, fm_path_mode mode, double tolerance_mm, double naive_mm);
 
 /* ---- offsets and coordinate systems (offsets.c) ---- */
 

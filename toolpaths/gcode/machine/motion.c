@@ -58,6 +58,9 @@ fm_status gc_emit_motion(gc_interp *g, fm_motion *m, double seconds)
     m->spindle_dir = g->spindle_dir;
     m->coolant = g->coolant;
     m->tool = g->tool;
+    m->path_mode = g->exact_stop_block ? FM_PATH_EXACT_STOP : g->path_mode;
+    m->path_tolerance = g->path_tolerance;
+    m->naive_tolerance = g->naive_tolerance;
     m->t0 = g->t;
     m->t1 = g->t + seconds;
     g->t = m->t1;
@@ -511,7 +514,28 @@ static fm_status cyc_move(gc_interp *g, const gc_cyc *k, int rapid, double aa, d
     return gc_move_line(g, rapid, to);
 }
 
+void gc_set_path_mode(gc_interp *g, fm_path_mode mode, double tolerance_mm, double naive_mm)
+{
+    g->path_mode = mode;
+    g->path_tolerance = tolerance_mm > 0 ? tolerance_mm : 0;
+    g->naive_tolerance = naive_mm > 0 ? naive_mm : 0;
+}
+
+/* rs274 runs a canned cycle in exact path mode (G61) and restores the mode
+ * after it (convert_cycle): the cycle's corners are stops. */
+static fm_status exec_cycle_moves(gc_interp *g, const gc_block *b, int code, int col);
+
 fm_status gc_exec_cycle(gc_interp *g, const gc_block *b, int code, int col)
+{
+    fm_path_mode mode = g->path_mode;
+    double tol = g->path_tolerance, naive = g->naive_tolerance;
+    if (mode != FM_PATH_EXACT_PATH) gc_set_path_mode(g, FM_PATH_EXACT_PATH, 0, 0);
+    fm_status st = exec_cycle_moves(g, b, code, col);
+    gc_set_path_mode(g, mode, tol, naive);
+    return st;
+}
+
+static fm_status exec_cycle_moves(gc_interp *g, const gc_block *b, int code, int col)
 {
     char name[32];
     gc_g_name(code, name, sizeof name);
