@@ -158,6 +158,7 @@ const S = {
   historyNote: '',      // why the stock of an earlier time cannot be shown
   events: null,         // EventSource
   toolpath: null,       // {motions, points, program, ...}
+  toolNames: {},        // tool number -> its description in the job's table (status "tools")
   programLines: [],
   line: 0,
   findings: [],
@@ -613,7 +614,8 @@ $('color-mode').addEventListener('change', (e) => { S.colorMode = e.target.value
 
 // ---------------------------------------------------------------- status --
 
-// The legend's swatches: the stock's colour for each tool of the job.
+// The legend's swatches: the stock's colour for each tool of the job, each
+// named (its title) as the job's tool table or library describes it.
 function showToolKeys(list) {
   const box = $('tool-keys');
   box.replaceChildren(...list.map(({ tool, color }) => {
@@ -621,8 +623,16 @@ function showToolKeys(list) {
     k.className = 'tool-key';
     k.style.setProperty('--swatch', color);
     k.textContent = `T${tool}`;
+    if (S.toolNames[tool]) k.title = S.toolNames[tool];
     return k;
   }));
+}
+
+// The tool in the readout: its number and, when the table names it, its
+// description ("T1 6 mm flat end mill, 2 flutes").
+function toolLabel(tool) {
+  const name = S.toolNames[tool];
+  return name ? `T${tool} ${name}` : `T${tool}`;
 }
 
 function showStatus(st) {
@@ -636,6 +646,8 @@ function showStatus(st) {
   $('job-percent').textContent = `${Math.round(p * 100)}%`;
   $('removed').textContent = j.removed_volume_mm3 != null ? `${fmt(j.removed_volume_mm3, 1)} mm³` : '-';
   $('stock').textContent = j.stock_volume_mm3 != null ? `${fmt(j.stock_volume_mm3, 1)} mm³` : '-';
+  if (Array.isArray(st.tools))
+    S.toolNames = Object.fromEntries(st.tools.map(({ tool, description }) => [tool, description]));
   if (Array.isArray(st.tool_colors)) showToolKeys(st.tool_colors);
   const err = $('error');
   if (j.error) {
@@ -664,7 +676,7 @@ function showPosition(pos, tool) {
   $('pos-x').textContent = fmt(pos[0]);
   $('pos-y').textContent = fmt(pos[1]);
   $('pos-z').textContent = fmt(pos[2]);
-  if (tool != null) $('tool').textContent = tool;
+  if (tool != null) $('tool').textContent = toolLabel(tool);
   marker.position.set(...pos).applyMatrix4(workpiece.matrix);
   marker.visible = true;
   invalidate();
@@ -748,7 +760,7 @@ function closeJob() {
     job: null, jobState: null, version: 0, syncing: false, syncAgain: false, synced: false,
     shownAt: null, historyNote: '',
     toolpath: null, programLines: [], line: 0, live: true, playing: false, replayT: 0, totalT: 0,
-    framed: false,
+    framed: false, toolNames: {},
   });
 }
 

@@ -57,6 +57,18 @@ static json_t *tool_colors_json(const job *j)
     return out;
 }
 
+/* Each tool of the job's table with its description as the table or the
+ * library names it: [{"tool": N, "description": "..."}] ("" when none). */
+static json_t *tools_json(const job *j)
+{
+    json_t *out = json_array();
+    const fm_tool_table *tools = &j->doc->tools;
+    for (size_t i = 0; i < tools->count; i++)
+        json_array_append_new(out, json_pack("{s:i, s:s}", "tool", tools->tools[i].number,
+                                             "description", tools->tools[i].comment));
+    return out;
+}
+
 json_t *fm_publish_status_json(job *j)
 {
     pthread_mutex_lock(&j->lock);
@@ -75,6 +87,7 @@ json_t *fm_publish_status_json(job *j)
         "mesh_version", (json_int_t)j->mesh_version, "created", j->created, "name", name);
     if (out) {
         json_object_set_new(out, "tool_colors", tool_colors_json(j));
+        json_object_set_new(out, "tools", tools_json(j));
         /* the viewer asks for GET .../deviation once such a job is done */
         json_object_set_new(out, "design", json_boolean(j->doc->spec.design_path != NULL));
         json_object_set_new(out, "voxels_uncertain", json_integer((json_int_t)v->voxels_uncertain));

@@ -303,6 +303,19 @@ async function main() {
     ok([ui.x, ui.y, ui.z].map(Number).every((v, k) => Math.abs(v - status.position[k]) < 1e-3),
       `position readout ${ui.x} ${ui.y} ${ui.z}`);
 
+    // Tools named as the job's table names them (deploy/demo/tools.json's
+    // comments): in the readout and as each legend swatch's title.
+    const names = Object.fromEntries(job.tools.tools.map((t) => [t.number, t.comment]));
+    const named = await page.evaluate(() => ({
+      readout: document.getElementById('tool').textContent,
+      keys: [...document.querySelectorAll('#tool-keys .tool-key')].map((k) => [k.textContent, k.title]),
+    }));
+    console.log(`tool readout "${named.readout}"; legend titles ${JSON.stringify(named.keys)}`);
+    ok(named.readout === `T${status.tool} ${names[status.tool]}`,
+      `the readout names the tool as its table does (${named.readout})`);
+    ok(named.keys.length === 3 && named.keys.every(([t, title]) => title === names[Number(t.slice(1))]),
+      'each legend swatch is titled with its tool\'s description');
+
     // The picture is not blank.
     // The canvas alone: the legend floating over it is hidden meanwhile.
     await page.evaluate(() => { document.getElementById('legend').style.visibility = 'hidden'; window.frepmillViewer.render(); });
