@@ -1,6 +1,8 @@
 /* core.h: what every frepmill module shares: status codes, the error record
- * that carries a person-readable message and a source position, and checked
- * size arithmetic for budgets. Nothing here allocates or prints. */
+ * that carries a person-readable message and a source position, checked
+ * size arithmetic for budgets, pi, the clocks, reading a whole file within
+ * a byte budget and writing one durably. Nothing here prints; only the file
+ * reader allocates (the buffer it returns). */
 #ifndef FM_CORE_H
 #define FM_CORE_H
 
@@ -61,5 +63,59 @@ const char *fm_error_format(const fm_error *err, char *buf, size_t size);
  * *out unchanged on overflow. */
 int fm_size_mul(size_t a, size_t b, size_t *out);
 int fm_size_add(size_t a, size_t b, size_t *out);
+
+/* ------------------------------------------------------------- numbers -- */
+
+#define FM_PI 3.14159265358979323846
+#define FM_DEG (FM_PI / 180.0) /* radians per degree */
+
+/* -------------------------------------------------------------- clocks -- */
+
+/* Seconds on the monotonic clock (never steps back): durations, deadlines. */
+double fm_clock_monotonic_s(void);
+/* Seconds since the Unix epoch (the real-time clock): timestamps. */
+double fm_clock_wall_s(void);
+/* CPU seconds of the process (user + system, every thread). */
+double fm_clock_cpu_s(void);
+/* The real-time instant seconds from now, for pthread_cond_timedwait. */
+struct timespec;
+void fm_clock_deadline(struct timespec *out, double seconds);
+
+/* --------------------------------------------------------------- files -- */
+
+/* Read the whole regular file at path into a NUL-terminated malloc'd buffer
+ * (*data; *size counts the bytes without the NUL; free(*data)). A file of
+ * more than max_bytes is refused (FM_ERR_LIMIT) before any memory is taken,
+ * and so is one that grows past it while being read. A folder, FIFO, socket
+ * or device is refused (FM_ERR_IO) without reading or blocking. what names
+ * the file in messages ("STL", "snapshot"; NULL for none); each message
+ * holds the path. On failure *data is NULL and *size 0. */
+fm_status fm_file_read(const char *path, const char *what, size_t max_bytes, char **data,
+                       size_t *size, fm_error *err);
+
+/* Writes a durable file's bytes to fd: 0, or an errno value on failure. */
+typedef int (*fm_file_writer)(int fd, void *ctx);
+
+/* Replace path whole and durably: the bytes go to a temporary file in the
+ * same folder (".<name>.fmtmp.<pid>.<n>", created exclusively), which is
+ * fsynced, renamed over path, and the folder is fsynced. A crash at any
+ * point leaves either the old file or the new one (and perhaps a temporary,
+ * see fm_file_remove_stale_temporaries); a failure returns FM_ERR_IO and
+ * removes the temporary. what names the file in messages ("<what> not
+ * saved: ..."; NULL: the path). */
+fm_status fm_file_write_durable(const char *path, const char *what, const void *data,
+                                size_t size, fm_error *err);
+/* The same with the bytes from writer(fd, ctx). previous, when not NULL, is
+ * where the file being replaced is kept: it is hard-linked there (or, where
+ * the file system has no hard links, renamed) before the new file takes its
+ * name, so that path never disappears. */
+fm_status fm_file_write_durable_with(const char *path, const char *what, fm_file_writer writer,
+                                     void *ctx, const char *previous, fm_error *err);
+/* fsync a folder, so that a rename or a new entry in it survives a power
+ * cut. */
+fm_status fm_file_sync_dir(const char *path, fm_error *err);
+/* Remove the temporary files in dir that durable writers left when their
+ * process died (those of living processes stay); *removed counts them. */
+fm_status fm_file_remove_stale_temporaries(const char *dir, size_t *removed, fm_error *err);
 
 #endif
