@@ -7,8 +7,6 @@
 #include <math.h>
 #include <string.h>
 
-#define CHECK_PI 3.14159265358979323846
-
 /* Swept angle of an arc in radians (positive), its radius at the start,
  * its start angle and direction (lib/sweep's reading of the arc). */
 double check_arc_angle(const fm_motion *m, double *radius, double *a0, int *ccw)
@@ -46,7 +44,7 @@ double check_descent_deg(const fm_motion *m)
         }
         lateral = sqrt(l2);
     }
-    return atan2(down, lateral) * 180.0 / CHECK_PI;
+    return atan2(down, lateral) * 180.0 / FM_PI;
 }
 
 void check_motion_point_bounds(const fm_motion *m, double lo[3], double hi[3])
@@ -61,8 +59,8 @@ void check_motion_point_bounds(const fm_motion *m, double lo[3], double hi[3])
         double ang = check_arc_angle(m, &r, &a0, &ccw);
         int p = m->plane_axis, u = (p + 1) % 3, v = (p + 2) % 3;
         /* the circle's extreme points that the arc passes */
-        for (int k = -8; k <= 8 + 4 * (int)(ang / (2 * CHECK_PI)); k++) {
-            double q = k * 0.5 * CHECK_PI;
+        for (int k = -8; k <= 8 + 4 * (int)(ang / (2 * FM_PI)); k++) {
+            double q = k * 0.5 * FM_PI;
             double rel = ccw ? q - a0 : a0 - q;
             if (rel < 0 || rel > ang) continue;
             double pu = m->center[u] + r * cos(q), pv = m->center[v] + r * sin(q);
@@ -144,7 +142,7 @@ void check_motion_prefix(const fm_motion *m, double u, fm_motion *out)
          * hair of a whole turn is moved a hair on, so that the count is
          * never read a turn short; a slightly longer prefix only makes the
          * flutes' sweep larger, which never adds a contact. */
-        double two_pi = 2 * CHECK_PI;
+        double two_pi = 2 * FM_PI;
         double whole = floor(part / two_pi);
         if (part - whole * two_pi < 1e-7) part = whole * two_pi + 1e-7;
         if (part > ang) part = ang;

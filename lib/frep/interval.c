@@ -161,7 +161,6 @@ static int contains_periodic(double lo, double hi, double offset, double period)
 }
 
 static const double TWO_PI = 6.283185307179586;
-static const double PI = 3.141592653589793;
 
 static ival sin_cos(ival a, int is_cos)
 {
@@ -175,7 +174,7 @@ static ival sin_cos(ival a, int is_cos)
     double lo = fl < fh ? fl : fh, hi = fl < fh ? fh : fl;
     lo = dn2(lo);
     hi = up2(hi);
-    double max_at = is_cos ? 0.0 : PI / 2, min_at = is_cos ? PI : -PI / 2;
+    double max_at = is_cos ? 0.0 : FM_PI / 2, min_at = is_cos ? FM_PI : -FM_PI / 2;
     if (contains_periodic(a.lo, a.hi, max_at, TWO_PI)) hi = 1.0;
     if (contains_periodic(a.lo, a.hi, min_at, TWO_PI)) lo = -1.0;
     return mk(clampd(lo, -1, 1), clampd(hi, -1, 1), a.nan);
@@ -241,8 +240,8 @@ static ival ival_unary(fm_op op, ival a)
     case FM_OP_COS: return sin_cos(a, 1);
     case FM_OP_TAN: {
         if (!isfinite(a.lo) || !isfinite(a.hi)) return mk(-INFINITY, INFINITY, 1);
-        if (a.hi - a.lo >= PI || fabs(a.lo) > 1e8 || fabs(a.hi) > 1e8 ||
-            contains_periodic(a.lo, a.hi, PI / 2, PI))
+        if (a.hi - a.lo >= FM_PI || fabs(a.lo) > 1e8 || fabs(a.hi) > 1e8 ||
+            contains_periodic(a.lo, a.hi, FM_PI / 2, FM_PI))
             return mk(-INFINITY, INFINITY, a.nan);
         return mk(dn2(tan(a.lo)), up2(tan(a.hi)), a.nan);
     }
@@ -370,7 +369,7 @@ static ival ival_atan2(ival a, ival b)
     int nan = a.nan || b.nan;
     /* Around the origin or across the branch cut (x < 0, y through 0,
      * where +0 and -0 give +pi and -pi): the whole range. */
-    if ((a.lo <= 0 && a.hi >= 0) && b.lo <= 0) return mk(-up2(PI), up2(PI), nan);
+    if ((a.lo <= 0 && a.hi >= 0) && b.lo <= 0) return mk(-up2(FM_PI), up2(FM_PI), nan);
     double c[4] = {atan2(a.lo, b.lo), atan2(a.lo, b.hi), atan2(a.hi, b.lo), atan2(a.hi, b.hi)};
     double lo = INFINITY, hi = -INFINITY;
     for (int i = 0; i < 4; i++) {

@@ -210,7 +210,7 @@ static double sphere_search(point_fn f, void *ctx, const double p[4], double d, 
     for (int start = 0; start < 2; start++) {
         double u[3], v = vals[start];
         memcpy(u, dirs[start], sizeof u);
-        double h = 2.0 * sqrt(4.0 * 3.141592653589793 / samples);
+        double h = 2.0 * sqrt(4.0 * FM_PI / samples);
         while (h > 1e-9) {
             double e1[3], e2[3];
             tangent_basis(u, e1, e2);

@@ -197,7 +197,7 @@ fm_stock *fm_stock_new_cylinder(double x, double y, double z0, double z1, double
     const double lo[3] = {x - r, y - r, z0}, hi[3] = {x + r, y + r, z1};
     /* caps 2 pi r^2; the side projects to 4 r (z1 - z0) on each of the
      * XZ and YZ planes */
-    const double area = 2 * 3.14159265358979323846 * r * r + 8 * r * (z1 - z0);
+    const double area = 2 * FM_PI * r * r + 8 * r * (z1 - z0);
     return new_from_shape(&c, lo, hi, area, "the cylinder stock", opt, err);
 }
 

@@ -9,8 +9,6 @@
 #include <math.h>
 #include <string.h>
 
-#define PI 3.14159265358979323846
-
 static int finite3(const double v[3]) { return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]); }
 
 int fm_motion_arc_of(const fm_motion *m, fm_motion_arc *a)
@@ -42,10 +40,10 @@ int fm_motion_arc_of(const fm_motion *m, fm_motion_arc *a)
     a->th0 = atan2(sj, si);
     double th1 = atan2(ej, ei);
     double delta = m->turns > 0 ? th1 - a->th0 : a->th0 - th1;
-    delta = fmod(delta, 2 * PI);
-    if (delta < 0) delta += 2 * PI;
-    if (delta < 1e-12) delta = 2 * PI; /* same start and end angle: a full circle */
-    delta += 2 * PI * (fabs((double)m->turns) - 1);
+    delta = fmod(delta, 2 * FM_PI);
+    if (delta < 0) delta += 2 * FM_PI;
+    if (delta < 1e-12) delta = 2 * FM_PI; /* same start and end angle: a full circle */
+    delta += 2 * FM_PI * (fabs((double)m->turns) - 1);
     a->dth = m->turns > 0 ? delta : -delta;
     return 1;
 }
@@ -82,12 +80,12 @@ void fm_arc_box(const fm_motion_arc *a, double ua, double ub, double lo[3], doub
     if (fabs(a->dr) <= 1e-12 * (1 + a->r0)) {
         double t0 = a->th0 + ua * a->dth, t1 = a->th0 + ub * a->dth;
         double tl = fmin(t0, t1), th = fmax(t0, t1);
-        if (th - tl >= 2 * PI) {
+        if (th - tl >= 2 * FM_PI) {
             tl = 0;
-            th = 2 * PI;
+            th = 2 * FM_PI;
         }
-        for (double q = ceil(tl / (PI / 2)); q <= floor(th / (PI / 2)); q++) {
-            double ci = a->center[ai] + rmax * cos(q * PI / 2), cj = a->center[aj] + rmax * sin(q * PI / 2);
+        for (double q = ceil(tl / (FM_PI / 2)); q <= floor(th / (FM_PI / 2)); q++) {
+            double ci = a->center[ai] + rmax * cos(q * FM_PI / 2), cj = a->center[aj] + rmax * sin(q * FM_PI / 2);
             lo[ai] = fmin(lo[ai], ci), hi[ai] = fmax(hi[ai], ci);
             lo[aj] = fmin(lo[aj], cj), hi[aj] = fmax(hi[aj], cj);
         }
@@ -237,7 +235,7 @@ void fm_motion_pose_bounds(const fm_motion *m, double ua, double ub, double clo[
 int fm_motion_pieces(const fm_motion *m, double max_angle, int param_pieces, int max_pieces)
 {
     if (max_pieces < 1) max_pieces = 1;
-    if (!(max_angle > 0)) max_angle = PI / 36;
+    if (!(max_angle > 0)) max_angle = FM_PI / 36;
     double n = 1;
     if (m->kind == FM_MOTION_PARAM) n = param_pieces;
     fm_motion_arc a;
@@ -245,7 +243,7 @@ int fm_motion_pieces(const fm_motion *m, double max_angle, int param_pieces, int
     if (fm_motion_has_rotary(m))
         for (int i = 0; i < m->machine->rotary_count; i++) {
             int l = m->machine->rotary[i].letter;
-            double d = fabs(m->rotary_end[l] - m->rotary_start[l]) * PI / 180;
+            double d = fabs(m->rotary_end[l] - m->rotary_start[l]) * FM_PI / 180;
             if (isfinite(d)) n = fmax(n, ceil(d / max_angle));
         }
     if (!(n >= 1)) n = 1;

@@ -15,9 +15,6 @@
 #include <math.h>
 #include <string.h>
 
-#define PI 3.14159265358979323846
-#define DEG (PI / 180.0)
-
 static double dot3(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 static double norm3(const double a[3]) { return sqrt(dot3(a, a)); }
 static void cross3(const double a[3], const double b[3], double out[3])
@@ -112,7 +109,7 @@ void fm_machine_table_transform(const fm_machine *mc, const double rotary[3], in
     for (int j = n - 1; j >= 0; j--) {
         const fm_rotary_axis *ax = &mc->rotary[idx[j]];
         double R[9], r2[9], t2[3], Rb[3];
-        rotation(ax->around, rotary[ax->letter] * DEG, R);
+        rotation(ax->around, rotary[ax->letter] * FM_DEG, R);
         for (int r = 0; r < 3; r++)
             for (int c = 0; c < 3; c++) r2[3 * r + c] = R[3 * r] * rot[c] + R[3 * r + 1] * rot[3 + c] + R[3 * r + 2] * rot[6 + c];
         mat_vec(R, trans, t2);
@@ -188,8 +185,8 @@ int fm_kin_init(fm_kin *k, const fm_motion *m, fm_error *err)
             for (int j = 0; j < 3; j++) s->b[j] = m->tip_offset[j] + ax->through[j];
             s->b[2] += m->tool_length + ax->pivot_length;
         }
-        s->th0 = m->rotary_start[ax->letter] * DEG;
-        s->dth = (m->rotary_end[ax->letter] - m->rotary_start[ax->letter]) * DEG;
+        s->th0 = m->rotary_start[ax->letter] * FM_DEG;
+        s->dth = (m->rotary_end[ax->letter] - m->rotary_start[ax->letter]) * FM_DEG;
     }
     if (!k->tcp) k->translate = k->nsteps;
     /* Table axes inverted, the base axis first. */
@@ -201,8 +198,8 @@ int fm_kin_init(fm_kin *k, const fm_motion *m, fm_error *err)
         memcpy(s->omega, ax->around, sizeof s->omega);
         s->point = !k->tcp;
         if (s->point) memcpy(s->b, ax->through, sizeof s->b);
-        s->th0 = -m->rotary_start[ax->letter] * DEG;
-        s->dth = -(m->rotary_end[ax->letter] - m->rotary_start[ax->letter]) * DEG;
+        s->th0 = -m->rotary_start[ax->letter] * FM_DEG;
+        s->dth = -(m->rotary_end[ax->letter] - m->rotary_start[ax->letter]) * FM_DEG;
     }
     if (k->tcp) {
         k->translate = k->nsteps;
@@ -215,8 +212,8 @@ int fm_kin_init(fm_kin *k, const fm_motion *m, fm_error *err)
             memcpy(s->omega, ax->around, sizeof s->omega);
             memcpy(s->b, ax->through, sizeof s->b);
             s->point = 1;
-            s->th0 = m->rotary_start[ax->letter] * DEG;
-            s->dth = (m->rotary_end[ax->letter] - m->rotary_start[ax->letter]) * DEG;
+            s->th0 = m->rotary_start[ax->letter] * FM_DEG;
+            s->dth = (m->rotary_end[ax->letter] - m->rotary_start[ax->letter]) * FM_DEG;
         }
     }
 
@@ -366,7 +363,7 @@ static double rotate_box(const kin_step *s, double th, double delta, int point, 
     double along = dot3(q, s->omega), perp[3];
     for (int j = 0; j < 3; j++) perp[j] = q[j] - along * s->omega[j];
     double dist = norm3(perp) + norm3(x->h);
-    double chord = 2 * sin(0.5 * fmin(delta, PI)) * dist;
+    double chord = 2 * sin(0.5 * fmin(delta, FM_PI)) * dist;
     double qm[3], h2[3];
     mat_vec(R, q, qm);
     for (int r = 0; r < 3; r++) {

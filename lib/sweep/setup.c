@@ -9,8 +9,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define PI 3.14159265358979323846
-
 static double dot3(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 static double norm3(const double a[3]) { return sqrt(dot3(a, a)); }
 
@@ -78,7 +76,7 @@ static void compute_bounds(fm_sweep *s)
             }
         }
         for (int q = -8; q <= 8; q++) {
-            double th = q * PI / 2;
+            double th = q * FM_PI / 2;
             double off = s->dth > 0 ? th - s->th0 : s->th0 - th;
             if (off < 0 || off > fabs(s->dth)) continue;
             double ci = s->ctr[s->ai] + rmax * cos(th), cj = s->ctr[s->aj] + rmax * sin(th);
@@ -171,7 +169,7 @@ fm_status fm_sweep_new(const fm_motion *m, const fm_tool_part *part, const fm_sw
         s->axis_const = 0;
         s->lipschitz = s->kin.speed;
         s->turn_rate = s->kin.turn;
-        s->pieces = (int)ceil(s->kin.turn / (PI / 2));
+        s->pieces = (int)ceil(s->kin.turn / (FM_PI / 2));
         if (s->pieces < 2) s->pieces = 2;
         if (s->pieces > 64) s->pieces = 64;
         fm_kin_pose(&s->kin, 0, s->c0, s->a0, NULL, NULL);
@@ -238,12 +236,12 @@ fm_status fm_sweep_new(const fm_motion *m, const fm_tool_part *part, const fm_sw
         s->th0 = arc.th0;
         s->dth = arc.dth;
         s->dh = arc.dh;
-        s->full_turn = fabs(s->dth) >= 2 * PI - 1e-12;
+        s->full_turn = fabs(s->dth) >= 2 * FM_PI - 1e-12;
         double rmax = fmax(s->r0, r1);
         s->speed = sqrt(rmax * s->dth * rmax * s->dth + s->dh * s->dh) + fabs(s->drr);
         s->lipschitz = s->speed;
         s->accel = rmax * s->dth * s->dth + 2 * fabs(s->drr * s->dth);
-        s->pieces = (int)ceil(fabs(s->dth) / (PI / 2));
+        s->pieces = (int)ceil(fabs(s->dth) / (FM_PI / 2));
         if (s->pieces < 1) s->pieces = 1;
         if (s->pieces > 64) s->pieces = 64;
         break;

@@ -11,8 +11,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define PI 3.14159265358979323846
-
 static double dot3(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 static double norm3(const double a[3]) { return sqrt(dot3(a, a)); }
 
@@ -143,13 +141,13 @@ static double planar_arc(const fm_sweep *s, void *pw, const double p[3], double 
     double rho;
     if (s->full_turn || rc == 0) {
         rho = fabs(rc - rr);
-        *u_at = rc == 0 ? 0 : fmod(atan2(uj, ui) - s->th0 + 4 * PI, 2 * PI) / fabs(s->dth);
+        *u_at = rc == 0 ? 0 : fmod(atan2(uj, ui) - s->th0 + 4 * FM_PI, 2 * FM_PI) / fabs(s->dth);
         if (*u_at > 1) *u_at = 1;
     } else {
         double phi = atan2(uj, ui);
         double off = s->dth > 0 ? phi - s->th0 : s->th0 - phi;
-        off = fmod(off, 2 * PI);
-        if (off < 0) off += 2 * PI;
+        off = fmod(off, 2 * FM_PI);
+        if (off < 0) off += 2 * FM_PI;
         if (off <= fabs(s->dth)) {
             rho = fabs(rc - rr);
             *u_at = off / fabs(s->dth);

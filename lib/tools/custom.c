@@ -42,8 +42,6 @@
 #define MAX_LEVELS 24
 #define FAR_MM 2.0        /* model values beyond +-2 mm may be bounds (coarse voxels are <= 1 mm) */
 
-#define PI 3.14159265358979323846
-
 typedef struct revolved_table {
     int nr, nz;            /* cells along r and z */
     double R, L, hr, hz;   /* bound and cell sizes */
@@ -207,7 +205,7 @@ static double revolved_value(fm_evaluator *ev, double r, double z)
         return fm_eval_point(ev, p);
     }
     double xs[SAMPLES], ys[SAMPLES], zs[SAMPLES], out[SAMPLES];
-    const double step = 2 * PI / SAMPLES;
+    const double step = 2 * FM_PI / SAMPLES;
     for (int m = 0; m < SAMPLES; m++) {
         xs[m] = r * cos(m * step);
         ys[m] = r * sin(m * step);
@@ -289,7 +287,7 @@ static fm_status table_build(const fm_tape *tape, double R, double L, revolved_t
             double best_lo = -DBL_MAX, worst_hi = -DBL_MAX;
             for (int s = 0; s < SECTORS; s++) {
                 fm_interval box[4];
-                sector_box(r0, r1, 2 * PI * s / SECTORS, 2 * PI * (s + 1) / SECTORS, z0, z1, box);
+                sector_box(r0, r1, 2 * FM_PI * s / SECTORS, 2 * FM_PI * (s + 1) / SECTORS, z0, z1, box);
                 fm_interval v = fm_eval_interval(ev, box);
                 if (v.lo > best_lo) best_lo = v.lo;
                 if (v.hi > worst_hi) worst_hi = v.hi;

@@ -7,8 +7,6 @@
 #include <math.h>
 #include <string.h>
 
-#define DEG (3.14159265358979323846 / 180.0)
-
 typedef struct chain {
     fm_profile_elem e[FM_PROFILE_MAX];
     size_t n;
@@ -106,7 +104,7 @@ static double lollipop_neck_z(const fm_tool_spec *s)
 
 static double dovetail_head_h(const fm_tool_spec *s)
 {
-    return (s->diameter / 2 - s->neck_diameter / 2) / tan(s->angle * DEG);
+    return (s->diameter / 2 - s->neck_diameter / 2) / tan(s->angle * FM_DEG);
 }
 
 #define BAD(...) fm_error_set(err, FM_ERR_INPUT, __VA_ARGS__)
@@ -184,7 +182,7 @@ fm_status fm_tool_validate(const fm_tool_spec *s, fm_error *err)
         if (s->tip_radius > 0 && s->diameter != 0 && fabs(s->diameter - 2 * s->tip_radius) > 1e-6)
             return BAD("tool %d (tapered): with a ball tip the diameter (%g) is the tip's, twice tip_radius "
                        "(%g); give one of them or make them agree", T, s->diameter, s->tip_radius);
-        if (s->tip_radius > 0 && s->flute_length <= s->tip_radius * (1 - sin(s->taper_angle * DEG)))
+        if (s->tip_radius > 0 && s->flute_length <= s->tip_radius * (1 - sin(s->taper_angle * FM_DEG)))
             return BAD("tool %d (tapered): flute_length %g ends inside the ball tip", T, s->flute_length);
         break;
     case FM_TOOL_DOVETAIL:
@@ -232,7 +230,7 @@ static fm_status build_flutes(const fm_tool_spec *s, fm_tool_part *part, fm_erro
         break;
     }
     case FM_TOOL_VBIT: {
-        double rt = s->tip_diameter / 2, h = (R - rt) / tan(s->angle / 2 * DEG);
+        double rt = s->tip_diameter / 2, h = (R - rt) / tan(s->angle / 2 * FM_DEG);
         chain_line(&c, rt, 0);
         if (F < h) { /* the flutes end on the cone */
             chain_line(&c, rt + (R - rt) * F / h, F);
@@ -243,7 +241,7 @@ static fm_status build_flutes(const fm_tool_spec *s, fm_tool_part *part, fm_erro
         break;
     }
     case FM_TOOL_DRILL: {
-        double h = R / tan(s->point_angle / 2 * DEG);
+        double h = R / tan(s->point_angle / 2 * FM_DEG);
         if (F < h) {
             chain_line(&c, R * F / h, F);
         } else {
@@ -253,7 +251,7 @@ static fm_status build_flutes(const fm_tool_spec *s, fm_tool_part *part, fm_erro
         break;
     }
     case FM_TOOL_TAPERED: {
-        double a = s->taper_angle * DEG, rt = s->tip_radius;
+        double a = s->taper_angle * FM_DEG, rt = s->tip_radius;
         if (rt > 0) {
             /* Ball tip centred at (0, rt); the flank is tangent to it. */
             double tr = rt * cos(a), tz = rt * (1 - sin(a));
