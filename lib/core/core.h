@@ -93,6 +93,10 @@ void fm_clock_deadline(struct timespec *out, double seconds);
 fm_status fm_file_read(const char *path, const char *what, size_t max_bytes, char **data,
                        size_t *size, fm_error *err);
 
+/* Write all size bytes to fd (again after a short write or EINTR): 0, or
+ * an errno value. */
+int fm_file_write_all(int fd, const void *data, size_t size);
+
 /* Writes a durable file's bytes to fd: 0, or an errno value on failure. */
 typedef int (*fm_file_writer)(int fd, void *ctx);
 

@@ -122,22 +122,26 @@ typedef struct bytes {
     size_t n;
 } bytes;
 
-static int write_bytes(int fd, void *ctx)
+int fm_file_write_all(int fd, const void *data, size_t size)
 {
-    const bytes *b = ctx;
-    const unsigned char *p = b->p;
-    size_t n = b->n;
-    while (n > 0) {
+    const unsigned char *p = data;
+    while (size > 0) {
         /* at most 1 GiB a call: Linux writes no more than about 2 GiB */
-        ssize_t w = write(fd, p, n > ((size_t)1 << 30) ? ((size_t)1 << 30) : n);
+        ssize_t w = write(fd, p, size > ((size_t)1 << 30) ? ((size_t)1 << 30) : size);
         if (w < 0) {
             if (errno == EINTR) continue;
             return errno ? errno : EIO;
         }
         p += w;
-        n -= (size_t)w;
+        size -= (size_t)w;
     }
     return 0;
+}
+
+static int write_bytes(int fd, void *ctx)
+{
+    const bytes *b = ctx;
+    return fm_file_write_all(fd, b->p, b->n);
 }
 
 fm_status fm_file_write_durable(const char *path, const char *what, const void *data,

@@ -8,7 +8,6 @@
  * node budgets, and every error carries file:line:column. */
 #include "hf/hf_internal.h"
 
-#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -1112,34 +1111,14 @@ fm_status fm_hf_compile_file(fm_graph *g, const char *path, const char *model_na
     if (!err) err = &local;
     if (out) memset(out, 0, sizeof *out);
     if (!path) return fm_error_set(err, FM_ERR_INTERNAL, "fm_hf_compile_file: no path");
-    FILE *f = fopen(path, "rb");
-    if (!f) return fm_error_at(err, FM_ERR_IO, path, 0, 0, "cannot open: %s", strerror(errno));
-    size_t cap = 1 << 16, len = 0;
-    char *buf = malloc(cap);
-    fm_status st = FM_OK;
-    while (buf) {
-        if (len == cap) {
-            if (cap > FM_HF_MAX_SOURCE) {
-                st = fm_error_at(err, FM_ERR_LIMIT, path, 0, 0,
-                                 "the file is larger than %u bytes (the source budget)",
-                                 (unsigned)FM_HF_MAX_SOURCE);
-                break;
-            }
-            char *nb = realloc(buf, cap * 2);
-            if (!nb) break;
-            buf = nb;
-            cap *= 2;
-        }
-        size_t n = fread(buf + len, 1, cap - len, f);
-        len += n;
-        if (n == 0) {
-            if (ferror(f)) st = fm_error_at(err, FM_ERR_IO, path, 0, 0, "read error");
-            break;
-        }
+    char *buf;
+    size_t len;
+    fm_status st = fm_file_read(path, NULL, FM_HF_MAX_SOURCE, &buf, &len, err);
+    if (st != FM_OK) {
+        snprintf(err->file, sizeof err->file, "%s", path);
+        return st;
     }
-    fclose(f);
-    if (!buf) return fm_error_at(err, FM_ERR_LIMIT, path, 0, 0, "out of memory reading the file");
-    if (st == FM_OK) st = fm_hf_compile_string(g, buf, len, path, model_name, NULL, out, err);
+    st = fm_hf_compile_string(g, buf, len, path, model_name, NULL, out, err);
     free(buf);
     return st;
 }

@@ -1,10 +1,9 @@
 /* mesh_write.c: the plain encoders (binary STL, binary little-endian PLY
  * with normals and colours, OBJ) into memory buffers, and writing any
- * format to a file by extension through a temporary file and a rename. */
-#include "mesh/mesh_internal.h"
+ * format to a file by extension, durably (lib/core's writer). */
+#include "mesh/mesh.h"
 
 #include <ctype.h>
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -200,32 +199,6 @@ fm_mesh_format fm_mesh_format_from_path(const char *path)
     return FM_MESH_FORMAT_UNKNOWN;
 }
 
-fm_status fm_mesh_write_bytes_atomic(const char *path, const uint8_t *data, size_t size, fm_error *err)
-{
-    size_t n = strlen(path);
-    char *tmp = malloc(n + 5);
-    if (!tmp)
-        return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
-    memcpy(tmp, path, n);
-    memcpy(tmp + n, ".tmp", 5);
-    FILE *f = fopen(tmp, "wb");
-    if (!f) {
-        fm_status st = fm_error_set(err, FM_ERR_IO, "cannot write %s: %s", tmp, strerror(errno));
-        free(tmp);
-        return st;
-    }
-    int ok = fwrite(data, 1, size, f) == size;
-    ok = (fclose(f) == 0) && ok;
-    if (!ok || rename(tmp, path) != 0) {
-        fm_status st = fm_error_set(err, FM_ERR_IO, "cannot write %s: %s", path, strerror(errno));
-        remove(tmp);
-        free(tmp);
-        return st;
-    }
-    free(tmp);
-    return FM_OK;
-}
-
 static fm_status write_encoded(const fm_mesh *mesh, const char *path, fm_mesh_format fmt,
                                const fm_mesh_draco_options *draco, fm_error *err)
 {
@@ -251,7 +224,7 @@ static fm_status write_encoded(const fm_mesh *mesh, const char *path, fm_mesh_fo
     }
     if (st != FM_OK)
         return st;
-    st = fm_mesh_write_bytes_atomic(path, data, size, err);
+    st = fm_file_write_durable(path, NULL, data, size, err);
     free(data);
     return st;
 }

@@ -3,7 +3,7 @@
  * shading, per-vertex colours, an optional toolpath overlay (feeds solid,
  * rapids dashed), supersampling anti-aliasing, an optional colour key with
  * a tiny built-in font, and a PNG writer (stb). */
-#include "mesh/mesh_internal.h"
+#include "mesh/mesh.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -432,7 +432,7 @@ fm_status fm_render_png(const fm_mesh *mesh, const fm_render_options *opt_in, co
             sink.failed)
             st = fm_error_set(err, FM_ERR_LIMIT, "PNG encoding failed (out of memory)");
         else
-            st = fm_mesh_write_bytes_atomic(path, sink.data, sink.size, err);
+            st = fm_file_write_durable(path, NULL, sink.data, sink.size, err);
         free(sink.data);
     }
     free(rgb);

@@ -16,24 +16,16 @@
  * folder. */
 #include "stock/stock_impl.h"
 
-#include <dirent.h>
-#include <errno.h>
-#include <fcntl.h>
 #include <math.h>
-#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <sys/types.h>
-#include <unistd.h>
 
 #define SNAP_MAGIC "FMSTOCK\n"
 #define SNAP_VERSION 1u
 #define SNAP_HEADER 32u
 #define SNAP_TRAILER 8u
 #define META_VERSION 2u /* 2 added the tool marks; 1 is still read */
-#define TMP_MARK ".fmtmp."
 
 /* ------------------------------------------------------------ hashing -- */
 
@@ -229,61 +221,32 @@ static fm_status parse_meta(const unsigned char *p, size_t len, meta *m, const c
 
 /* ------------------------------------------------------------- writing -- */
 
-static fm_status write_all(int fd, const unsigned char *p, size_t n, uint64_t *hash)
-{
-    if (hash) *hash = fnv1a(*hash, p, n);
-    while (n > 0) {
-        ssize_t w = write(fd, p, n > ((size_t)1 << 30) ? ((size_t)1 << 30) : n);
-        if (w < 0) {
-            if (errno == EINTR) continue;
-            return FM_ERR_IO;
-        }
-        p += w;
-        n -= (size_t)w;
-    }
-    return FM_OK;
-}
+/* The file's parts in order, then the FNV-1a of all of them. */
+typedef struct snapshot_parts {
+    const unsigned char *p[3];
+    size_t n[3];
+} snapshot_parts;
 
-/* Split path into its folder ("." if none) and base name. */
-static int split_path(const char *path, char *dir, size_t dsize, const char **base)
+static int write_parts(int fd, void *ctx)
 {
-    const char *slash = strrchr(path, '/');
-    if (!slash) {
-        if (dsize < 2) return -1;
-        strcpy(dir, ".");
-        *base = path;
-        return 0;
+    const snapshot_parts *parts = ctx;
+    uint64_t hash = FNV_OFFSET;
+    for (int i = 0; i < 3; i++) {
+        hash = fnv1a(hash, parts->p[i], parts->n[i]);
+        int e = fm_file_write_all(fd, parts->p[i], parts->n[i]);
+        if (e) return e;
     }
-    size_t n = (size_t)(slash - path);
-    if (n == 0) n = 1; /* "/name" */
-    if (n >= dsize) return -1;
-    memcpy(dir, path, n);
-    dir[n] = '\0';
-    *base = slash + 1;
-    return 0;
-}
-
-static fm_status io_error(fm_error *err, const char *what, const char *path, int e)
-{
-    return fm_error_set(err, FM_ERR_IO, "snapshot not saved: %s %s: %s", what, path,
-                        strerror(e));
+    unsigned char trailer[8];
+    for (int i = 0; i < 8; i++) trailer[i] = (unsigned char)(hash >> (8 * i));
+    return fm_file_write_all(fd, trailer, 8);
 }
 
 fm_status fm_stock_save(const fm_stock *s, const char *path, const char *resume, fm_error *err)
 {
-    static unsigned long counter;
-    char dir[4096], tmp[4096 + 300], prevtmp[4096 + 300], prev[4096 + 16];
-    const char *base;
-    if (!s || !path || !*path || split_path(path, dir, sizeof dir, &base) || !*base)
+    char prev[4096 + 16];
+    if (!s || !path || !*path || snprintf(prev, sizeof prev, "%s.prev", path) >= (int)sizeof prev)
         return fm_error_set(err, FM_ERR_INPUT, "snapshot path \"%s\" is not a file path",
                             path ? path : "");
-    if (strlen(base) > 200)
-        return fm_error_set(err, FM_ERR_INPUT, "snapshot file name is too long");
-    const unsigned long seq = __atomic_add_fetch(&counter, 1, __ATOMIC_RELAXED);
-    snprintf(tmp, sizeof tmp, "%s/.%s" TMP_MARK "%ld.%lu", dir, base, (long)getpid(), seq);
-    snprintf(prevtmp, sizeof prevtmp, "%s/.%s.prev" TMP_MARK "%ld.%lu", dir, base,
-             (long)getpid(), seq);
-    snprintf(prev, sizeof prev, "%s.prev", path);
 
     size_t marks_len = 0;
     unsigned char *marks = fm_tool_marks_encode(&s->marks, &marks_len);
@@ -310,76 +273,12 @@ fm_status fm_stock_save(const fm_stock *s, const char *path, const char *resume,
     put_u64(&h, m.len);
     put_u64(&h, vdb_len);
 
-    int fd = -1;
     if (h.failed) {
         rc = fm_error_set(err, FM_ERR_LIMIT, "snapshot not saved: out of memory");
         goto done;
     }
-    fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-    if (fd < 0) {
-        rc = io_error(err, "cannot create", tmp, errno);
-        goto done;
-    }
-    uint64_t hash = FNV_OFFSET;
-    unsigned char trailer[8];
-    if (write_all(fd, h.p, h.len, &hash) || write_all(fd, m.p, m.len, &hash) ||
-        write_all(fd, vdb, vdb_len, &hash)) {
-        rc = io_error(err, "cannot write", tmp, errno);
-        goto fail_tmp;
-    }
-    for (int i = 0; i < 8; i++) trailer[i] = (unsigned char)(hash >> (8 * i));
-    if (write_all(fd, trailer, 8, NULL)) {
-        rc = io_error(err, "cannot write", tmp, errno);
-        goto fail_tmp;
-    }
-    /* an fsync error means the data may not be on disk: not saved */
-    if (fsync(fd) != 0) {
-        rc = io_error(err, "fsync failed on", tmp, errno);
-        goto fail_tmp;
-    }
-    if (close(fd) != 0) {
-        fd = -1;
-        rc = io_error(err, "close failed on", tmp, errno);
-        goto fail_tmp;
-    }
-    fd = -1;
-
-    /* Keep the previous generation. A hard link plus rename replaces
-     * "<path>.prev" atomically while <path> itself never disappears. */
-    if (access(path, F_OK) == 0) {
-        if (link(path, prevtmp) == 0) {
-            if (rename(prevtmp, prev) != 0) {
-                rc = io_error(err, "cannot rename to", prev, errno);
-                unlink(prevtmp);
-                goto fail_tmp;
-            }
-        } else if (rename(path, prev) != 0) { /* no hard links here */
-            rc = io_error(err, "cannot rename to", prev, errno);
-            goto fail_tmp;
-        }
-    }
-    if (rename(tmp, path) != 0) {
-        rc = io_error(err, "cannot rename to", path, errno);
-        goto fail_tmp;
-    }
-    int dfd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (dfd < 0) {
-        rc = io_error(err, "cannot open folder", dir, errno);
-        goto done;
-    }
-    if (fsync(dfd) != 0) {
-        /* the rename may not survive a power cut: say so */
-        rc = io_error(err, "fsync failed on folder", dir, errno);
-        close(dfd);
-        goto done;
-    }
-    close(dfd);
-    rc = FM_OK;
-    goto done;
-
-fail_tmp:
-    if (fd >= 0) close(fd);
-    unlink(tmp);
+    snapshot_parts parts = {{h.p, m.p, vdb}, {h.len, m.len, vdb_len}};
+    rc = fm_file_write_durable_with(path, "snapshot", write_parts, &parts, prev, err);
 done:
     free(h.p);
     free(m.p);
@@ -397,48 +296,13 @@ fm_stock *fm_stock_load_vdb(const char *path, const fm_stock_options *opt_in, fm
         fm_error_set(err, FM_ERR_INPUT, "no snapshot path");
         return NULL;
     }
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
-    if (fd < 0) {
-        fm_error_set(err, FM_ERR_IO, "cannot open snapshot %s: %s", path, strerror(errno));
-        return NULL;
-    }
-    struct stat st;
-    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        fm_error_set(err, FM_ERR_IO, "snapshot %s is not a regular file", path);
-        close(fd);
-        return NULL;
-    }
-    const uint64_t size = (uint64_t)st.st_size;
+    char *data;
+    size_t size;
+    if (fm_file_read(path, "snapshot", opt.memory_budget, &data, &size, err)) return NULL;
+    unsigned char *buf = (unsigned char *)data;
+    fm_stock *s = NULL;
     if (size < SNAP_HEADER + SNAP_TRAILER) {
         fm_error_set(err, FM_ERR_INPUT, "%s: truncated snapshot (%llu bytes)", path,
-                     (unsigned long long)size);
-        close(fd);
-        return NULL;
-    }
-    if (size > opt.memory_budget) {
-        fm_error_set(err, FM_ERR_LIMIT,
-                     "%s: snapshot of %.0f MB is larger than the memory budget of %.0f MB", path,
-                     (double)size / 1048576.0, (double)opt.memory_budget / 1048576.0);
-        close(fd);
-        return NULL;
-    }
-    unsigned char *buf = malloc((size_t)size);
-    if (!buf) {
-        fm_error_set(err, FM_ERR_LIMIT, "%s: out of memory reading the snapshot", path);
-        close(fd);
-        return NULL;
-    }
-    size_t got = 0;
-    while (got < size) {
-        ssize_t r = read(fd, buf + got, (size_t)size - got);
-        if (r < 0 && errno == EINTR) continue;
-        if (r <= 0) break;
-        got += (size_t)r;
-    }
-    close(fd);
-    fm_stock *s = NULL;
-    if (got != size) {
-        fm_error_set(err, FM_ERR_IO, "%s: read %zu of %llu bytes", path, got,
                      (unsigned long long)size);
         goto out;
     }
@@ -561,26 +425,5 @@ fm_stock *fm_stock_load_latest(const char *path, const fm_stock_options *opt, in
 
 fm_status fm_stock_snapshot_cleanup(const char *dir, size_t *removed, fm_error *err)
 {
-    if (removed) *removed = 0;
-    DIR *d = opendir(dir);
-    if (!d) return fm_error_set(err, FM_ERR_IO, "cannot open %s: %s", dir, strerror(errno));
-    struct dirent *e;
-    size_t count = 0;
-    const long self = (long)getpid();
-    while ((e = readdir(d)) != NULL) {
-        const char *mark = strstr(e->d_name, TMP_MARK);
-        if (e->d_name[0] != '.' || !mark) continue;
-        char *end;
-        const long pid = strtol(mark + strlen(TMP_MARK), &end, 10);
-        if (end == mark + strlen(TMP_MARK) || *end != '.') continue;
-        /* a writer that still runs may be in the middle of its write */
-        if (pid == self) continue;
-        if (pid > 0 && (kill((pid_t)pid, 0) == 0 || errno == EPERM)) continue;
-        char full[4096 + 512];
-        snprintf(full, sizeof full, "%s/%s", dir, e->d_name);
-        if (unlink(full) == 0) count++;
-    }
-    closedir(d);
-    if (removed) *removed = count;
-    return FM_OK;
+    return fm_file_remove_stale_temporaries(dir, removed, err);
 }

@@ -13,7 +13,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 /* Bytes held per triangle at the peak, beside the grid: our floats and an
  * ASCII facet's line, and then either our indices and the bridge's copies
@@ -442,42 +441,14 @@ fm_vdb *fm_stl_to_vdb(const char *path, const fm_stock_options *opt_in, const do
 {
     fm_stock_options opt;
     if (fm_stock_options_resolve(opt_in, &opt, err)) return NULL;
-    FILE *fp = path ? fopen(path, "rb") : NULL;
-    if (!fp) {
-        fm_error_set(err, FM_ERR_IO, "cannot open STL %s: %s", path ? path : "(null)",
-                     strerror(errno));
-        return NULL;
-    }
-    struct stat st;
-    if (fstat(fileno(fp), &st) != 0 || !S_ISREG(st.st_mode)) {
-        fm_error_set(err, FM_ERR_IO, "STL %s is not a regular file", path);
-        fclose(fp);
-        return NULL;
-    }
-    const size_t size = (size_t)st.st_size;
-    if ((uint64_t)st.st_size > opt.memory_budget) {
-        fm_error_set(err, FM_ERR_LIMIT, "STL %s (%.0f MB) is larger than the memory budget",
-                     path, (double)st.st_size / 1048576.0);
-        fclose(fp);
-        return NULL;
-    }
-    unsigned char *buf = malloc(size + 1);
-    if (!buf) {
-        fm_error_set(err, FM_ERR_LIMIT, "out of memory reading %s", path);
-        fclose(fp);
-        return NULL;
-    }
-    const size_t got = fread(buf, 1, size, fp);
-    fclose(fp);
-    buf[got] = '\0';
+    char *text;
+    size_t size;
+    if (fm_file_read(path, "STL", opt.memory_budget, &text, &size, err)) return NULL;
+    unsigned char *buf = (unsigned char *)text;
     mesh m = {0};
     fm_vdb *grid = NULL;
     uint32_t *tris = NULL;
     const size_t max_tris = opt.memory_budget / BYTES_PER_TRIANGLE;
-    if (got != size) {
-        fm_error_set(err, FM_ERR_IO, "cannot read %s", path);
-        goto out;
-    }
 
     /* Binary when the size matches the count in the header exactly: many
      * binary files also begin with "solid". */
