@@ -550,46 +550,7 @@ fm_status tt_push(const tt_reader *r, fm_tool_table *t, size_t *cap, const fm_to
 
 fm_status tt_read_file(const char *path, size_t max, char **text, size_t *len, fm_error *err)
 {
-    *text = NULL;
-    *len = 0;
-    FILE *f = fopen(path, "rb");
-    if (!f) return fm_error_at(err, FM_ERR_IO, path, 0, 0, "cannot open: %s", strerror(errno));
-    size_t cap = 4096, n = 0;
-    char *buf = malloc(cap + 1);
-    fm_status st = FM_OK;
-    for (;;) {
-        if (!buf) {
-            st = fm_error_set(err, FM_ERR_LIMIT, "out of memory");
-            break;
-        }
-        if (n == cap) {
-            if (cap > max) {
-                st = fm_error_at(err, FM_ERR_LIMIT, path, 0, 0, "tool table larger than %zu bytes",
-                                 max);
-                break;
-            }
-            char *nb = realloc(buf, cap * 2 + 1);
-            if (!nb) free(buf);
-            buf = nb;
-            cap *= 2;
-            continue;
-        }
-        size_t k = fread(buf + n, 1, cap - n, f);
-        if (k == 0) break;
-        n += k;
-    }
-    if (!st && ferror(f)) st = fm_error_at(err, FM_ERR_IO, path, 0, 0, "read error");
-    fclose(f);
-    if (!st && n > max)
-        st = fm_error_at(err, FM_ERR_LIMIT, path, 0, 0, "tool table larger than %zu bytes", max);
-    if (st) {
-        free(buf);
-        return st;
-    }
-    buf[n] = '\0';
-    *text = buf;
-    *len = n;
-    return FM_OK;
+    return fm_file_read(path, "tool table", max, text, len, err);
 }
 
 /* ------------------------------------------------------------------ */

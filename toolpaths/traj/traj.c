@@ -369,8 +369,7 @@ static fm_status check_join(traj_doc *d, size_t i, long prev_feed)
                        "ends with (%.6g, %.6g, %.6g): %.6g degrees apart, more than the "
                        "tolerance %.6g; put {\"rapid\": true} between them",
                        i, a0[0], a0[1], a0[2], prev_feed, a1[0], a1[1], a1[2],
-                       turn * 180 / 3.14159265358979323846,
-                       d->opt.axis_tolerance * 180 / 3.14159265358979323846);
+                       turn * 180 / FM_PI, d->opt.axis_tolerance * 180 / FM_PI);
     return FM_OK;
 }
 
@@ -582,35 +581,14 @@ fm_status fm_traj_run_file(const char *path, const fm_traj_options *opt, fm_moti
         o = *opt;
     else
         fm_traj_options_default(&o);
-    FILE *f = fopen(path, "rb");
-    if (!f) return fm_error_at(err, FM_ERR_IO, path, 0, 0, "cannot open the trajectory");
-    /* Read at most one byte more than allowed, to tell "too large". */
-    size_t cap = 4096, len = 0;
-    char *buf = malloc(cap);
-    fm_status st = FM_OK;
-    while (buf) {
-        if (len == cap) {
-            if (cap > o.max_document_bytes) break;
-            char *nb = realloc(buf, cap * 2);
-            if (!nb) {
-                free(buf);
-                buf = NULL;
-                break;
-            }
-            buf = nb;
-            cap *= 2;
-        }
-        size_t want = cap - len;
-        size_t got = fread(buf + len, 1, want, f);
-        len += got;
-        if (got < want) {
-            if (ferror(f)) st = fm_error_at(err, FM_ERR_IO, path, 0, 0, "read error");
-            break;
-        }
+    char *buf;
+    size_t len;
+    fm_status st = fm_file_read(path, "trajectory", o.max_document_bytes, &buf, &len, err);
+    if (st) {
+        if (err) snprintf(err->file, sizeof err->file, "%s", path);
+        return st;
     }
-    fclose(f);
-    if (!buf) return fm_error_at(err, FM_ERR_LIMIT, path, 0, 0, "out of memory reading the file");
-    if (!st) st = fm_traj_run_string(buf, len, path, &o, sink, user, summary, err);
+    st = fm_traj_run_string(buf, len, path, &o, sink, user, summary, err);
     free(buf);
     return st;
 }
