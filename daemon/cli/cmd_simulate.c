@@ -169,31 +169,9 @@ typedef struct job_file {
 
 static fm_status load_job(const char *path, job_file *jf, fm_error *err)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) return fm_error_set(err, FM_ERR_IO, "cannot open %s: %s", path, strerror(errno));
-    char *text = NULL;
-    size_t len = 0, cap = 0;
-    fm_status st = FM_OK;
-    for (;;) {
-        if (len + 65536 > cap) {
-            if (cap > 2 * FM_JOB_DOC_MAX_TEXT) {
-                st = fm_error_set(err, FM_ERR_LIMIT, "%s: larger than %zu bytes", path,
-                                  2 * FM_JOB_DOC_MAX_TEXT);
-                break;
-            }
-            char *bigger = realloc(text, cap = cap ? cap * 2 : 1 << 20);
-            if (!bigger) {
-                st = fm_error_set(err, FM_ERR_LIMIT, "out of memory");
-                break;
-            }
-            text = bigger;
-        }
-        size_t n = fread(text + len, 1, cap - len, f);
-        len += n;
-        if (n == 0) break;
-    }
-    if (st == FM_OK && ferror(f)) st = fm_error_set(err, FM_ERR_IO, "cannot read %s", path);
-    fclose(f);
+    char *text;
+    size_t len;
+    fm_status st = fm_file_read(path, NULL, 2 * FM_JOB_DOC_MAX_TEXT, &text, &len, err);
     /* The CLI's documents may name files on this machine; live programs
      * are the daemon's. */
     const fm_job_doc_rules rules = {.allow_files = 1};

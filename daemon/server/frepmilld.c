@@ -67,7 +67,7 @@ static char *read_text(const char *path)
     char *data;
     size_t size;
     fm_error err;
-    if (fm_store_read(path, (size_t)64 << 20, &data, &size, &err) != FM_OK) {
+    if (fm_file_read(path, NULL, (size_t)64 << 20, &data, &size, &err) != FM_OK) {
         fm_log(FM_LOG_ERROR, "demo: %s", err.message);
         return NULL;
     }

@@ -70,7 +70,7 @@ fm_status fm_job_store_create(const char *jobs_dir, const char *id, double creat
                                                         dir, strerror(errno));
     if (st == FM_OK) st = fm_job_store_write_models(doc, dir, err);
     if (st == FM_OK) st = write_json(dir, "spec.json", stored, err);
-    if (st == FM_OK) st = fm_store_fsync_dir(jobs_dir, err);
+    if (st == FM_OK) st = fm_file_sync_dir(jobs_dir, err);
     json_decref(stored);
     if (st != FM_OK) fm_store_remove_dir(dir, NULL);
     return st;
@@ -115,7 +115,7 @@ fm_status fm_job_store_mark_deleted(const char *jobs_dir, job *j, fm_error *err)
     if (rename(j->dir, gone) != 0)
         return fm_error_set(err, FM_ERR_IO, "cannot delete job %s: %s", j->id, strerror(errno));
     fm_error ferr;
-    fm_store_fsync_dir(jobs_dir, &ferr);
+    fm_file_sync_dir(jobs_dir, &ferr);
     return FM_OK;
 }
 
@@ -136,7 +136,7 @@ static int load_job(const fm_job_store_loader *loader, const char *id)
     char *text;
     size_t size;
     fm_error err;
-    if (fm_store_read(path, JOB_SPEC_MAX_BYTES, &text, &size, &err) != FM_OK) {
+    if (fm_file_read(path, NULL, JOB_SPEC_MAX_BYTES, &text, &size, &err) != FM_OK) {
         /* A folder without its spec was never acknowledged: the daemon
          * died between mkdir and the rename of spec.json. */
         fm_log(FM_LOG_WARN, "job %s: no stored spec (%s); removing the unacknowledged folder", id,
@@ -166,7 +166,7 @@ static int load_job(const fm_job_store_loader *loader, const char *id)
     json_decref(stored);
     if (!j) return 0;
     snprintf(path, sizeof path, "%s/result.json", dir);
-    if (fm_store_read(path, JOB_SPEC_MAX_BYTES, &text, &size, &err) == FM_OK) {
+    if (fm_file_read(path, NULL, JOB_SPEC_MAX_BYTES, &text, &size, &err) == FM_OK) {
         json_t *result = json_loadb(text, size, 0, &jerr);
         free(text);
         json_t *status = json_object_get(result, "status");

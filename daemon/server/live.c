@@ -101,7 +101,7 @@ static fm_status journal_load(job *j, fm_error *err)
     if (access(path, F_OK) != 0) return FM_OK;
     char *text = NULL;
     size_t size = 0;
-    fm_status st = fm_store_read(path, LIVE_JOURNAL_MAX_BYTES, &text, &size, err);
+    fm_status st = fm_file_read(path, NULL, LIVE_JOURNAL_MAX_BYTES, &text, &size, err);
     if (st != FM_OK) return st;
     size_t lines = 0;
     for (size_t i = 0; i < size; i++) lines += text[i] == '\n';
@@ -290,7 +290,7 @@ fm_status fm_live_document(const fm_live_config *cfg, const job *src, const fm_j
         size_t size = 0;
         fm_error terr;
         fm_error_clear(&terr);
-        if (fm_store_read(tools, FM_TOOLTABLE_MAX_BYTES, &text, &size, &terr) != FM_OK)
+        if (fm_file_read(tools, NULL, FM_TOOLTABLE_MAX_BYTES, &text, &size, &terr) != FM_OK)
             return fm_error_set(err, FM_ERR_INPUT, "live_tools: %s", terr.message);
         json_error_t jerr;
         tools_json = json_loadb(text, size, 0, &jerr);

@@ -1,13 +1,10 @@
-/* store.c: durable small files for the job store. Why each step: the
- * temporary file keeps a reader (or a restart) from seeing half a file; the
- * fsync before the rename makes the data reach the disk before the name
- * points at it; the fsync of the folder makes the rename itself survive a
- * power cut. A job is acknowledged only after all of it returned. */
+/* store.c: the job store's folders and its durable small files (written by
+ * lib/core's durable writer: temporary file, fsync, rename, fsync of the
+ * folder). A job is acknowledged only after all of it returned. */
 #include "store.h"
 
 #include <dirent.h>
 #include <errno.h>
-#include <fcntl.h>
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -35,92 +32,13 @@ fm_status fm_store_mkdirs(const char *path, fm_error *err)
     return FM_OK;
 }
 
-fm_status fm_store_fsync_dir(const char *path, fm_error *err)
-{
-    int fd = open(path, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (fd < 0) return fm_error_set(err, FM_ERR_IO, "cannot open %s: %s", path, strerror(errno));
-    int rc = fsync(fd);
-    int e = errno;
-    close(fd);
-    if (rc != 0) return fm_error_set(err, FM_ERR_IO, "fsync %s: %s", path, strerror(e));
-    return FM_OK;
-}
-
 fm_status fm_store_write_atomic(const char *dir, const char *name, const void *data, size_t size,
                                 fm_error *err)
 {
-    char path[PATH_MAX], tmp[PATH_MAX];
-    if (snprintf(path, sizeof path, "%s/%s", dir, name) >= (int)sizeof path ||
-        snprintf(tmp, sizeof tmp, "%s/%s.tmp", dir, name) >= (int)sizeof tmp)
+    char path[PATH_MAX];
+    if (snprintf(path, sizeof path, "%s/%s", dir, name) >= (int)sizeof path)
         return fm_error_set(err, FM_ERR_IO, "path too long: %s/%s", dir, name);
-    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0640);
-    if (fd < 0) return fm_error_set(err, FM_ERR_IO, "cannot create %s: %s", tmp, strerror(errno));
-    const char *p = data;
-    size_t left = size;
-    while (left > 0) {
-        ssize_t w = write(fd, p, left);
-        if (w < 0 && errno == EINTR) continue;
-        if (w <= 0) {
-            int e = errno;
-            close(fd);
-            unlink(tmp);
-            return fm_error_set(err, FM_ERR_IO, "cannot write %s: %s", tmp, strerror(e));
-        }
-        p += w;
-        left -= (size_t)w;
-    }
-    if (fsync(fd) != 0) {
-        int e = errno;
-        close(fd);
-        unlink(tmp);
-        return fm_error_set(err, FM_ERR_IO, "fsync %s: %s", tmp, strerror(e));
-    }
-    if (close(fd) != 0) {
-        unlink(tmp);
-        return fm_error_set(err, FM_ERR_IO, "cannot write %s: %s", tmp, strerror(errno));
-    }
-    if (rename(tmp, path) != 0) {
-        int e = errno;
-        unlink(tmp);
-        return fm_error_set(err, FM_ERR_IO, "cannot rename %s: %s", tmp, strerror(e));
-    }
-    return fm_store_fsync_dir(dir, err);
-}
-
-fm_status fm_store_read(const char *path, size_t max, char **data, size_t *size, fm_error *err)
-{
-    *data = NULL;
-    *size = 0;
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
-    if (fd < 0) return fm_error_set(err, FM_ERR_IO, "cannot open %s: %s", path, strerror(errno));
-    struct stat st;
-    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || (size_t)st.st_size > max) {
-        close(fd);
-        return fm_error_set(err, FM_ERR_IO, "%s is not a regular file of at most %zu bytes", path,
-                            max);
-    }
-    size_t n = (size_t)st.st_size;
-    char *buf = malloc(n + 1);
-    if (!buf) {
-        close(fd);
-        return fm_error_set(err, FM_ERR_LIMIT, "out of memory reading %s", path);
-    }
-    size_t got = 0;
-    while (got < n) {
-        ssize_t r = read(fd, buf + got, n - got);
-        if (r < 0 && errno == EINTR) continue;
-        if (r <= 0) break;
-        got += (size_t)r;
-    }
-    close(fd);
-    if (got != n) {
-        free(buf);
-        return fm_error_set(err, FM_ERR_IO, "short read of %s", path);
-    }
-    buf[n] = '\0';
-    *data = buf;
-    *size = n;
-    return FM_OK;
+    return fm_file_write_durable(path, NULL, data, size, err);
 }
 
 fm_status fm_store_remove_dir(const char *path, fm_error *err)
