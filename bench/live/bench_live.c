@@ -58,14 +58,15 @@ static int die(const char *what)
 
 /* ------------------------------------------------------------- daemon -- */
 
+/* The start of a small file (a /proc record, an address file) into buf. */
 static int read_file(const char *path, char *buf, size_t size)
 {
-    FILE *f = fopen(path, "r");
-    if (!f) return -1;
-    size_t n = fread(buf, 1, size - 1, f);
-    fclose(f);
-    buf[n] = '\0';
-    return (int)n;
+    char *data;
+    size_t n;
+    if (fm_file_read(path, NULL, 1 << 20, &data, &n, NULL) != FM_OK) return -1;
+    snprintf(buf, size, "%s", data);
+    free(data);
+    return (int)strlen(buf);
 }
 
 /* "http://127.0.0.1:PORT" or "127.0.0.1:PORT" -> port. */

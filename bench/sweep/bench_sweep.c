@@ -41,7 +41,7 @@ static int band_points(const fm_sweep *s, const fm_motion *m, const fm_tool_part
         e2[0] = a[1] * e1[2] - a[2] * e1[1];
         e2[1] = a[2] * e1[0] - a[0] * e1[2];
         e2[2] = a[0] * e1[1] - a[1] * e1[0];
-        double ang = urand(0, 2 * SC_PI), p[3];
+        double ang = urand(0, 2 * FM_PI), p[3];
         for (int i = 0; i < 3; i++)
             p[i] = c[i] + zc * a[i] + r * (cos(ang) * e1[i] + sin(ang) * e2[i]) + urand(-0.5, 0.5);
         x[k] = p[0], y[k] = p[1], z[k] = p[2];

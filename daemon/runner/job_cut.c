@@ -88,7 +88,7 @@ double fm_job_motion_length(const fm_motion *m)
         for (int a = 0; a < 3; a++)
             if (a != m->plane_axis) r2 += (m->start[a] - m->center[a]) * (m->start[a] - m->center[a]);
         int turns = m->turns < 0 ? -m->turns : m->turns;
-        return chord + 2 * 3.14159265358979323846 * sqrt(r2) * (turns > 0 ? turns : 1);
+        return chord + 2 * FM_PI * sqrt(r2) * (turns > 0 ? turns : 1);
     }
     return chord;
 }
@@ -184,7 +184,7 @@ void job_report(job_cutter *c, const fm_motion *last)
     for (int a = 0; a < 3; a++) p->position[a] = last->end[a] + last->tip_offset[a];
     p->removed_mm3 = fm_stock_removed_volume(c->stock);
     p->resume_from = last->index + 1;
-    p->elapsed_s = job_now_s() - c->started;
+    p->elapsed_s = fm_clock_monotonic_s() - c->started;
     p->stock = c->stock;
     if (c->hooks && c->hooks->progress && c->hooks->progress(c->hooks->user, p)) c->stopped = 1;
 }
@@ -193,9 +193,9 @@ void job_report(job_cutter *c, const fm_motion *last)
  * or still pending in the check) and report the findings it opened. */
 static fm_status check_motion(job_cutter *c, const fm_motion *m, const fm_tool *tool)
 {
-    double t0 = job_now_s();
+    double t0 = fm_clock_monotonic_s();
     fm_status st = fm_check_motion(c->check, m, tool, c->check_grid, c->err);
-    c->check_time += job_now_s() - t0;
+    c->check_time += fm_clock_monotonic_s() - t0;
     if (st != FM_OK) {
         if (c->err && c->err->line == 0) c->err->line = m->line;
         return st;

@@ -165,9 +165,4 @@ fm_design *job_make_design(const fm_job_spec *spec, const fm_stock *stock, fm_er
 fm_status job_blame_gouges(const fm_job_spec *spec, const job_tools *tools, double voxel,
                            fm_job_motions *log, fm_job_result *result, fm_error *err);
 
-/* ------------------------------------------------------ resources -- */
-
-double job_now_s(void);    /* monotonic clock, s */
-double job_cpu_s(void);    /* CPU time of the process, s */
-
 #endif

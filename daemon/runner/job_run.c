@@ -99,17 +99,17 @@ static fm_status cut(job_cutter *c, const job_survey *sv, fm_job_result *result,
 static fm_status compare(job_cutter *c, fm_design *design, fm_job_motions *log,
                          fm_job_result *result, fm_error *err)
 {
-    const double w0 = job_now_s(), c0 = job_cpu_s();
+    const double w0 = fm_clock_monotonic_s(), c0 = fm_clock_cpu_s();
     fm_status st = fm_stock_compare_design(c->stock, design, FM_JOB_MAX_REGIONS,
                                            &result->deviation, err);
     result->has_deviation = st == FM_OK;
-    const double w1 = job_now_s(), c1 = job_cpu_s();
+    const double w1 = fm_clock_monotonic_s(), c1 = fm_clock_cpu_s();
     result->design_compare_wall_s = w1 - w0;
     result->design_compare_cpu_s = c1 - c0;
     if (st == FM_OK)
         st = job_blame_gouges(c->spec, c->tools, fm_stock_voxel_size(c->stock), log, result, err);
-    result->design_blame_wall_s = job_now_s() - w1;
-    result->design_blame_cpu_s = job_cpu_s() - c1;
+    result->design_blame_wall_s = fm_clock_monotonic_s() - w1;
+    result->design_blame_cpu_s = fm_clock_cpu_s() - c1;
     return st;
 }
 
@@ -165,7 +165,7 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
                      fm_error *err)
 {
     memset(result, 0, sizeof *result);
-    const double started = job_now_s();
+    const double started = fm_clock_monotonic_s();
     job_tools tools;
     job_survey sv = {0};
     fm_stock *stock = spec->resume_stock; /* owned from here on, also on error */
@@ -178,11 +178,11 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
     /* The design before any cut: its errors come at once, and progress
      * hooks can colour by deviation while the job runs. */
     if (st == FM_OK && spec->design_path) {
-        const double w0 = job_now_s(), c0 = job_cpu_s();
+        const double w0 = fm_clock_monotonic_s(), c0 = fm_clock_cpu_s();
         if (!(design = job_make_design(spec, stock, err)))
             st = err && err->code ? err->code : FM_ERR_INPUT;
-        result->design_build_wall_s = job_now_s() - w0;
-        result->design_build_cpu_s = job_cpu_s() - c0;
+        result->design_build_wall_s = fm_clock_monotonic_s() - w0;
+        result->design_build_cpu_s = fm_clock_cpu_s() - c0;
     }
     if (st == FM_OK && !(c = calloc(1, sizeof *c)))
         st = fm_error_set(err, FM_ERR_LIMIT, "out of memory");
@@ -193,7 +193,7 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
         c->tools = &tools;
         c->stock = stock;
         c->err = err;
-        c->started = job_now_s();
+        c->started = fm_clock_monotonic_s();
         c->progress.motions_total = sv.motions;
         c->progress.program_time_total = sv.time_total;
         c->progress.block = -1;
@@ -215,7 +215,7 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
         }
         fill_result(c, &sv, result);
         result->design = design;
-        result->wall_time_s = job_now_s() - started;
+        result->wall_time_s = fm_clock_monotonic_s() - started;
     } else {
         fm_deviation_free(&result->deviation);
         result->has_deviation = 0;

@@ -15,7 +15,6 @@
 #define PROBE_MAX_SAMPLES 4000000 /* about 100 MB of doubles: refuse beyond */
 #define PROBE_MAX_STEPS 1000000
 #define PROBE_RESOLUTION 1e-6     /* mm: the bisection stops here */
-#define PROBE_PI 3.14159265358979323846
 
 typedef struct probe_samples {
     double *p; /* xyz offsets from the tip */
@@ -46,8 +45,8 @@ static void elem_point(const fm_profile_elem *e, double f, double rz[2], double 
         double a0 = atan2(e->a[1] - e->c[1], e->a[0] - e->c[0]);
         double a1 = atan2(e->b[1] - e->c[1], e->b[0] - e->c[0]);
         double d = a1 - a0;
-        if (e->ccw && d < 0) d += 2 * PROBE_PI;
-        if (!e->ccw && d > 0) d -= 2 * PROBE_PI;
+        if (e->ccw && d < 0) d += 2 * FM_PI;
+        if (!e->ccw && d > 0) d -= 2 * FM_PI;
         double a = a0 + f * d;
         rz[0] = e->c[0] + e->radius * cos(a);
         rz[1] = e->c[1] + e->radius * sin(a);
@@ -72,7 +71,7 @@ static double elem_length(const fm_profile_elem *e)
         double a0 = atan2(e->a[1] - e->c[1], e->a[0] - e->c[0]);
         double a1 = atan2(e->b[1] - e->c[1], e->b[0] - e->c[0]);
         double d = fabs(a1 - a0);
-        if (d > PROBE_PI) d = 2 * PROBE_PI - d;
+        if (d > FM_PI) d = 2 * FM_PI - d;
         return e->radius * d;
     }
     return hypot(e->b[0] - e->a[0], e->b[1] - e->a[1]);
@@ -104,14 +103,14 @@ static fm_status sample_part(const fm_tool_part *part, double h, const double di
         for (size_t i = 0; i <= nf; i++) {
             double rz[2], n[2];
             elem_point(e, (double)i / (double)nf, rz, n);
-            size_t nt = rz[0] <= 1e-12 ? 1 : (size_t)ceil(2 * PROBE_PI * rz[0] / h);
+            size_t nt = rz[0] <= 1e-12 ? 1 : (size_t)ceil(2 * FM_PI * rz[0] / h);
             if (nt < 8 && rz[0] > 1e-12) nt = 8;
             if (s->n + nt > PROBE_MAX_SAMPLES)
                 return fm_error_set(err, FM_ERR_LIMIT,
                                     "probing: the tool's surface needs more than %d samples at "
                                     "this voxel size", PROBE_MAX_SAMPLES);
             for (size_t j = 0; j < nt; j++) {
-                double th = 2 * PROBE_PI * (double)j / (double)nt;
+                double th = 2 * FM_PI * (double)j / (double)nt;
                 double c = cos(th), sn = sin(th);
                 double nx = n[0] * c, ny = n[0] * sn, nz = n[1];
                 /* a first contact cannot happen where the surface faces away

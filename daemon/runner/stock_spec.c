@@ -12,8 +12,6 @@
 
 #include "job.h"
 
-#define STOCK_PI 3.14159265358979323846
-
 /* Parse exactly n comma-separated finite numbers. */
 static int parse_numbers(const char *s, double *out, int n)
 {
@@ -99,7 +97,7 @@ double fm_stock_spec_projected_area(const fm_stock_spec *s)
     if (s->shape == FM_STOCK_SHAPE_CYLINDER) {
         /* Caps project on z; the side projects to 8 r h on x and y. */
         double r = s->radius, h = s->hi[2] - s->lo[2];
-        return 2 * STOCK_PI * r * r + 8 * r * h;
+        return 2 * FM_PI * r * r + 8 * r * h;
     }
     return -1;
 }

@@ -10,9 +10,8 @@
 
 #include "sweep/sweep.h"
 
-#define TP_PI 3.14159265358979323846
 /* A point every 5 degrees of arc or of any rotary joint at most. */
-#define TP_ARC_STEP (TP_PI / 36)
+#define TP_ARC_STEP (FM_PI / 36)
 #define TP_PARAM_PIECES 32
 #define TP_MAX_PIECES 100000
 

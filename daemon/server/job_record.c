@@ -5,21 +5,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
-double fm_jobs_mono_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+double fm_jobs_mono_s(void) { return fm_clock_monotonic_s(); }
 
-double fm_jobs_wall_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+double fm_jobs_wall_s(void) { return fm_clock_wall_s(); }
 
 const char *fm_job_state_name(fm_job_state state)
 {

@@ -4,6 +4,8 @@
  * replaced, so every event stays one line for grep and journald. */
 #include "log.h"
 
+#include "core/core.h"
+
 #include <errno.h>
 #include <fcntl.h>
 #include <pthread.h>
@@ -81,13 +83,15 @@ void fm_log(fm_log_level level, const char *fmt, ...)
     if (level > log_level) return;
     static const char *const names[] = {"ERROR", "WARN", "INFO", "DEBUG"};
     char line[2048];
-    struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
+    /* microseconds apart from the seconds, so that rounding never shows
+     * 1000 ms */
+    const long long us = (long long)(fm_clock_wall_s() * 1e6);
+    const time_t sec = (time_t)(us / 1000000);
     struct tm tm;
-    gmtime_r(&ts.tv_sec, &tm);
+    gmtime_r(&sec, &tm);
     int n = snprintf(line, sizeof line, "%04d-%02d-%02dT%02d:%02d:%02d.%03ldZ %-5s ",
                      tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min,
-                     tm.tm_sec, ts.tv_nsec / 1000000L, names[level]);
+                     tm.tm_sec, (long)(us % 1000000 / 1000), names[level]);
     va_list ap;
     va_start(ap, fmt);
     int m = vsnprintf(line + n, sizeof line - (size_t)n - 1, fmt, ap);

@@ -191,14 +191,6 @@ void fm_publish_progress(job *j, const fm_job_progress *p, publish_pace *pace)
 
 /* ------------------------------------------------------------ meshes -- */
 
-/* CPU time of the daemon (every thread), for the publication's debug log. */
-static double process_cpu_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
-
 void fm_publish_chunks_drop_caches(job *j)
 {
     pthread_mutex_lock(&j->lock);
@@ -370,7 +362,7 @@ static void publish_chunks(job *j, fm_stock *stock, double program_time_s, int c
         for (size_t i = 0; i < n; i++)
             if (!fresh[i].cache) fresh[i].cache = fm_mesh_chunk_cache_new();
     }
-    const double t0 = fm_jobs_mono_s(), cpu0 = process_cpu_s();
+    const double t0 = fm_jobs_mono_s(), cpu0 = fm_clock_cpu_s();
     /* Draco speed 7 instead of the default 5: on the live bench's chunks
      * (bench_remesh --speed 7) 30-40 % less encoding time, and the files
      * came out 0.4 % smaller, not larger. */
@@ -397,7 +389,7 @@ static void publish_chunks(job *j, fm_stock *stock, double program_time_s, int c
            "threads: mesh %.1f ms, encode %.1f ms wall (summed over the threads), %.1f ms "
            "daemon CPU",
            j->id, n, triangles, (unsigned long long)version, (fm_jobs_mono_s() - t0) * 1e3,
-           helped ? 2 : 1, t_mesh * 1e3, t_encode * 1e3, (process_cpu_s() - cpu0) * 1e3);
+           helped ? 2 : 1, t_mesh * 1e3, t_encode * 1e3, (fm_clock_cpu_s() - cpu0) * 1e3);
     json_t *ids = json_array();
     pthread_mutex_lock(&j->lock);
     if (j->history_from_s < 0) j->history_from_s = program_time_s;
@@ -694,13 +686,7 @@ int fm_publish_events_wait(job *j, uint64_t after, int timeout_ms, fm_http_event
                            int *finished)
 {
     struct timespec until;
-    clock_gettime(CLOCK_REALTIME, &until);
-    until.tv_sec += timeout_ms / 1000;
-    until.tv_nsec += (long)(timeout_ms % 1000) * 1000000L;
-    if (until.tv_nsec >= 1000000000L) {
-        until.tv_sec++;
-        until.tv_nsec -= 1000000000L;
-    }
+    fm_clock_deadline(&until, timeout_ms / 1000.0);
     pthread_mutex_lock(&j->lock);
     while (j->next_event - 1 <= after && !j->ended) {
         if (pthread_cond_timedwait(&j->cond, &j->lock, &until) != 0) break;

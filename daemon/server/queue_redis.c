@@ -116,13 +116,6 @@ struct fm_redis_queue {
     double next_renew;
 };
 
-static double qr_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* ------------------------------------------------------------ the URL -- */
 
 static int url_take(const char **p, const char *stop, char *out, size_t size)
@@ -540,10 +533,7 @@ static int qr_has_capacity(fm_redis_queue *q)
 static void qr_wait(fm_redis_queue *q, double seconds)
 {
     struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
-    double until = (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec + seconds;
-    ts.tv_sec = (time_t)until;
-    ts.tv_nsec = (long)((until - floor(until)) * 1e9);
+    fm_clock_deadline(&ts, seconds);
     pthread_mutex_lock(&q->lock);
     if (!q->stop && !q->outbox) pthread_cond_timedwait(&q->cond, &q->lock, &ts);
     pthread_mutex_unlock(&q->lock);
@@ -578,7 +568,7 @@ static void *qr_main(void *arg)
             continue;
         }
         if (qr_flush_results(q) != 0) continue;
-        double now = qr_now();
+        double now = fm_clock_monotonic_s();
         if (now >= q->next_renew) {
             if (qr_renew(q) != 0) continue;
             q->next_renew = now + q->cfg.claim_s / 3.0;

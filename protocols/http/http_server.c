@@ -74,13 +74,6 @@ typedef struct request {
     int rejected; /* a response was queued before the body ended */
 } request;
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 static void logf_(fm_http_server *s, int level, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))
@@ -400,7 +393,7 @@ static ssize_t sse_read(void *cls, uint64_t pos, char *buf, size_t max)
         if (st->pending_off == st->pending_size) {
             /* A comment now and then keeps proxies and the idle timeout from
              * closing a quiet stream. */
-            if (now_s() - st->last_write < SSE_KEEPALIVE_S) return 0;
+            if (fm_clock_monotonic_s() - st->last_write < SSE_KEEPALIVE_S) return 0;
             sse_append(st, ": keepalive\n\n", 13);
         }
     }
@@ -408,7 +401,7 @@ static ssize_t sse_read(void *cls, uint64_t pos, char *buf, size_t max)
     if (n > max) n = max;
     memcpy(buf, st->pending + st->pending_off, n);
     st->pending_off += n;
-    st->last_write = now_s();
+    st->last_write = fm_clock_monotonic_s();
     return (ssize_t)n;
 }
 
@@ -430,7 +423,7 @@ static enum MHD_Result serve_events(fm_http_server *s, struct MHD_Connection *co
     if (!st) return MHD_NO;
     st->server = s;
     snprintf(st->id, sizeof st->id, "%s", id);
-    st->last_write = now_s();
+    st->last_write = fm_clock_monotonic_s();
     /* A reconnecting EventSource sends the last id it saw. */
     const char *last = MHD_lookup_connection_value(con, MHD_HEADER_KIND, "Last-Event-ID");
     if (last) st->after = strtoull(last, NULL, 10);
@@ -787,7 +780,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *con, const c
         if (req->rejected) return MHD_YES; /* a response is queued; drop the rest */
         double deadline = s->cfg.request_deadline_ms / 1000.0;
         pthread_mutex_lock(&s->conn_lock);
-        int late = track && now_s() - track->request_start > deadline;
+        int late = track && fm_clock_monotonic_s() - track->request_start > deadline;
         pthread_mutex_unlock(&s->conn_lock);
         if (late) {
             req->rejected = 1;
@@ -841,7 +834,7 @@ static void on_completed(void *cls, struct MHD_Connection *con, void **con_cls,
     conn_track *track = track_of(con);
     if (track) {
         pthread_mutex_lock(&s->conn_lock);
-        track->request_start = now_s();
+        track->request_start = fm_clock_monotonic_s();
         track->receiving = 1;
         pthread_mutex_unlock(&s->conn_lock);
     }
@@ -871,7 +864,7 @@ static void on_connection(void *cls, struct MHD_Connection *con, void **socket_c
                 inet_ntop(AF_INET6, &((const struct sockaddr_in6 *)sa)->sin6_addr, t->ip,
                           sizeof t->ip);
         }
-        t->request_start = now_s();
+        t->request_start = fm_clock_monotonic_s();
         t->receiving = 1;
         pthread_mutex_lock(&s->conn_lock);
         int same_ip = 0;
@@ -911,16 +904,11 @@ static void *sweeper_main(void *arg)
     pthread_mutex_lock(&s->stop_lock);
     while (!s->stopping) {
         struct timespec until;
-        clock_gettime(CLOCK_REALTIME, &until);
-        until.tv_nsec += 250 * 1000000L;
-        if (until.tv_nsec >= 1000000000L) {
-            until.tv_sec++;
-            until.tv_nsec -= 1000000000L;
-        }
+        fm_clock_deadline(&until, 0.25);
         pthread_cond_timedwait(&s->stop_cond, &s->stop_lock, &until);
         if (s->stopping) break;
         pthread_mutex_unlock(&s->stop_lock);
-        double deadline = s->cfg.request_deadline_ms / 1000.0, now = now_s();
+        double deadline = s->cfg.request_deadline_ms / 1000.0, now = fm_clock_monotonic_s();
         pthread_mutex_lock(&s->conn_lock);
         for (conn_track *t = s->conns; t; t = t->next) {
             if (!t->receiving || now - t->request_start <= deadline || t->fd < 0) continue;

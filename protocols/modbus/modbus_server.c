@@ -53,12 +53,7 @@ struct fm_modbus_server {
     int64_t accept_paused_until_ms;
 };
 
-static int64_t monotonic_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
-}
+static int64_t monotonic_ms(void) { return (int64_t)(fm_clock_monotonic_s() * 1000); }
 
 static void server_log(const fm_modbus_server *s, int level, const char *fmt, ...)
 #if defined(__GNUC__)
