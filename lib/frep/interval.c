@@ -160,23 +160,21 @@ static int contains_periodic(double lo, double hi, double offset, double period)
     return floor(kh + slack) >= ceil(kl - slack);
 }
 
-static const double TWO_PI = 6.283185307179586;
-
 static ival sin_cos(ival a, int is_cos)
 {
     if (!isfinite(a.lo) || !isfinite(a.hi)) {
         if (a.lo == a.hi) return EMPTY_NAN; /* sin(inf) is NaN */
         return mk(-1.0, 1.0, 1);
     }
-    if (a.hi - a.lo >= TWO_PI || fabs(a.lo) > 1e8 || fabs(a.hi) > 1e8)
+    if (a.hi - a.lo >= 2 * FM_PI || fabs(a.lo) > 1e8 || fabs(a.hi) > 1e8)
         return mk(-1.0, 1.0, a.nan);
     double fl = is_cos ? cos(a.lo) : sin(a.lo), fh = is_cos ? cos(a.hi) : sin(a.hi);
     double lo = fl < fh ? fl : fh, hi = fl < fh ? fh : fl;
     lo = dn2(lo);
     hi = up2(hi);
     double max_at = is_cos ? 0.0 : FM_PI / 2, min_at = is_cos ? FM_PI : -FM_PI / 2;
-    if (contains_periodic(a.lo, a.hi, max_at, TWO_PI)) hi = 1.0;
-    if (contains_periodic(a.lo, a.hi, min_at, TWO_PI)) lo = -1.0;
+    if (contains_periodic(a.lo, a.hi, max_at, 2 * FM_PI)) hi = 1.0;
+    if (contains_periodic(a.lo, a.hi, min_at, 2 * FM_PI)) lo = -1.0;
     return mk(clampd(lo, -1, 1), clampd(hi, -1, 1), a.nan);
 }
 

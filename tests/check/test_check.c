@@ -631,7 +631,7 @@ static void test_machine_moving_link(void)
     one_component(&opt, "check/cradle_wall.hf", 1);
     const double blo[3] = {-20, -20, -10}, bhi[3] = {20, 20, 10};
     const char *prog2 = "G21 G90\nG0 Z150\nG0 X0 Y85 Z5\nG0 C-75\nG0 Z150\n";
-    const double deep = 85 * sin(75 * 3.14159265358979323846 / 180) + 3 - 80;
+    const double deep = 85 * sin(75 * FM_PI / 180) + 3 - 80;
     c = check_program(prog2, blo, bhi, flat_tool(20, 40, 1), &opt, NULL);
     if (c) {
         dump(c);

@@ -85,7 +85,7 @@ static void make_program(void)
             n += (size_t)snprintf(program + n, sizeof program - n, "G0 X%.4f Y%.4f Z%.4f\n", nx, ny, nz);
         } else if (r < 0.45) {
             /* an arc from here: a centre 3..9 mm away, up to 300 degrees */
-            double rad = test_uniform(3, 9), a0 = test_uniform(0, 6.283185307), sweep = test_uniform(0.3, 5.2);
+            double rad = test_uniform(3, 9), a0 = test_uniform(0, 2 * FM_PI), sweep = test_uniform(0.3, 5.2);
             int ccw = test_rand01() < 0.5;
             double cx = x - rad * cos(a0), cy = y - rad * sin(a0);
             double a1 = ccw ? a0 + sweep : a0 - sweep;
@@ -167,7 +167,7 @@ static void prefix(const fm_motion *m, double u, fm_motion *out)
         double ex = m->end[0] - m->center[0], ey = m->end[1] - m->center[1];
         double a0 = atan2(sy, sx), a1 = atan2(ey, ex);
         double sweep = m->turns > 0 ? a1 - a0 : a0 - a1;
-        while (sweep <= 0) sweep += 2 * 3.14159265358979323846;
+        while (sweep <= 0) sweep += 2 * FM_PI;
         double a = m->turns > 0 ? a0 + u * sweep : a0 - u * sweep;
         double r0 = hypot(sx, sy), r1 = hypot(ex, ey), rr = r0 + u * (r1 - r0);
         if (u * sweep < 1e-9) {

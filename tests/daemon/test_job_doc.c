@@ -265,7 +265,7 @@ static void test_stock_spec(void)
     CHECK(s.shape == FM_STOCK_SHAPE_CYLINDER && s.radius == 4 && s.axis[0] == 5 && s.axis[1] == 6);
     CHECK(s.lo[0] == 1 && s.hi[0] == 9 && s.lo[1] == 2 && s.hi[1] == 10 && s.lo[2] == -10 && s.hi[2] == 10);
     /* caps 2 pi r^2 on z, the side 2 r h on each of x and y, twice */
-    CHECK_NEAR(fm_stock_spec_projected_area(&s), 2 * 3.14159265358979 * 16 + 8 * 4 * 20, 1e-6);
+    CHECK_NEAR(fm_stock_spec_projected_area(&s), 2 * FM_PI * 16 + 8 * 4 * 20, 1e-6);
     CHECK(fm_stock_spec_parse("part.STL", &s, &err) == FM_OK && s.shape == FM_STOCK_SHAPE_STL);
     CHECK(fm_stock_spec_projected_area(&s) < 0);
     CHECK(fm_stock_spec_parse("model.hf", &s, &err) == FM_OK && s.shape == FM_STOCK_SHAPE_HYPERFUN);

@@ -8,8 +8,6 @@
 #include "frep/frep_internal.h"
 #include "test.h"
 
-#define PI 3.14159265358979323846
-
 /* Every value the tests read is also computed by the compiled tape
  * (fm_tape_compile + fm_eval_point) and must equal the reference
  * evaluator's. One tape is cached: tests evaluate one node many times. */

@@ -7,8 +7,8 @@
 #include "test.h"
 #include "frep_random.h"
 
-static const double special_points[] = {0.0, 1.0, -1.0, 0.5, -0.5, 2.0, 1.5707963267948966,
-                                        -1.5707963267948966, 3.141592653589793, 4.71238898038469};
+static const double special_points[] = {0.0,       1.0,        -1.0,  0.5,           -0.5, 2.0,
+                                        FM_PI / 2, -FM_PI / 2, FM_PI, 3 * FM_PI / 2};
 #define NSPECIAL (sizeof special_points / sizeof special_points[0])
 
 static void random_box(fm_interval box[4])

@@ -423,7 +423,7 @@ static void test_mappings(void)
     fm_node coord[3] = {x, y, z};
     for (int a = 0; a < 3; a++) {
         int i = (a + 1) % 3, j = (a + 2) % 3;
-        fm_node rot = fm_rotate(g, coord[i], a, PI / 2);
+        fm_node rot = fm_rotate(g, coord[i], a, FM_PI / 2);
         double p[4] = {0, 0, 0, 0};
         p[j] = 1.0; /* the object's value at +i is now found at +j */
         CHECK_NEAR(reference_and_tape(g, rot, p), 1.0, 1e-15);

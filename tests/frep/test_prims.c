@@ -274,7 +274,7 @@ static void test_ellipsoid(void)
     /* First order: from a surface point s along the unit normal by delta,
      * the distance is |delta| (delta below the smallest curvature radius). */
     for (int i = 0; i < 300; i++) {
-        double th = test_uniform(0, 2 * PI), ph = test_uniform(0.05, PI - 0.05);
+        double th = test_uniform(0, 2 * FM_PI), ph = test_uniform(0.05, FM_PI - 0.05);
         double s[3] = {c[0] + rad[0] * cos(th) * sin(ph), c[1] + rad[1] * sin(th) * sin(ph),
                        c[2] + rad[2] * cos(ph)};
         double nrm[3];

@@ -164,7 +164,7 @@ static void extension(void)
         "array y[3], c[3]; c = [0, 0, 0]; y[1] = x[1]; y[2] = x[2]; y[3] = x[3]; t = x[4];"
         "r = fmAffineT(y, cos(t), -sin(t), 0, t,  sin(t), cos(t), 0, 0,  0, 0, 1, 0);"
         "o = hfSphere(y, c, 1);";
-    double h = 1.5707963267948966;
+    double h = FM_PI / 2;
     CHECK_NEAR(value_at(af, h, 0.5, 0, h), 0.75, 1e-12);
     CHECK_NEAR(value_at(af, 0.3, 0.2, 0.1, 0), 1 - 0.09 - 0.04 - 0.01, 1e-12);
     /* fmProject, fmNormalize and the offsets build their special nodes */
@@ -243,7 +243,7 @@ static void examples(void)
     CHECK(eval_file("../examples/clamp.hf", 0, 0, -1) < 0);
     /* cast stock: centre 15 from top and bottom; walls lean in by tan 3 deg */
     CHECK_NEAR(eval_file("../examples/cast_stock.hf", 50, 30, 15), 15, 1e-12);
-    double t3 = tan(3 * 3.14159265358979 / 180);
+    double t3 = tan(3 * FM_PI / 180);
     CHECK_NEAR(eval_file("../examples/cast_stock.hf", 100 - 15 * t3, 30, 15), 0, 1e-12);
     CHECK_NEAR(eval_file("../examples/cast_stock.hf", 50, 60 - 10 * t3, 10), 0, 1e-12);
     CHECK(eval_file("../examples/cast_stock.hf", 0.5, 0.5, 0.5) < 0); /* filleted corner */

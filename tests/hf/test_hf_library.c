@@ -138,7 +138,7 @@ static double f_blend_int(const double x[3])
 }
 
 /* ---- transforms: the test reads back w . xt with weights 1, sqrt 2, pi ---- */
-static double weigh(const double y[3]) { return y[0] + sqrt(2.0) * y[1] + 3.14159265358979323846 * y[2]; }
+static double weigh(const double y[3]) { return y[0] + sqrt(2.0) * y[1] + FM_PI * y[2]; }
 static const char *weighed = "xt[1] + sqrt(2)*xt[2] + 3.14159265358979323846*xt[3]";
 static double f_shift(const double x[3])
 {

@@ -47,12 +47,11 @@ static inline fm_mesh *fixture_sphere(const double c[3], double r, int rings, in
                              NULL, NULL);
     if (!m)
         return NULL;
-    const double pi = 3.14159265358979323846;
     for (int i = 0; i <= rings; i++) {
-        double th = pi * i / rings;
+        double th = FM_PI * i / rings;
         int count = (i == 0 || i == rings) ? 1 : segs;
         for (int j = 0; j < count; j++) {
-            double ph = 2 * pi * j / segs;
+            double ph = 2 * FM_PI * j / segs;
             double n[3] = {sin(th) * cos(ph), sin(th) * sin(ph), cos(th)};
             float p[3], nf[3];
             uint8_t rgb[3];

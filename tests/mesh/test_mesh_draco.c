@@ -69,7 +69,7 @@ static void round_trip(const fm_mesh *m, int bits, int speed, int normals, int c
             double c = 0;
             for (int k = 0; k < 3; k++)
                 c += (double)d->normals[3 * i + k] * m->normals[3 * j + k];
-            CHECK(c > cos(3.0 * 3.14159265 / 180)); /* 8-bit octahedral: about 1 degree */
+            CHECK(c > cos(3.0 * FM_DEG)); /* 8-bit octahedral: about 1 degree */
         }
     }
     for (size_t i = 0; i < m->vertex_count; i++) {

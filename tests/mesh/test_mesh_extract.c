@@ -145,11 +145,10 @@ static void sample_boundary(ptlist *l, const double lo[3], const double hi[3], c
                 }
         }
     /* Cylinder wall and floor, where inside the box. */
-    const double pi = 3.14159265358979323846;
-    int na = (int)ceil(2 * pi * c->r / s);
+    int na = (int)ceil(2 * FM_PI * c->r / s);
     int nz = (int)ceil((c->z1 - c->z0) / s);
     for (int a = 0; a < na; a++) {
-        double t = 2 * pi * a / na;
+        double t = 2 * FM_PI * a / na;
         for (int k = 0; k <= nz; k++) {
             double z = c->z0 + (c->z1 - c->z0) * k / nz;
             if (z <= hi[2])
@@ -159,9 +158,9 @@ static void sample_boundary(ptlist *l, const double lo[3], const double hi[3], c
     int nr = (int)ceil(c->r / s);
     for (int i = 0; i <= nr; i++) {
         double rr = c->r * i / nr;
-        int m = i ? (int)ceil(2 * pi * rr / s) : 1;
+        int m = i ? (int)ceil(2 * FM_PI * rr / s) : 1;
         for (int a = 0; a < m; a++) {
-            double t = 2 * pi * a / m;
+            double t = 2 * FM_PI * a / m;
             push(l, c->cx + rr * cos(t), c->cy + rr * sin(t), c->z0);
         }
     }
@@ -384,8 +383,7 @@ static void test_pocket(void)
         return;
     }
     check_closed(m, "pocket");
-    const double pi = 3.14159265358979323846;
-    double exact = 14.0 * 13 * 12 - pi * c.r * c.r * (12 - c.z0);
+    double exact = 14.0 * 13 * 12 - FM_PI * c.r * c.r * (12 - c.z0);
     CHECK_NEAR(fm_mesh_volume(m), exact, 0.005 * exact);
 
     /* Every vertex within half a voxel of the exact boundary. */
@@ -685,8 +683,7 @@ static void test_field_sphere(void)
         return;
     }
     check_closed(m, "sphere");
-    const double pi = 3.14159265358979323846;
-    CHECK_NEAR(fm_mesh_volume(m), 4.0 / 3 * pi * pow(sp.r, 3), 0.005 * 4.0 / 3 * pi * pow(sp.r, 3));
+    CHECK_NEAR(fm_mesh_volume(m), 4.0 / 3 * FM_PI * pow(sp.r, 3), 0.005 * 4.0 / 3 * FM_PI * pow(sp.r, 3));
     double worst = 0, worst_n = 0;
     for (size_t i = 0; i < m->vertex_count; i++) {
         const float *p = m->positions + 3 * i, *n = m->normals + 3 * i;
@@ -697,9 +694,9 @@ static void test_field_sphere(void)
         worst_n = fmax(worst_n, acos(fmin(1.0, cosang)));
     }
     CHECK(worst <= 0.5 * voxel);
-    CHECK(worst_n < 3.0 * pi / 180);
+    CHECK(worst_n < 3.0 * FM_PI / 180);
     printf("sphere: %zu vertices, worst radial error %.4f mm, worst normal %.2f deg\n",
-           m->vertex_count, worst, worst_n * 180 / pi);
+           m->vertex_count, worst, worst_n * 180 / FM_PI);
     CHECK(fm_mesh_from_field(&f, 0, NULL, &err) == NULL && err.code == FM_ERR_INPUT);
     fm_mesh_free(m);
 }

@@ -26,19 +26,7 @@
 
 #include "protocols/modbus/modbus_server.h"
 
-static inline int64_t mt_now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
-}
-
-static inline double mt_now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
-}
+static inline int64_t mt_now_ms(void) { return (int64_t)(fm_clock_monotonic_s() * 1000); }
 
 static inline void mt_sleep_ms(int ms)
 {

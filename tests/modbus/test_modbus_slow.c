@@ -83,13 +83,13 @@ int main(int argc, char **argv)
     modbus_set_response_timeout(ctx, 1, 0);
     static double lat[4000];
     int count = 0, errors = 0;
-    double end = mt_now_s() + seconds - 0.5;
+    double end = fm_clock_monotonic_s() + seconds - 0.5;
     mt_sleep_ms(200); /* let the tricklers connect and start */
-    while (mt_now_s() < end && count < 4000) {
+    while (fm_clock_monotonic_s() < end && count < 4000) {
         uint16_t regs[29];
-        double t0 = mt_now_s();
+        double t0 = fm_clock_monotonic_s();
         int rc = modbus_read_input_registers(ctx, 0, 29, regs);
-        lat[count++] = mt_now_s() - t0;
+        lat[count++] = fm_clock_monotonic_s() - t0;
         if (rc != 29 || regs[0] != 1)
             errors++;
         mt_sleep_ms(10);

@@ -30,11 +30,11 @@ static void *poll_loop(void *arg)
     modbus_set_response_timeout(ctx, 2, 0);
     uint32_t last_block = 0;
     int turn = 0;
-    while (mt_now_s() < w->deadline) {
+    while (fm_clock_monotonic_s() < w->deadline) {
         uint16_t regs[29];
-        double t0 = mt_now_s();
+        double t0 = fm_clock_monotonic_s();
         int n = turn++ % 2 ? modbus_read_registers(ctx, 0, 29, regs) : modbus_read_input_registers(ctx, 0, 29, regs);
-        double dt = mt_now_s() - t0;
+        double dt = fm_clock_monotonic_s() - t0;
         w->requests++;
         if (dt > w->worst_s)
             w->worst_s = dt;
@@ -75,7 +75,7 @@ int main(int argc, char **argv)
         return 1;
     }
     worker *w = calloc((size_t)clients, sizeof *w);
-    double deadline = mt_now_s() + duration;
+    double deadline = fm_clock_monotonic_s() + duration;
     int started = 0;
     for (int i = 0; i < clients; i++) {
         w[i].port = fm_modbus_server_port(server);

@@ -26,8 +26,6 @@
 #include "test.h"
 #include "toolpaths/tooltable/tooltable.h"
 
-#define PI 3.14159265358979323846
-
 static const char *box_model = "box_cutter(x[3], a[1])\n{\n  r_alpha = 1;\n"
                                "  box_cutter = (2 - x[1]) & (2 + x[1]) & (1 - x[2]) & (1 + x[2]) & x[3] & (5 - x[3]);\n}\n";
 static const char *ball_model = "offset_ball(x[3], a[1])\n{\n"
@@ -94,13 +92,13 @@ int main(void)
     CHECK(write_file(box_path, box_model) && write_file(ball_path, ball_model));
 
     double box = plunge(box_path, 2.5, 5, -3);
-    double box_want = PI * 5 * 3;
+    double box_want = FM_PI * 5 * 3;
     printf("box cutter plunged 3 mm: removed %.4f mm3, cylinder of radius sqrt(5): %.4f mm3 (%.4f%%)\n", box,
            box_want, 100 * fabs(box - box_want) / box_want);
     CHECK(fabs(box - box_want) <= 0.002 * box_want);
 
     double ball = plunge(ball_path, 3, 2, -1.5);
-    double ball_want = 4 * PI + 2 * PI * PI;
+    double ball_want = 4 * FM_PI + 2 * FM_PI * FM_PI;
     printf("offset ball plunged to tube centre -0.5: removed %.4f mm3, closed form %.4f mm3 (%.4f%%)\n", ball,
            ball_want, 100 * fabs(ball - ball_want) / ball_want);
     CHECK(fabs(ball - ball_want) <= 0.002 * ball_want);

@@ -47,8 +47,6 @@
 #include "test.h"
 #include "toolpaths/tooltable/tooltable.h"
 
-#define PI 3.14159265358979323846
-
 static const char *tool_json =
     "{\"units\": \"mm\", \"tools\": ["
     "{\"number\": 1, \"shape\": \"flat\", \"diameter\": 6, \"flute_length\": 20, \"length\": 40},"
@@ -77,9 +75,9 @@ static int pocket_outline(double (*p)[2], int mid[4], int diag[4])
         p[n][0] = mids[c][0];
         p[n][1] = mids[c][1];
         n++;
-        const double a0 = -PI / 2 + c * PI / 2;
+        const double a0 = -FM_PI / 2 + c * FM_PI / 2;
         for (int i = 0; i <= CORNER_SEGMENTS; i++) {
-            const double a = a0 + (PI / 2) * i / CORNER_SEGMENTS;
+            const double a = a0 + (FM_PI / 2) * i / CORNER_SEGMENTS;
             if (i == CORNER_SEGMENTS / 2) diag[c] = n;
             p[n][0] = cx[c] + RC * cos(a);
             p[n][1] = cy[c] + RC * sin(a);
@@ -343,9 +341,9 @@ static void test_pocket(void)
         return;
     }
     /* the cut pocket: the path's rectangle 33.2 x 13.2 grown by r = 3 */
-    const double a_cut = (33.2 + 6) * (13.2 + 6) - (4 - PI) * 9;
+    const double a_cut = (33.2 + 6) * (13.2 + 6) - (4 - FM_PI) * 9;
     const double v_excess = (a_design - a_cut) * 5;
-    const double v_strip = (15 * 6 + PI * 9) * 0.2, v_plunge = PI * 9 * 0.5;
+    const double v_strip = (15 * 6 + FM_PI * 9) * 0.2, v_plunge = FM_PI * 9 * 0.5;
     fm_job_result r;
     if (!run(pocket_program, "box:0,0,-10,60,40,0", design, h, tol, 0, &r)) {
         CHECK(0);
@@ -592,7 +590,7 @@ static void test_rotary_blame(void)
     run_machine = NULL;
     CHECK(ran);
     if (!ran) return;
-    const double disk = PI * 9;
+    const double disk = FM_PI * 9;
     const double v_expect = (10 * 6 + disk) * 1 + disk * 0.5;
     const fm_deviation *d = &r.deviation;
     printf("rotary blame: %zu gouges (max %.4f mm, %.3f mm3; expected 1.5 mm, %.3f mm3), "

@@ -18,8 +18,6 @@
 #include "test.h"
 #include "toolpaths/tooltable/tooltable.h"
 
-#define PI 3.14159265358979323846
-
 /* Volume of {f >= 0} by the midpoint rule on cells of size h over a box,
  * evaluating the model's own tape in batches: independent of lib/stock. */
 static double integrate_model(const char *path, const double lo[3], const double hi[3], double h)
@@ -76,7 +74,7 @@ static double simpson(double (*f)(double), double a, double b)
 static double disk_area(double h)
 {
     double r = form_radius(h);
-    return PI * r * r;
+    return FM_PI * r * r;
 }
 
 static double chord(double h)
@@ -93,13 +91,13 @@ static double chord(double h)
 static double hex_groove_volume(double d)
 {
     const int nx = 1200, nt = 7200;
-    double sum = 0, dx = 6.0 / nx, dt = 2 * PI / nt;
+    double sum = 0, dx = 6.0 / nx, dt = 2 * FM_PI / nt;
     for (int i = 0; i < nx; i++) {
         double x = -3 + (i + 0.5) * dx;
         double r_lo = 20 - sqrt(9 - x * x);
         for (int j = 0; j < nt; j++) {
             double t = (j + 0.5) * dt;
-            double phi = fmod(t, PI / 3) - PI / 6;
+            double phi = fmod(t, FM_PI / 3) - FM_PI / 6;
             double h = d / cos(phi);
             if (h > r_lo) sum += 0.5 * (h * h - r_lo * r_lo);
         }
@@ -202,7 +200,7 @@ int main(void)
             } else {
                 double d = 17.32;
                 double groove = hex_groove_volume(d);
-                double want = 100 * (400 * PI - 2 * sqrt(3.0) * d * d) + groove;
+                double want = 100 * (400 * FM_PI - 2 * sqrt(3.0) * d * d) + groove;
                 printf("indexer example: removed %.1f mm3, closed form + groove %.1f mm3 (groove %.1f)\n",
                        result.removed_volume_mm3, want, groove);
                 CHECK(fabs(result.removed_volume_mm3 - want) <= 0.005 * want);

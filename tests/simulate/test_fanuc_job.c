@@ -18,8 +18,6 @@
 #include "test.h"
 #include "toolpaths/tooltable/tooltable.h"
 
-#define PI 3.14159265358979323846
-
 static const char *tool_json =
     "{\"units\": \"mm\", \"tools\": ["
     "{\"number\": 1, \"shape\": \"flat\", \"diameter\": 10, \"flute_length\": 25, \"length\": 75,"
@@ -186,7 +184,7 @@ static const char *haas_program =
 
 static void test_haas_pockets(const fm_tool_table *tools)
 {
-    double exact = 2 * PI * 20 * 20 * 6;
+    double exact = 2 * FM_PI * 20 * 20 * 6;
     fm_job_spec spec;
     fm_job_spec_default(&spec);
     spec.program_text = haas_program;
@@ -227,14 +225,14 @@ int main(void)
      * whole rectangle (no point inside is farther than 5 from a long side)
      * plus the outer band with round corners: a b + 2 r (a + b) + pi r^2. */
     double a = 20, b = 10, r = 5;
-    double pocket = (a * b + 2 * r * (a + b) + PI * r * r) * 6;
+    double pocket = (a * b + 2 * r * (a + b) + FM_PI * r * r) * 6;
     /* Slot: 30 mm long, 10 wide, round ends, 3 deep. */
-    double slot = (30 * 10 + PI * r * r) * 3;
+    double slot = (30 * 10 + FM_PI * r * r) * 3;
     /* Drills: radius 3, point 118 degrees: a cone of height 3 / tan 59
      * under a cylinder, to tip depths 10 (two G81 holes) and 15 (two G83). */
-    double rd = 3, cone = rd / tan(59 * PI / 180);
-    double hole10 = PI * rd * rd * (10 - cone) + PI * rd * rd * cone / 3;
-    double hole15 = PI * rd * rd * (15 - cone) + PI * rd * rd * cone / 3;
+    double rd = 3, cone = rd / tan(59 * FM_PI / 180);
+    double hole10 = FM_PI * rd * rd * (10 - cone) + FM_PI * rd * rd * cone / 3;
+    double hole15 = FM_PI * rd * rd * (15 - cone) + FM_PI * rd * rd * cone / 3;
     double exact = pocket + slot + 2 * hole10 + 2 * hole15;
 
     fm_job_spec spec;

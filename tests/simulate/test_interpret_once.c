@@ -17,7 +17,6 @@
 #include "test.h"
 #include "toolpaths/tooltable/tooltable.h"
 
-#define PI 3.14159265358979323846
 #define SLOT_LINE 5
 
 static const char *TOOLS = "{\"units\": \"mm\", \"tools\": [{\"number\": 1, \"shape\": \"flat\", "
@@ -79,7 +78,7 @@ static void test_slot_with_design(void)
     fm_error_clear(&err);
     CHECK(fm_job_run(&spec, NULL, &r, &err) == FM_OK);
     CHECK(r.interpretations == 1);
-    const double want = 2 * (2 * 3 * 20 + PI * 9);
+    const double want = 2 * (2 * 3 * 20 + FM_PI * 9);
     CHECK_NEAR(r.removed_volume_mm3, want, 2e-3 * want);
     CHECK(r.has_deviation && r.deviation.gouge_count >= 1);
     if (r.has_deviation && r.deviation.gouge_count >= 1) {

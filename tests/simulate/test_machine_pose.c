@@ -16,8 +16,6 @@
 #include "test.h"
 #include "toolpaths/tooltable/tooltable.h"
 
-#define PI 3.14159265358979323846
-
 static const char *tool_json =
     "{\"units\": \"mm\", \"tools\": ["
     "{\"number\": 1, \"shape\": \"ball\", \"diameter\": 6, \"flute_length\": 20, \"length\": 40}]}";
@@ -38,7 +36,7 @@ static void track(void *user, const fm_motion *motion)
 
 static void rz(double deg, double R[9])
 {
-    double c = cos(deg * PI / 180), s = sin(deg * PI / 180);
+    double c = cos(deg * FM_PI / 180), s = sin(deg * FM_PI / 180);
     const double r[9] = {c, -s, 0, s, c, 0, 0, 0, 1};
     memcpy(R, r, sizeof r);
 }

@@ -19,7 +19,6 @@
 #include "job.h"
 #include "test.h"
 
-#define PI 3.14159265358979323846
 #define VOXEL 0.05
 
 static size_t sphere_bytes(double radius, const char *dir)
@@ -32,7 +31,7 @@ static size_t sphere_bytes(double radius, const char *dir)
     fprintf(f, "sphere(x[3], a[1])\n{\n  array c[3];\n  c = [1, 2, 3];\n  sphere = hfSphere(x, c, %g);\n}\n",
             radius);
     fclose(f);
-    const size_t estimate = fm_stock_estimate_bytes(6 * PI * radius * radius, VOXEL, 3);
+    const size_t estimate = fm_stock_estimate_bytes(6 * FM_PI * radius * radius, VOXEL, 3);
     fm_stock_options opt;
     fm_stock_options_default(&opt);
     opt.voxel_mm = VOXEL;
@@ -50,7 +49,7 @@ static size_t sphere_bytes(double radius, const char *dir)
         CHECK(s != NULL);
         return 0;
     }
-    const double exact = 4.0 / 3.0 * PI * radius * radius * radius;
+    const double exact = 4.0 / 3.0 * FM_PI * radius * radius * radius;
     const double volume = fm_stock_volume(s);
     const size_t bytes = fm_stock_memory_bytes(s);
     printf("sphere R %g at %g mm: volume %.2f mm3 (exact %.2f), grid %.2f MB, area estimate %.2f MB\n",

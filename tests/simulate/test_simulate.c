@@ -12,8 +12,6 @@
 #include "test.h"
 #include "toolpaths/tooltable/tooltable.h"
 
-#define PI 3.14159265358979323846
-
 static const char *tool_json =
     "{\"units\": \"mm\", \"tools\": ["
     "{\"number\": 1, \"shape\": \"flat\", \"diameter\": 6, \"flute_length\": 20, \"length\": 40},"
@@ -75,7 +73,7 @@ static double revolution_volume(double (*r)(double), double H)
     for (int i = 0; i <= n; i++) {
         double w = (i == 0 || i == n) ? 1 : (i % 2 ? 4 : 2);
         double ri = r(i * h);
-        sum += w * PI * ri * ri;
+        sum += w * FM_PI * ri * ri;
     }
     return sum * h / 3;
 }
@@ -111,33 +109,33 @@ int main(int argc, char **argv)
 
     /* Flat slot with plunge: 60 mm long, 6 wide, 3 deep with round ends. */
     const char *flat_slot = "G21 G90 T1 M6 S10000 M3\nG0 X20 Y30 Z5\nG1 Z-3 F300\nG1 X80 F800\nG0 Z5\nM2\n";
-    double flat_slot_v = (60 * 6 + PI * 9) * 3;
+    double flat_slot_v = (60 * 6 + FM_PI * 9) * 3;
 
     /* Ball slot, ball centre on the stock top: half a capsule. */
     const char *ball_slot = "G21 G90 T2 M6 S10000 M3\nG0 X20 Y30 Z5\nG1 Z-3 F300\nG1 X80 F800\nG0 Z5\nM2\n";
-    double ball_slot_v = (PI * 9 * 60 + 4.0 / 3 * PI * 27) / 2;
+    double ball_slot_v = (FM_PI * 9 * 60 + 4.0 / 3 * FM_PI * 27) / 2;
 
     /* Full circle of radius 20 at depth 2: an annulus 17..23. */
     const char *ring = "G21 G90 T1 M6 S10000 M3\nG0 X70 Y30 Z5\nG1 Z-2 F300\nG2 X70 Y30 I-20 J0 F800\n"
                        "G0 Z5\nM2\n";
-    double ring_v = PI * (23 * 23 - 17 * 17) * 2;
+    double ring_v = FM_PI * (23 * 23 - 17 * 17) * 2;
 
     /* Helical bore: helix of radius 2.5 down 10 mm in 4 turns, then a full
      * circle at the bottom: a cylinder of radius 5.5, depth 10. */
     const char *helix = "G21 G90 T1 M6 S10000 M3\nG0 X52.5 Y30 Z5\nG1 Z0 F300\n"
                         "G3 X52.5 Y30 Z-10 I-2.5 J0 P4 F600\nG3 X52.5 Y30 I-2.5 J0\nG0 Z5\nM2\n";
-    double helix_v = PI * 5.5 * 5.5 * 10;
+    double helix_v = FM_PI * 5.5 * 5.5 * 10;
 
     /* G81 pattern: four 5 mm holes, tip at Z-10, 118 degree point. */
     const char *drill = "G21 G90 T3 M6 S3000 M3\nG0 Z5\nG98 G81 X20 Y20 Z-10 R2 F200\nX40\nY40\nX20\n"
                         "G80\nG0 Z5\nM2\n";
-    double cone_h = 2.5 / tan(59.0 * PI / 180);
-    double drill_v = 4 * (PI * 6.25 * (10 - cone_h) + PI * 6.25 * cone_h / 3);
+    double cone_h = 2.5 / tan(59.0 * FM_PI / 180);
+    double drill_v = 4 * (FM_PI * 6.25 * (10 - cone_h) + FM_PI * 6.25 * cone_h / 3);
 
     /* V-bit (90 degrees, sharp) line 2 mm deep: a triangular groove of half
      * width 2 plus a cone at the ends (two halves). */
     const char *vline = "G21 G90 T4 M6 S15000 M3\nG0 X20 Y30 Z5\nG1 Z-2 F300\nG1 X80 F800\nG0 Z5\nM2\n";
-    double vline_v = 60 * 2 * 2 + PI * 4 * 2 / 3;
+    double vline_v = 60 * 2 * 2 + FM_PI * 4 * 2 / 3;
 
     /* Bull nose slot 3 mm deep, 50 mm long: the profile's cross-section
      * along the slot plus one whole tool bottom for the two ends. */

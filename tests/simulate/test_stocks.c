@@ -15,7 +15,6 @@
 #include "test_stl.h"
 #include "toolpaths/tooltable/tooltable.h"
 
-#define PI 3.14159265358979323846
 /* The README's "at most 0.022% off at 0.1 mm". */
 #define CLAIMED 0.00022
 
@@ -75,7 +74,7 @@ int main(void)
      * removes the strip |y| <= 3 of the disc, 3 deep. */
     if (run("G21 G90 T1 M6 S10000 M3\nG0 X-30 Y0 Z5\nG1 Z-3 F300\nG1 X30 F800\nG0 Z5\nM2\n",
             "cylinder:0,0,-10,0,20", &r) == 0) {
-        check_rel("cylinder: initial volume", r.initial_volume_mm3, PI * 400 * 10, CLAIMED);
+        check_rel("cylinder: initial volume", r.initial_volume_mm3, FM_PI * 400 * 10, CLAIMED);
         check_rel("cylinder: slot across", r.removed_volume_mm3, disc_strip(20, 3) * 3, CLAIMED);
         fm_stock_free(r.stock);
     }
@@ -92,7 +91,7 @@ int main(void)
     snprintf(vdb, sizeof vdb, "%s/after.vdb", dir);
     const double lo[3] = {0, 0, -10}, hi[3] = {40, 30, 0};
     CHECK(fm_test_write_box_stl(stl, lo, hi, FM_TEST_BOX_NO_FACE) == 0);
-    const double slot = (20 * 6 + PI * 9) * 3;
+    const double slot = (20 * 6 + FM_PI * 9) * 3;
     if (run("G21 G90 T1 M6 S10000 M3\nG0 X10 Y10 Z5\nG1 Z-3 F300\nG1 X30 F800\nG0 Z5\nM2\n", stl, &r) == 0) {
         check_rel("stl box: initial volume", r.initial_volume_mm3, 40 * 30 * 10, CLAIMED);
         check_rel("stl box: slot", r.removed_volume_mm3, slot, CLAIMED);

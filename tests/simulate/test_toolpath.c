@@ -15,8 +15,6 @@
 #include "test.h"
 #include "toolpath.h"
 
-#define PI 3.14159265358979323846
-
 static fm_motion motion(fm_motion_kind kind, double x0, double y0, double x1, double y1, double t0,
                         double t1)
 {
@@ -95,7 +93,7 @@ static void test_arc_and_lines(void)
     CHECK(json_array_size(points) == (size_t)(3 * first));
     /* the arc's point k at angle 5k degrees on the circle of radius 10 */
     for (int k = 0; k < 19; k++) {
-        double th = 5.0 * k * PI / 180;
+        double th = 5.0 * k * FM_PI / 180;
         size_t p = (size_t)(3 * (2 + k));
         CHECK_NEAR(json_number_value(json_array_get(points, p)), 10 * cos(th), 1e-3);
         CHECK_NEAR(json_number_value(json_array_get(points, p + 1)), 10 * sin(th), 1e-3);
@@ -169,7 +167,7 @@ static void test_table_placements(void)
     json_t *P = json_object_get(doc, "placements");
     CHECK(json_array_size(P) == 12 * n);
     for (size_t k = 0; k < n && json_array_size(P) == 12 * n; k++) {
-        double A = 90.0 * (double)k / (double)(n - 1) * PI / 180, q[12];
+        double A = 90.0 * (double)k / (double)(n - 1) * FM_PI / 180, q[12];
         for (int i = 0; i < 12; i++) q[i] = json_number_value(json_array_get(P, 12 * k + (size_t)i));
         /* Rx(A), row-major, no translation */
         const double want[12] = {1, 0, 0, 0, cos(A), -sin(A), 0, sin(A), cos(A), 0, 0, 0};

@@ -274,7 +274,7 @@ static void test_gouges(int threads, fm_deviation *keep)
     }
     fm_deviation dev;
     CHECK(compare(s, d, &dev));
-    const double v_pocket = 10 * 10 * 0.2, v_plunge = M_PI * 1.5 * 1.5 * 1.5;
+    const double v_pocket = 10 * 10 * 0.2, v_plunge = FM_PI * 1.5 * 1.5 * 1.5;
     printf("gouges (%d threads): %zu regions, max %.4f mm, %.3f mm3 (expected %.3f)\n", threads,
            dev.gouge_total, dev.max_gouge_mm, dev.gouge_volume_mm3, v_pocket + v_plunge);
     CHECK(dev.gouge_total == 2);

@@ -19,13 +19,6 @@ static long status_kb(const char *key)
     return kb;
 }
 
-static double cpu_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
 /* AddressSanitizer's shadow memory and quarantine add to the resident set,
  * so the 300 MB bound is only meaningful in a plain build. */
 #if defined(__SANITIZE_ADDRESS__)
@@ -54,9 +47,9 @@ int main(void)
     o.voxel_mm = 0.1;
     const double lo[3] = {0, 0, 0}, hi[3] = {100, 100, 50};
     const long base = status_kb("VmRSS:");
-    double t = cpu_seconds();
+    double t = fm_clock_cpu_s();
     fm_stock *s = fm_stock_new_box(lo, hi, &o, &err);
-    t = cpu_seconds() - t;
+    t = fm_clock_cpu_s() - t;
     CHECK(s != NULL);
     if (!s) return test_summary("stock_memory");
     const long rss = status_kb("VmRSS:"), peak = status_kb("VmHWM:");
@@ -74,14 +67,14 @@ int main(void)
     /* 10 ball slots, r 5, 3 mm deep, across the top: each removes a
      * section of a cylinder of radius 5 cut by a chord 2 mm from the
      * centre, along 100 mm (plus two half-ball ends outside the block) */
-    t = cpu_seconds();
+    t = fm_clock_cpu_s();
     for (int i = 0; i < 10; i++) {
         const double a[3] = {-10, 5 + 10 * i, 52}, b[3] = {110, 5 + 10 * i, 52};
         shape c = make_capsule(a, b, 5);
         fm_field f = shape_field(&c);
         CHECK(fm_stock_subtract(s, &f, NULL, NULL, &err) == FM_OK);
     }
-    t = cpu_seconds() - t;
+    t = fm_clock_cpu_s() - t;
     /* circular segment of radius 5 below a chord at distance 2 */
     const double seg = 25 * acos(2.0 / 5) - 2 * sqrt(25 - 4);
     const double want = 10 * seg * 100;

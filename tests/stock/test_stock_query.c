@@ -253,7 +253,7 @@ static void test_zero_set(void)
      * bounds both; the raw field would be off by 90%. */
     CHECK(w.worst < 0.025);
     /* the volume is the sphere's */
-    CHECK_NEAR(fm_stock_volume(s), 4.0 / 3.0 * 3.14159265358979 * sr * sr * sr, 0.005 * 523.6);
+    CHECK_NEAR(fm_stock_volume(s), 4.0 / 3.0 * FM_PI * sr * sr * sr, 0.005 * 523.6);
     fm_stock_free(s);
 
     /* a field with no zero set is an input error, not a crash */

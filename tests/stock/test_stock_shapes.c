@@ -87,7 +87,7 @@ static void test_cylinder(void)
     fm_stock *s = fm_stock_new_cylinder(3, -4, z0, z1, r, &o, &err);
     CHECK(s != NULL);
     if (!s) return;
-    const double vol = M_PI * r * r * (z1 - z0), area = 2 * M_PI * r * r + 2 * M_PI * r * (z1 - z0);
+    const double vol = FM_PI * r * r * (z1 - z0), area = 2 * FM_PI * r * r + 2 * FM_PI * r * (z1 - z0);
     double ar = 0;
     CHECK(fm_stock_surface_area(s, &ar, &err) == FM_OK);
     CHECK_NEAR(fm_stock_volume(s), vol, 1e-3 * vol);
@@ -109,7 +109,7 @@ static void test_field(void)
     fm_stock *s = fm_stock_new_from_field(&f, &o, &err);
     CHECK(s != NULL);
     if (!s) return;
-    const double vol = 4.0 / 3.0 * M_PI * 216, area = 4 * M_PI * 36;
+    const double vol = 4.0 / 3.0 * FM_PI * 216, area = 4 * FM_PI * 36;
     double ar = 0;
     CHECK(fm_stock_surface_area(s, &ar, &err) == FM_OK);
     CHECK_NEAR(fm_stock_volume(s), vol, 1e-3 * vol);

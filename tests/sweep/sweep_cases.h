@@ -10,8 +10,6 @@
 
 #include "sweep/sweep.h"
 
-#define SC_PI 3.14159265358979323846
-
 static inline fm_tool_spec sc_spec(fm_tool_shape shape)
 {
     fm_tool_spec s;

@@ -13,8 +13,6 @@
 
 #include <stdlib.h>
 
-#define DEG (SC_PI / 180)
-
 /* ------------------------------------------- the chains, written out -- */
 
 static void Rx(double th, const double v[3], double out[3])
@@ -140,7 +138,7 @@ static void check_frame_up(void)
             fm_motion m = rotary_line(&mc, from, to, r0, r1, tcp);
             m.tip_offset[2] = -0.7;
             for (int i = 0; i < 100; i++) {
-                double u = i / 99.0, a = (r0[0] + u * (r1[0] - r0[0])) * DEG, c = (r0[2] + u * (r1[2] - r0[2])) * DEG;
+                double u = i / 99.0, a = (r0[0] + u * (r1[0] - r0[0])) * FM_DEG, c = (r0[2] + u * (r1[2] - r0[2])) * FM_DEG;
                 double X[3], tip_m[3], axis_m[3], z[3] = {0, 0, 1}, q[3];
                 for (int k = 0; k < 3; k++) X[k] = from[k] + u * (to[k] - from[k]);
                 if (tcp) {
@@ -207,7 +205,7 @@ static void check_five_axis_move(void)
         fm_sweep *s;
         CHECK(fm_sweep_new(&m, &t.flutes, NULL, &s, NULL) == FM_OK);
         for (int i = 0; i < 100; i++) {
-            double u = i / 99.0, a = (r0[0] + u * (r1[0] - r0[0])) * DEG, c = (r0[2] + u * (r1[2] - r0[2])) * DEG;
+            double u = i / 99.0, a = (r0[0] + u * (r1[0] - r0[0])) * FM_DEG, c = (r0[2] + u * (r1[2] - r0[2])) * FM_DEG;
             double X[3], tip[3], axis[3], want_tip[3], want_axis[3];
             for (int k = 0; k < 3; k++) X[k] = from[k] + u * (to[k] - from[k]);
             if (tcp) {
@@ -258,7 +256,7 @@ static void check_five_axis_move(void)
         memcpy(hmo.tip_offset, o, sizeof o);
         hmo.tool_length = HEAD_TOOL;
         for (int i = 0; i < 100; i++) {
-            double u = i / 99.0, b = (hr0[1] + u * (hr1[1] - hr0[1])) * DEG, c = (hr0[2] + u * (hr1[2] - hr0[2])) * DEG;
+            double u = i / 99.0, b = (hr0[1] + u * (hr1[1] - hr0[1])) * FM_DEG, c = (hr0[2] + u * (hr1[2] - hr0[2])) * FM_DEG;
             double X[3], tip[3], axis[3], want_tip[3], want_axis[3];
             for (int k = 0; k < 3; k++) X[k] = from[k] + u * (to[k] - from[k]);
             double zero[3] = {0, 0, 0};
@@ -284,7 +282,7 @@ static void check_five_axis_move(void)
         fm_motion bmo = rotary_line(&bm, from, to, hr0, hr1, tcp);
         bmo.tool_length = HEAD_TOOL;
         for (int i = 0; i < 100; i++) {
-            double u = i / 99.0, b = (hr0[1] + u * (hr1[1] - hr0[1])) * DEG, c = (hr0[2] + u * (hr1[2] - hr0[2])) * DEG;
+            double u = i / 99.0, b = (hr0[1] + u * (hr1[1] - hr0[1])) * FM_DEG, c = (hr0[2] + u * (hr1[2] - hr0[2])) * FM_DEG;
             double X[3], tip[3], axis[3], want_tip[3], want_axis[3], q[3], z[3] = {0, 0, 1};
             double tc[3] = {3, -2, 0};
             for (int k = 0; k < 3; k++) X[k] = from[k] + u * (to[k] - from[k]);
@@ -503,7 +501,7 @@ static void check_fold(void)
     fm_motion f;
     CHECK(fm_kin_fold(&m, &f));
     double want[3];
-    Rx(-30 * DEG, to, want);
+    Rx(-30 * FM_DEG, to, want);
     for (int k = 0; k < 3; k++) CHECK_NEAR(f.end[k], want[k], 1e-12);
     fm_tool t;
     fm_tool_spec spec = sc_spec(FM_TOOL_FLAT);
@@ -525,7 +523,7 @@ static void check_fold(void)
         double u = i / 10.0, tip[3], ax[3], P[3], w[3];
         fm_sweep_pose(s, arc.t0 + u * (arc.t1 - arc.t0), tip, ax);
         fm_motion_point_at(&arc, u, P);
-        Rx(-SC_PI / 2, P, w);
+        Rx(-FM_PI / 2, P, w);
         for (int k = 0; k < 3; k++) CHECK_NEAR(tip[k], w[k], 1e-9);
     }
     fm_sweep_free(s);
@@ -681,13 +679,13 @@ static void check_machine(void)
     fm_machine_table_transform(&mc, r, -1, R, T);
     for (int i = 0; i < 3; i++) x[i] = R[3 * i] * w[0] + R[3 * i + 1] * w[1] + R[3 * i + 2] * w[2] + T[i];
     double back[3], ax[3];
-    trunnion_written(33 * DEG, -71 * DEG, x, back, ax);
+    trunnion_written(33 * FM_DEG, -71 * FM_DEG, x, back, ax);
     for (int i = 0; i < 3; i++) CHECK_NEAR(back[i], w[i], 1e-12);
     /* Only the base axis: R_A alone. */
     fm_machine_table_transform(&mc, r, 1, R, T);
     for (int i = 0; i < 3; i++) x[i] = R[3 * i] * w[0] + R[3 * i + 1] * w[1] + R[3 * i + 2] * w[2] + T[i];
     double want[3];
-    about(Rx, TRT_A_THROUGH, 33 * DEG, w, want);
+    about(Rx, TRT_A_THROUGH, 33 * FM_DEG, w, want);
     for (int i = 0; i < 3; i++) CHECK_NEAR(x[i], want[i], 1e-12);
     fm_error err;
     fm_machine bad = trunnion(0);
@@ -705,10 +703,10 @@ static void check_machine(void)
     /* Pieces for drawing follow the largest joint turn. */
     double f3[3] = {0, 0, 0}, r0[3] = {0, 0, 0}, r1[3] = {90, 0, 0};
     fm_motion m = rotary_line(&mc, f3, f3, r0, r1, 0);
-    CHECK(fm_motion_pieces(&m, 5 * DEG, 32, 1000) == 18);
+    CHECK(fm_motion_pieces(&m, 5 * FM_DEG, 32, 1000) == 18);
     CHECK(fm_motion_has_rotary(&m));
     m.machine = NULL;
-    CHECK(!fm_motion_has_rotary(&m) && fm_motion_pieces(&m, 5 * DEG, 32, 1000) == 1);
+    CHECK(!fm_motion_has_rotary(&m) && fm_motion_pieces(&m, 5 * FM_DEG, 32, 1000) == 1);
 }
 
 int main(void)

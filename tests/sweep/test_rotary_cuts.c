@@ -16,7 +16,6 @@
 #include <stdlib.h>
 #include <time.h>
 
-#define PI 3.14159265358979323846
 #define BAR_HALF 20.0
 
 /* A round bar along X: radius R about (y, z) = (yc, 0), |x| <= 20; exact
@@ -128,15 +127,14 @@ static fm_tool flat(double diameter, double flutes)
     return t;
 }
 
-static double cpu_s(void) { return (double)clock() / CLOCKS_PER_SEC; }
 static double started;
 
 static void report(const char *name, double got, double want)
 {
     double rel = (got - want) / want;
     printf("%-16s removed %10.3f mm^3, expected %10.3f: %+.3f%% (%.1f s of CPU)\n", name, got, want, 100 * rel,
-           cpu_s() - started);
-    started = cpu_s();
+           fm_clock_cpu_s() - started);
+    started = fm_clock_cpu_s();
     CHECK(fabs(rel) <= 0.005);
 }
 
@@ -155,7 +153,7 @@ static void check_ring_groove(void)
     fm_motion turn = move(&mc, down, down, 0, 360, 1);
     CHECK(cut(s, &plunge, &t));
     CHECK(cut(s, &turn, &t));
-    report("ring groove", fm_stock_removed_volume(s), PI * (b.R * b.R - r * r) * w);
+    report("ring groove", fm_stock_removed_volume(s), FM_PI * (b.R * b.R - r * r) * w);
     fm_stock_free(s);
 }
 
@@ -224,10 +222,10 @@ static double helix_volume(double R, double r, double a, double x0, double x1, d
                 double c2 = a * a - s * s;
                 if (c2 < 0) c2 = 0;
                 double alpha = fmin(acos(r / rho), asin(fmin(1, sqrt(c2) / rho)));
-                lo = fmin(lo, PI / 2 - alpha - th);
-                hi = fmax(hi, PI / 2 + alpha - th);
+                lo = fmin(lo, FM_PI / 2 - alpha - th);
+                hi = fmax(hi, FM_PI / 2 + alpha - th);
             }
-            area += fmin(2 * PI, hi - lo) * rho * hr;
+            area += fmin(2 * FM_PI, hi - lo) * rho * hr;
         }
         vol += area * hx;
     }
@@ -248,13 +246,13 @@ static void check_helix(void)
     fm_motion helix = move(&mc, down, end, 0, Theta, 1);
     CHECK(cut(s, &plunge, &t));
     CHECK(cut(s, &helix, &t));
-    report("helical groove", fm_stock_removed_volume(s), helix_volume(b.R, r, w / 2, x0, x1, Theta * PI / 180));
+    report("helical groove", fm_stock_removed_volume(s), helix_volume(b.R, r, w / 2, x0, x1, Theta * FM_PI / 180));
     fm_stock_free(s);
 }
 
 int main(void)
 {
-    started = cpu_s();
+    started = fm_clock_cpu_s();
     check_ring_groove();
     check_indexed();
     check_helix();

@@ -32,7 +32,7 @@ static void pick_point(const fm_sweep *s, const fm_motion *m, const fm_tool_part
         zc = test_rand01() < 0.5 ? part->z_lo : part->z_hi;
         r = test_uniform(0, part->r_max * 0.5);
     }
-    double ang = test_uniform(0, 2 * SC_PI);
+    double ang = test_uniform(0, 2 * FM_PI);
     double c[3], a[3];
     fm_sweep_pose(s, m->t0 + test_rand01() * (m->t1 - m->t0), c, a);
     /* Two unit vectors perpendicular to the axis. */
@@ -540,7 +540,7 @@ static void check_arc_semantics(void)
     /* G17 CCW quarter from (5, 0) to (0, 5) about the origin: the tip passes
      * (5/sqrt2, 5/sqrt2) and never (-5, 0). Tip offset moves everything. */
     double c[3] = {0, 0, 0};
-    fm_motion m = sc_arc(2, c, 5, 0, SC_PI / 2, 1, 0);
+    fm_motion m = sc_arc(2, c, 5, 0, FM_PI / 2, 1, 0);
     m.tip_offset[2] = -2;
     fm_sweep *s;
     fm_tool t;

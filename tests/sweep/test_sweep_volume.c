@@ -18,8 +18,6 @@
 #include "test.h"
 #include "sweep/sweep_cases.h"
 
-#define PI SC_PI
-
 typedef struct vol_acc {
     double vol, err;
     size_t cells, uncertain;
@@ -123,13 +121,13 @@ static double bore_volume(double R, double H, double Ra, double p)
     for (int i = 0; i < n; i++) {
         double rho = (i + 0.5) * h, alpha;
         if (rho <= R - Ra) {
-            alpha = PI;
+            alpha = FM_PI;
         } else {
             double c = (rho * rho + Ra * Ra - R * R) / (2 * rho * Ra);
             alpha = acos(c > 1 ? 1 : c < -1 ? -1 : c);
         }
-        double ext = H + p / (2 * PI) * ((2 * PI - 2 * alpha) * alpha / PI + 2 * alpha);
-        sum += 2 * PI * rho * ext;
+        double ext = H + p / (2 * FM_PI) * ((2 * FM_PI - 2 * alpha) * alpha / FM_PI + 2 * alpha);
+        sum += 2 * FM_PI * rho * ext;
     }
     return sum * h;
 }
@@ -140,11 +138,11 @@ int main(void)
     /* Slot: flat d = 6, flute 3, 10 mm along X: L d depth + the two end caps. */
     fm_tool_part flat = flat_part(6, 3);
     fm_motion m = sc_line(0, 0, 0, 10, 0, 0);
-    report("slot", sweep_volume(&m, &flat, 1, L), (10 * 6 + PI * 9) * 3);
+    report("slot", sweep_volume(&m, &flat, 1, L), (10 * 6 + FM_PI * 9) * 3);
     /* Ring: full circle of radius 5: annulus pi ((5 + 3)^2 - (5 - 3)^2) times 3. */
     double c0[3] = {0, 0, 0};
     m = sc_arc(2, c0, 5, 0, 0, 1, 0);
-    report("ring", sweep_volume(&m, &flat, 1, L), PI * (64 - 4) * 3);
+    report("ring", sweep_volume(&m, &flat, 1, L), FM_PI * (64 - 4) * 3);
     /* Ball of radius 1 along one turn of a helix (radius 5, pitch 4): a tube,
      * pi r^2 length + the two half-ball caps (Weyl's tube formula; the
      * curvature radius 5.08 exceeds r and turns are 4 > 2r apart). */
@@ -154,8 +152,8 @@ int main(void)
     fm_error err;
     CHECK(fm_tool_part_from_profile(sph, 2, &ball, &err) == FM_OK);
     m = sc_arc(2, c0, 5, 0, 0, 1, 4);
-    double len = sqrt(pow(2 * PI * 5, 2) + 16);
-    report("ball helix", sweep_volume(&m, &ball, 1, 5), PI * len + 4.0 / 3 * PI);
+    double len = sqrt(pow(2 * FM_PI * 5, 2) + 16);
+    report("ball helix", sweep_volume(&m, &ball, 1, 5), FM_PI * len + 4.0 / 3 * FM_PI);
     /* Flat d = 6, height 3, helix radius 1, pitch 2 down one turn (a bore). */
     m = sc_arc(2, c0, 1, 0, 0, 1, -2);
     report("flat helix (bore)", sweep_volume(&m, &flat, 1, 5), bore_volume(3, 3, 1, 2));
@@ -164,7 +162,7 @@ int main(void)
     fm_tool drill;
     CHECK(fm_tool_build(&ds, &drill, &err) == FM_OK);
     m = sc_line(0, 0, 0, 0, 0, -5);
-    double hc = 3 / tan(59 * PI / 180);
-    report("drill plunge", sweep_volume(&m, &drill.flutes, 1, L), PI * 9 * (10 + 5 - hc) + PI * 9 * hc / 3);
+    double hc = 3 / tan(59 * FM_PI / 180);
+    report("drill plunge", sweep_volume(&m, &drill.flutes, 1, L), FM_PI * 9 * (10 + 5 - hc) + FM_PI * 9 * hc / 3);
     return test_summary("sweep_volume");
 }

@@ -11,9 +11,6 @@
 #include <math.h>
 #include <stdlib.h>
 
-#define PI 3.14159265358979323846
-#define DEG (PI / 180)
-
 static fm_tool_spec base_spec(fm_tool_shape shape)
 {
     fm_tool_spec s;
@@ -63,8 +60,8 @@ static samples sample_boundary(const fm_tool_part *part)
             double a0 = atan2(e->a[1] - e->c[1], e->a[0] - e->c[0]);
             double a1 = atan2(e->b[1] - e->c[1], e->b[0] - e->c[0]);
             double d = a1 - a0;
-            if (d > PI) d -= 2 * PI;
-            if (d < -PI) d += 2 * PI;
+            if (d > FM_PI) d -= 2 * FM_PI;
+            if (d < -FM_PI) d += 2 * FM_PI;
             int k = (int)(fabs(d) / 1e-3) + 1;
             for (int j = 0; j < k; j++) {
                 double a = a0 + d * j / k;
@@ -163,7 +160,7 @@ static double part_volume(const fm_tool_part *part)
             double w = (i == 0 || i == n) ? 1 : (i % 2 ? 4 : 2);
             sum += w * r * r;
         }
-        total += PI * sum * h / 3;
+        total += FM_PI * sum * h / 3;
     }
     return total;
 }
@@ -176,7 +173,7 @@ static void check_shapes(void)
     /* Flat: cylinder. */
     fm_tool_spec s = base_spec(FM_TOOL_FLAT);
     CHECK(fm_tool_build(&s, &t, &err) == FM_OK);
-    CHECK_NEAR(part_volume(&t.flutes), PI * R * R * F, 1e-3);
+    CHECK_NEAR(part_volume(&t.flutes), FM_PI * R * R * F, 1e-3);
     CHECK(t.flutes.convex);
     double p[3] = {0, 0, -1};
     CHECK_NEAR(fm_tool_part_eval(&t.flutes, NULL, p), -1, 1e-15);
@@ -185,14 +182,14 @@ static void check_shapes(void)
     check_part_distance(&t.flutes, "flat");
     /* Shank and holder. */
     CHECK(t.has_shank && t.has_holder);
-    CHECK_NEAR(part_volume(&t.shank), PI * R * R * (30 - F), 1e-3);
-    double hv = PI * 100 * 25 + PI * 20.0 / 3 * (400 + 20 * 15 + 225);
+    CHECK_NEAR(part_volume(&t.shank), FM_PI * R * R * (30 - F), 1e-3);
+    double hv = FM_PI * 100 * 25 + FM_PI * 20.0 / 3 * (400 + 20 * 15 + 225);
     CHECK_NEAR(part_volume(&t.holder), hv, 1e-3 * hv / 1000);
     check_part_distance(&t.holder, "holder");
     /* Ball: hemisphere + cylinder. */
     s = base_spec(FM_TOOL_BALL);
     CHECK(fm_tool_build(&s, &t, &err) == FM_OK);
-    CHECK_NEAR(part_volume(&t.flutes), 2.0 / 3 * PI * R * R * R + PI * R * R * (F - R), 1e-3);
+    CHECK_NEAR(part_volume(&t.flutes), 2.0 / 3 * FM_PI * R * R * R + FM_PI * R * R * (F - R), 1e-3);
     CHECK_NEAR(t.flutes.ball_radius, R, 0);
     double pb[3] = {0, 0, R};
     CHECK_NEAR(fm_tool_part_eval(&t.flutes, NULL, pb), R, 1e-15);
@@ -203,9 +200,9 @@ static void check_shapes(void)
     CHECK(fm_tool_build(&s, &t, &err) == FM_OK);
     {
         double rc = 1, a = R - rc;
-        double v = PI * a * a * rc                                            /* inner cylinder under the corners */
-                   + 2 * PI * (a + 4 * rc / (3 * PI)) * PI * rc * rc / 4        /* corner ring */
-                   + PI * R * R * (F - rc);
+        double v = FM_PI * a * a * rc                                            /* inner cylinder under the corners */
+                   + 2 * FM_PI * (a + 4 * rc / (3 * FM_PI)) * FM_PI * rc * rc / 4        /* corner ring */
+                   + FM_PI * R * R * (F - rc);
         CHECK_NEAR(part_volume(&t.flutes), v, 1e-3);
     }
     check_part_distance(&t.flutes, "bull");
@@ -213,8 +210,8 @@ static void check_shapes(void)
     s = base_spec(FM_TOOL_VBIT);
     CHECK(fm_tool_build(&s, &t, &err) == FM_OK);
     {
-        double rt = 0.2, h = (R - rt) / tan(45 * DEG);
-        double v = PI * h / 3 * (rt * rt + rt * R + R * R) + PI * R * R * (F - h);
+        double rt = 0.2, h = (R - rt) / tan(45 * FM_DEG);
+        double v = FM_PI * h / 3 * (rt * rt + rt * R + R * R) + FM_PI * R * R * (F - h);
         CHECK_NEAR(part_volume(&t.flutes), v, 1e-3);
         double on[3] = {0.5 * (rt + R), 0, 0.5 * h};
         CHECK_NEAR(fm_tool_part_eval(&t.flutes, NULL, on), 0, 1e-14);
@@ -224,8 +221,8 @@ static void check_shapes(void)
     s = base_spec(FM_TOOL_DRILL);
     CHECK(fm_tool_build(&s, &t, &err) == FM_OK);
     {
-        double h = R / tan(59 * DEG);
-        CHECK_NEAR(part_volume(&t.flutes), PI * R * R * h / 3 + PI * R * R * (F - h), 1e-3);
+        double h = R / tan(59 * FM_DEG);
+        CHECK_NEAR(part_volume(&t.flutes), FM_PI * R * R * h / 3 + FM_PI * R * R * (F - h), 1e-3);
         double below[3] = {0, 0, -2};
         CHECK_NEAR(fm_tool_part_eval(&t.flutes, NULL, below), -2, 1e-15);
     }
@@ -234,8 +231,8 @@ static void check_shapes(void)
     s = base_spec(FM_TOOL_TAPERED);
     CHECK(fm_tool_build(&s, &t, &err) == FM_OK);
     {
-        double R1 = R + F * tan(5 * DEG);
-        CHECK_NEAR(part_volume(&t.flutes), PI * F / 3 * (R * R + R * R1 + R1 * R1), 1e-3);
+        double R1 = R + F * tan(5 * FM_DEG);
+        CHECK_NEAR(part_volume(&t.flutes), FM_PI * F / 3 * (R * R + R * R1 + R1 * R1), 1e-3);
     }
     check_part_distance(&t.flutes, "tapered");
     /* Tapered ball: cap of the tip ball below the tangent circle, frustum above. */
@@ -244,10 +241,10 @@ static void check_shapes(void)
     s.tip_radius = 1;
     CHECK(fm_tool_build(&s, &t, &err) == FM_OK);
     {
-        double a = 5 * DEG, rt = 1, tz = rt * (1 - sin(a)), tr = rt * cos(a);
-        double cap = PI * tz * tz * (3 * rt - tz) / 3;
+        double a = 5 * FM_DEG, rt = 1, tz = rt * (1 - sin(a)), tr = rt * cos(a);
+        double cap = FM_PI * tz * tz * (3 * rt - tz) / 3;
         double R1 = tr + (F - tz) * tan(a);
-        double fr = PI * (F - tz) / 3 * (tr * tr + tr * R1 + R1 * R1);
+        double fr = FM_PI * (F - tz) / 3 * (tr * tr + tr * R1 + R1 * R1);
         CHECK_NEAR(part_volume(&t.flutes), cap + fr, 1e-3);
         CHECK(t.flutes.convex);
     }
@@ -256,8 +253,8 @@ static void check_shapes(void)
     s = base_spec(FM_TOOL_DOVETAIL);
     CHECK(fm_tool_build(&s, &t, &err) == FM_OK);
     {
-        double Rb = 6, rn = 2.5, h = (Rb - rn) / tan(30 * DEG);
-        CHECK_NEAR(part_volume(&t.flutes), PI * h / 3 * (Rb * Rb + Rb * rn + rn * rn) + PI * rn * rn * (F - h),
+        double Rb = 6, rn = 2.5, h = (Rb - rn) / tan(30 * FM_DEG);
+        CHECK_NEAR(part_volume(&t.flutes), FM_PI * h / 3 * (Rb * Rb + Rb * rn + rn * rn) + FM_PI * rn * rn * (F - h),
                    1e-3);
         CHECK(!t.flutes.convex);
     }
@@ -267,7 +264,7 @@ static void check_shapes(void)
     CHECK(fm_tool_build(&s, &t, &err) == FM_OK);
     {
         double Rb = 4, rn = 1.5, zn = Rb + sqrt(Rb * Rb - rn * rn), capH = 2 * Rb - zn;
-        double v = 4.0 / 3 * PI * Rb * Rb * Rb - PI * capH * capH * (3 * Rb - capH) / 3 + PI * rn * rn * (F - zn);
+        double v = 4.0 / 3 * FM_PI * Rb * Rb * Rb - FM_PI * capH * capH * (3 * Rb - capH) / 3 + FM_PI * rn * rn * (F - zn);
         CHECK_NEAR(part_volume(&t.flutes), v, 1e-3);
         CHECK(!t.flutes.convex);
         double c[3] = {0, 0, Rb};

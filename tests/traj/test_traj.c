@@ -9,7 +9,6 @@
 #include "test.h"
 #include "toolpaths/traj/traj.h"
 
-#define PI 3.14159265358979323846
 #define MAXM 64
 
 static fm_motion got[MAXM];
@@ -154,13 +153,13 @@ static void test_helix(void)
     if (st) fprintf(stderr, "%s\n", err.message);
     CHECK(ngot == 1);
     CHECK(sum.motions == 1 && sum.segments == 1 && !sum.stopped);
-    CHECK_NEAR(sum.seconds, 2 * PI, 1e-12);
+    CHECK_NEAR(sum.seconds, 2 * FM_PI, 1e-12);
     const fm_motion *m = &got[0];
     CHECK_NEAR(m->t0, 0, 0);
-    CHECK_NEAR(m->t1, 2 * PI, 1e-15);
+    CHECK_NEAR(m->t1, 2 * FM_PI, 1e-15);
     CHECK_NEAR(m->start[0], 10, 1e-12);
-    CHECK_NEAR(m->end[2], -2 * PI, 1e-12);
-    CHECK_NEAR(m->axis_end[1], sin(0.4 * PI), 1e-12);
+    CHECK_NEAR(m->end[2], -2 * FM_PI, 1e-12);
+    CHECK_NEAR(m->axis_end[1], sin(0.4 * FM_PI), 1e-12);
     CHECK(m->tool == 3);
     CHECK_NEAR(m->feed, 600, 0);
     CHECK(m->spindle_dir == -1);
@@ -178,7 +177,7 @@ static void *thread_body(void *arg)
     int bad = 0;
     for (int k = 0; k < 4000; k++) {
         seed = seed * 1103515245u + 12345u;
-        double t = 2 * PI * (seed >> 8) / 16777216.0, p[3], a[3], q[3], b[3];
+        double t = 2 * FM_PI * (seed >> 8) / 16777216.0, p[3], a[3], q[3], b[3];
         thread_motion->path->pose(thread_motion->path->ctx, t, p, a);
         helix_closed(t, q, b);
         for (int i = 0; i < 3; i++) bad += fabs(p[i] - q[i]) > 1e-12 || fabs(a[i] - b[i]) > 1e-12;
