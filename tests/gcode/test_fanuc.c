@@ -17,8 +17,6 @@
 #include "test.h"
 #include "toolpaths/gcode/gcode.h"
 
-#define GC_TEST_PI 3.14159265358979323846
-
 #define MAXM 4000
 
 static fm_motion got[MAXM];
@@ -361,7 +359,7 @@ static void test_rotation(void)
 {
     /* a 10 mm square rotated 30 degrees about the origin: (x, y) ->
      * (x c - y s, x s + y c), c = cos 30, s = sin 30 */
-    double c = cos(GC_TEST_PI / 6), s = 0.5;
+    double c = cos(FM_PI / 6), s = 0.5;
     em e[] = {{'R', 0, 0, 0}, {'L', 10 * c, 10 * s, 0}, {'L', 10 * c - 10 * s, 10 * s + 10 * c, 0},
               {'L', -10 * s, 10 * c, 0}, {'L', 0, 0, 0}, {'R', 10, 0, 0}};
     expect_motions("G68 square",
@@ -475,7 +473,7 @@ static void test_polar(void)
 {
     /* G16 bolt circle of radius 50 at 0, 60 and 120 degrees:
      * (50, 0), (25, 43.30127), (-25, 43.30127) */
-    double h = 50 * sin(GC_TEST_PI / 3);
+    double h = 50 * sin(FM_PI / 3);
     em e[] = {{'R', 0, 0, 10},
               {'R', 50, 0, 10}, {'R', 50, 0, 2}, {'L', 50, 0, -5}, {'R', 50, 0, 2},
               {'R', 25, h, 2}, {'L', 25, h, -5}, {'R', 25, h, 2},
@@ -492,7 +490,7 @@ static void test_polar(void)
     int holes = 0;
     for (int i = 0; i < ngot; i++)
         if (got[i].kind == FM_MOTION_LINE) {
-            double a = holes * 60 * GC_TEST_PI / 180;
+            double a = holes * 60 * FM_PI / 180;
             CHECK_NEAR(got[i].end[0], 30 * cos(a), 1e-9);
             CHECK_NEAR(got[i].end[1], 30 * sin(a), 1e-9);
             holes++;
@@ -508,16 +506,16 @@ static void test_arcs(void)
     fm_error err;
     CHECK(run("G90 G00 X0 Y0\nG02 X10. Y10. R10. F100\n", &err) == FM_OK);
     CHECK(ngot == 2 && fabs(got[1].center[0] - 10) < 1e-9 && fabs(got[1].center[1]) < 1e-9);
-    CHECK_NEAR(got[1].t1 - got[1].t0, GC_TEST_PI * 10 / 2 / 100 * 60, 1e-9);
+    CHECK_NEAR(got[1].t1 - got[1].t0, FM_PI * 10 / 2 / 100 * 60, 1e-9);
     CHECK(run("G90 G00 X0 Y0\nG02 X10. Y10. R-10. F100\n", &err) == FM_OK);
     CHECK(ngot == 2 && fabs(got[1].center[0]) < 1e-9 && fabs(got[1].center[1] - 10) < 1e-9);
-    CHECK_NEAR(got[1].t1 - got[1].t0, 3 * GC_TEST_PI * 10 / 2 / 100 * 60, 1e-9);
+    CHECK_NEAR(got[1].t1 - got[1].t0, 3 * FM_PI * 10 / 2 / 100 * 60, 1e-9);
     CHECK(run("G90 G00 X10. Y0\nG02 X10. Y0 R5. F100\nG00 X1.\n", &err) == FM_OK);
     CHECK(ngot == 2 && got[1].kind == FM_MOTION_RAPID);
     CHECK(run("G90 G00 X10. Y0\nG02 I5. F100\n", &err) == FM_OK);
     CHECK(ngot == 2 && got[1].kind == FM_MOTION_ARC && got[1].turns == -1);
     CHECK(ngot == 2 && fabs(got[1].center[0] - 15) < 1e-9 && fabs(got[1].end[0] - 10) < 1e-9);
-    CHECK_NEAR(got[1].t1 - got[1].t0, 2 * GC_TEST_PI * 5 / 100 * 60, 1e-9);
+    CHECK_NEAR(got[1].t1 - got[1].t0, 2 * FM_PI * 5 / 100 * 60, 1e-9);
     /* G90 with I J: still incremental from the start (10, 0): centre (10, 5) */
     CHECK(run("G90 G00 X10. Y0\nG03 X10. Y10. J5. F100\n", &err) == FM_OK);
     CHECK(ngot == 2 && fabs(got[1].center[0] - 10) < 1e-9 && fabs(got[1].center[1] - 5) < 1e-9);
@@ -777,7 +775,7 @@ static void test_g95(void)
     if (ngot == 6) {
         CHECK_NEAR(got[1].feed, 200, 1e-9);
         CHECK_NEAR(got[1].t1 - got[1].t0, 3, 1e-9);
-        CHECK_NEAR(got[2].t1 - got[2].t0, 5 * GC_TEST_PI / 200 * 60, 1e-9);
+        CHECK_NEAR(got[2].t1 - got[2].t0, 5 * FM_PI / 200 * 60, 1e-9);
         CHECK_NEAR(got[3].feed, 100, 1e-9);
         CHECK_NEAR(got[3].t1 - got[3].t0, 6, 1e-9);
         CHECK_NEAR(got[4].t1 - got[4].t0, 2, 1e-9);
@@ -829,8 +827,8 @@ static void test_circular_pocket(void)
         CHECK_NEAR(got[3].center[0], 50, 1e-9);
         CHECK_NEAR(got[4].center[0], 55, 1e-9);
         CHECK_NEAR(got[1].t1 - got[1].t0, 1, 1e-9);                        /* 5 mm at 300 */
-        CHECK_NEAR(got[2].t1 - got[2].t0, 5 * GC_TEST_PI / 300 * 60, 1e-9); /* half of r 5 */
-        CHECK_NEAR(got[3].t1 - got[3].t0, 20 * GC_TEST_PI / 300 * 60, 1e-9); /* r 10 */
+        CHECK_NEAR(got[2].t1 - got[2].t0, 5 * FM_PI / 300 * 60, 1e-9); /* half of r 5 */
+        CHECK_NEAR(got[3].t1 - got[3].t0, 20 * FM_PI / 300 * 60, 1e-9); /* r 10 */
     }
     /* Haas' example G13 G91 Z-.5 I.4 K2. Q.4 D1 L4 in mm: G13 G91 Z-5. I4.
      * K20. Q4. D2 (radius 3) L2: circles of radius 4, 8, 12, 16, 20, the tool
@@ -862,7 +860,7 @@ static void test_circular_pocket(void)
             CHECK(got[2 + 2 * c].turns == 1 && got[3 + 2 * c].turns == 1);
         }
         CHECK_NEAR(got[12].center[0], 8.5, 1e-9);
-        CHECK_NEAR(got[11].t1 - got[11].t0, 34 * GC_TEST_PI / 100 * 60, 1e-9); /* r 17 */
+        CHECK_NEAR(got[11].t1 - got[11].t0, 34 * FM_PI / 100 * 60, 1e-9); /* r 17 */
     }
     /* Haas' manual's own example, in inches: G13 G91 Z-.5 I.4 K2. Q.4 D1 L4
      * F20. with a 0.5 in end mill (radius .25): circles .4 .8 1.2 1.6 2.0,
@@ -891,7 +889,7 @@ static void test_circular_pocket(void)
     expect_motions_opt("Haas G13 example (inch)",
                        "G20 G90 G00 X0 Y0 Z0\nG13 G91 Z-.5 I.4 K2. Q.4 D1 L4 F20.\n", &oi, e5, n5);
     if (ngot == n5) {
-        CHECK_NEAR(got[11].t1 - got[11].t0, 2 * GC_TEST_PI * 1.75 / 20 * 60, 1e-9);
+        CHECK_NEAR(got[11].t1 - got[11].t0, 2 * FM_PI * 1.75 / 20 * 60, 1e-9);
         CHECK_NEAR(got[11].feed, 20 * 25.4, 1e-9);
     }
     /* Q that does not divide K - I: radii 4, 8, then 10 (D0: the centre on them) */

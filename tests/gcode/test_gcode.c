@@ -9,7 +9,6 @@
 #include "test.h"
 #include "toolpaths/gcode/gcode.h"
 
-#define PI 3.14159265358979323846
 #define MAXM 2000
 
 static fm_motion got[MAXM];
@@ -59,23 +58,23 @@ static void test_times(void)
     /* full circle of radius 5 at 60 mm/min: 2*pi*5 s */
     CHECK(run("G0 X0 Y0\nG2 X0 Y0 I5 J0 F60\n", &err) == FM_OK);
     CHECK(ngot == 2 && got[1].kind == FM_MOTION_ARC && got[1].turns == -1);
-    CHECK_NEAR(got[1].t1 - got[1].t0, 2 * PI * 5, 1e-9);
+    CHECK_NEAR(got[1].t1 - got[1].t0, 2 * FM_PI * 5, 1e-9);
     CHECK_NEAR(got[1].center[0], 5, 1e-12);
     CHECK(got[1].plane_axis == 2);
     /* helix: two turns of radius 3 and 4 mm down: length hypot(2*2*pi*3, 4) */
     CHECK(run("G0 X0 Y0 Z0\nG3 X0 Y0 Z-4 I3 J0 P2 F60\n", &err) == FM_OK);
     CHECK(got[1].turns == 2);
-    CHECK_NEAR(got[1].t1 - got[1].t0, hypot(4 * PI * 3, 4), 1e-9);
+    CHECK_NEAR(got[1].t1 - got[1].t0, hypot(4 * FM_PI * 3, 4), 1e-9);
     /* quarter arc with R: centre at (0,10) for G3 from (10,0)... closed form */
     CHECK(run("G0 X10 Y0\nG3 X0 Y10 R10 F60\n", &err) == FM_OK);
     CHECK_NEAR(got[1].center[0], 0, 1e-9);
     CHECK_NEAR(got[1].center[1], 0, 1e-9);
-    CHECK_NEAR(got[1].t1 - got[1].t0, PI * 10 / 2, 1e-9);
+    CHECK_NEAR(got[1].t1 - got[1].t0, FM_PI * 10 / 2, 1e-9);
     /* negative R: the long way round, centre mirrored */
     CHECK(run("G0 X10 Y0\nG3 X0 Y10 R-10 F60\n", &err) == FM_OK);
     CHECK_NEAR(got[1].center[0], 10, 1e-9);
     CHECK_NEAR(got[1].center[1], 10, 1e-9);
-    CHECK_NEAR(got[1].t1 - got[1].t0, 3 * PI * 10 / 2, 1e-9);
+    CHECK_NEAR(got[1].t1 - got[1].t0, 3 * FM_PI * 10 / 2, 1e-9);
     /* inverse time: F2 means half a minute whatever the length */
     CHECK(run("G93 G1 X100 F2\n", &err) == FM_OK);
     CHECK_NEAR(got[0].t1 - got[0].t0, 30, 1e-12);

@@ -126,7 +126,7 @@ static void test_tcp(void)
     fm_motion_pose_at(&got[1], 0.5, tip, ax);
     CHECK_NEAR(tip[0], 5, 1e-12);
     CHECK_NEAR(tip[2], 10, 1e-12);
-    CHECK_NEAR(ax[1], sin(15 * 3.14159265358979323846 / 180), 1e-12);
+    CHECK_NEAR(ax[1], sin(15 * FM_PI / 180), 1e-12);
 }
 
 int main(void)
