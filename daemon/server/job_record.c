@@ -1,14 +1,10 @@
 /* job_record.c: a job's record made, referenced and freed (job_record.h),
- * and the clocks and grid budget that every part of the job manager uses. */
+ * and the grid budget that every part of the job manager uses. */
 #include "job_record.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-double fm_jobs_mono_s(void) { return fm_clock_monotonic_s(); }
-
-double fm_jobs_wall_s(void) { return fm_clock_wall_s(); }
 
 const char *fm_job_state_name(fm_job_state state)
 {

@@ -112,10 +112,6 @@ typedef struct job {
     void (*live_free)(job_live *live); /* set with live */
 } job;
 
-/* Monotonic and wall-clock seconds. */
-double fm_jobs_mono_s(void);
-double fm_jobs_wall_s(void);
-
 /* A new record with one reference (the caller's, usually the table's); it
  * owns doc (NULL: the record could not be made and doc is freed). Its
  * folder is jobs_dir/id; history_limit bounds its mesh history; stopping

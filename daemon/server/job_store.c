@@ -82,12 +82,12 @@ void fm_job_store_save_snapshot(job *j, fm_stock *stock, long resume_from)
     snprintf(path, sizeof path, "%s/stock.vdb", j->dir);
     snprintf(resume, sizeof resume, "resume_from=%ld", resume_from);
     fm_error err;
-    double t0 = fm_jobs_mono_s();
+    double t0 = fm_clock_monotonic_s();
     if (fm_stock_save(stock, path, resume, &err) != FM_OK)
         fm_log(FM_LOG_ERROR, "job %s: snapshot failed: %s", j->id, err.message);
     else
         fm_log(FM_LOG_DEBUG, "job %s: snapshot at motion %ld in %.2f s", j->id, resume_from,
-               fm_jobs_mono_s() - t0);
+               fm_clock_monotonic_s() - t0);
 }
 
 fm_stock *fm_job_store_load_snapshot(job *j, const fm_stock_options *opt, long *resume_from)

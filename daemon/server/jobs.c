@@ -156,7 +156,7 @@ static fm_status admit(fm_jobs *jobs, fm_job_doc *doc, const char *given_id, job
     char new_id[32];
     if (given_id) snprintf(new_id, sizeof new_id, "%s", given_id);
     else make_id(jobs, new_id, sizeof new_id);
-    double created = fm_jobs_wall_s();
+    double created = fm_clock_wall_s();
     fm_error ferr;
     fm_error_clear(&ferr);
     if (fm_job_store_create(jobs->jobs_dir, new_id, created, doc, &ferr) != FM_OK) {

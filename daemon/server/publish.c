@@ -150,7 +150,7 @@ void fm_publish_view_from_status(job *j, json_t *status)
 
 void fm_publish_progress(job *j, const fm_job_progress *p, publish_pace *pace)
 {
-    double now = fm_jobs_mono_s();
+    double now = fm_clock_monotonic_s();
     pthread_mutex_lock(&j->lock);
     /* The stock (made by the runner, or a snapshot with its stored initial
      * volume) is first seen here. */
@@ -286,18 +286,18 @@ static void remesh_chunks(remesh_work *w, remesh_share *share)
         v->version = w->version;
         v->time_s = w->time_s;
         fm_error err;
-        const double tm = fm_jobs_mono_s();
+        const double tm = fm_clock_monotonic_s();
         c->mesh = fm_mesh_from_stock_chunk_cached(w->stock, c->index, w->opt, c->cache, &err);
-        share->mesh_s += fm_jobs_mono_s() - tm;
+        share->mesh_s += fm_clock_monotonic_s() - tm;
         v->triangles = c->mesh ? c->mesh->triangle_count : 0;
         share->triangles += v->triangles;
-        const double te = fm_jobs_mono_s();
+        const double te = fm_clock_monotonic_s();
         if (v->triangles > 0 &&
             fm_mesh_encode_draco(c->mesh, w->draco, &v->drc, &v->drc_size, &err) != FM_OK) {
             v->drc = NULL;
             v->drc_size = 0;
         }
-        share->encode_s += fm_jobs_mono_s() - te;
+        share->encode_s += fm_clock_monotonic_s() - te;
     }
 }
 
@@ -362,7 +362,7 @@ static void publish_chunks(job *j, fm_stock *stock, double program_time_s, int c
         for (size_t i = 0; i < n; i++)
             if (!fresh[i].cache) fresh[i].cache = fm_mesh_chunk_cache_new();
     }
-    const double t0 = fm_jobs_mono_s(), cpu0 = fm_clock_cpu_s();
+    const double t0 = fm_clock_monotonic_s(), cpu0 = fm_clock_cpu_s();
     /* Draco speed 7 instead of the default 5: on the live bench's chunks
      * (bench_remesh --speed 7) 30-40 % less encoding time, and the files
      * came out 0.4 % smaller, not larger. */
@@ -388,7 +388,7 @@ static void publish_chunks(job *j, fm_stock *stock, double program_time_s, int c
            "job %s: published %zu chunks (%zu triangles) at version %llu in %.1f ms on %d "
            "threads: mesh %.1f ms, encode %.1f ms wall (summed over the threads), %.1f ms "
            "daemon CPU",
-           j->id, n, triangles, (unsigned long long)version, (fm_jobs_mono_s() - t0) * 1e3,
+           j->id, n, triangles, (unsigned long long)version, (fm_clock_monotonic_s() - t0) * 1e3,
            helped ? 2 : 1, t_mesh * 1e3, t_encode * 1e3, (fm_clock_cpu_s() - cpu0) * 1e3);
     json_t *ids = json_array();
     pthread_mutex_lock(&j->lock);

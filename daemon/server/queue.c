@@ -105,7 +105,7 @@ static int on_progress(void *user, const fm_job_progress *p)
 {
     run_ctx *rc = user;
     job *j = rc->j;
-    double now = fm_jobs_mono_s();
+    double now = fm_clock_monotonic_s();
     rc->resume_from = p->resume_from;
     fm_publish_progress(j, p, &rc->pace);
     pthread_mutex_lock(&j->lock);
@@ -122,12 +122,12 @@ static int on_progress(void *user, const fm_job_progress *p)
     }
     if (now - rc->last_snapshot >= rc->q->cfg.snapshot_interval_s) {
         fm_job_store_save_snapshot(j, p->stock, p->resume_from);
-        rc->last_snapshot = fm_jobs_mono_s();
+        rc->last_snapshot = fm_clock_monotonic_s();
     }
     /* A live job publishes as soon as it has caught up with the machine. */
     if (p->idle || now - rc->last_publish >= rc->q->cfg.publish_interval_s) {
         fm_publish_chunks(j, p->stock, p->program_time);
-        rc->last_publish = fm_jobs_mono_s();
+        rc->last_publish = fm_clock_monotonic_s();
     }
     return 0;
 }
@@ -155,7 +155,7 @@ static void on_stock(void *user, fm_stock *stock)
     double triangles = 4 * (n[0] * n[1] + n[1] * n[2] + n[2] * n[0]);
     if (!(triangles <= HISTORY_START_TRIANGLES)) return;
     fm_publish_chunks(rc->j, stock, 0);
-    rc->last_publish = fm_jobs_mono_s();
+    rc->last_publish = fm_clock_monotonic_s();
 }
 
 static json_t *error_json(const fm_error *err)
@@ -206,7 +206,7 @@ static void run_job(fm_queue *q, job *j)
     fm_error_clear(&err);
     run_ctx rc = {.q = q, .j = j, .pace = {.last_line = -1}};
     int unfinished = 0; /* stopped by shutdown: resumes at the next start */
-    rc.last_snapshot = rc.last_publish = fm_jobs_mono_s();
+    rc.last_snapshot = rc.last_publish = fm_clock_monotonic_s();
 
     pthread_mutex_lock(&j->lock);
     j->state = FM_JOB_RUNNING;
@@ -306,11 +306,11 @@ static void run_job(fm_queue *q, job *j)
     fm_publish_chunks(j, result.stock, end_time);
     fm_publish_chunks_drop_caches(j);
     if (result.design && result.has_deviation) {
-        double w0 = fm_jobs_mono_s();
+        double w0 = fm_clock_monotonic_s();
         fm_error derr;
         if (fm_publish_deviation(j, result.stock, result.design, &result.deviation, &derr) == FM_OK)
             fm_log(FM_LOG_INFO, "job %s: deviation mesh written in %.2f s", j->id,
-                   fm_jobs_mono_s() - w0);
+                   fm_clock_monotonic_s() - w0);
         else
             fm_log(FM_LOG_WARN, "job %s: no deviation mesh for the viewer: %s", j->id, derr.message);
     }
