@@ -85,7 +85,8 @@ void fm_clock_deadline(struct timespec *out, double seconds);
 
 /* Read the whole regular file at path into a NUL-terminated malloc'd buffer
  * (*data; *size counts the bytes without the NUL; free(*data)). A file of
- * more than max_bytes is refused (FM_ERR_LIMIT) before any memory is taken,
+ * more than max_bytes is refused (FM_ERR_LIMIT with the reason "too_large",
+ * which tells it from running out of memory) before any memory is taken,
  * and so is one that grows past it while being read. A folder, FIFO, socket
  * or device is refused (FM_ERR_IO) without reading or blocking. what names
  * the file in messages ("STL", "snapshot"; NULL for none); each message

@@ -44,8 +44,9 @@ fm_status fm_file_read(const char *path, const char *what, size_t max_bytes, cha
     }
     if ((uintmax_t)st.st_size > (uintmax_t)max_bytes) {
         close(fd);
-        return fm_error_set(err, FM_ERR_LIMIT, "%s is %llu bytes, over the budget of %zu bytes",
-                            name, (unsigned long long)st.st_size, max_bytes);
+        return fm_error_set_reason(err, FM_ERR_LIMIT, "too_large",
+                                   "%s is %llu bytes, over the budget of %zu bytes", name,
+                                   (unsigned long long)st.st_size, max_bytes);
     }
     /* Room for what fstat said, one byte more to see that the file grew,
      * and the NUL. */
@@ -61,9 +62,9 @@ fm_status fm_file_read(const char *path, const char *what, size_t max_bytes, cha
             /* the file grew since fstat (or is in /proc): keep reading,
              * within the budget */
             if (len > max_bytes) {
-                rc = fm_error_set(err, FM_ERR_LIMIT,
-                                  "%s grew past the budget of %zu bytes while being read", name,
-                                  max_bytes);
+                rc = fm_error_set_reason(err, FM_ERR_LIMIT, "too_large",
+                                         "%s grew past the budget of %zu bytes while being read",
+                                         name, max_bytes);
                 break;
             }
             size_t room = 2 * len > len + 4096 ? 2 * len : len + 4096;

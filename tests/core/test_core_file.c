@@ -66,6 +66,7 @@ static void reads(void)
     free(data);
     CHECK(fm_file_read(p, "program", sizeof text - 2, &data, &size, &err) == FM_ERR_LIMIT);
     CHECK(data == NULL && size == 0);
+    CHECK(strcmp(err.reason, "too_large") == 0);
     CHECK_STR_CONTAINS(err.message, "program ");
     CHECK_STR_CONTAINS(err.message, p);
     CHECK_STR_CONTAINS(err.message, "is 9 bytes, over the budget of 8 bytes");
@@ -117,6 +118,7 @@ static void reads(void)
     free(data);
     CHECK(fm_file_read("/proc/self/status", NULL, 10, &data, &size, &err) == FM_ERR_LIMIT);
     CHECK(data == NULL && size == 0);
+    CHECK(strcmp(err.reason, "too_large") == 0);
     CHECK_STR_CONTAINS(err.message, "grew past the budget of 10 bytes while being read");
 
     path_in(p, sizeof p, "a.ngc");
