@@ -341,7 +341,7 @@ static fm_status straight_first(gc_interp *g, int rapid, double feed, const doub
                        "cutter compensation entry move of length %.4f is shorter than the tool "
                        "radius %.4f; expected a longer entry move", dist, r);
     double alpha = atan2(p[1] - cur[1], p[0] - cur[0]) +
-                   (c->side == GC_COMP_LEFT ? GC_PI / 2 : -GC_PI / 2);
+                   (c->side == GC_COMP_LEFT ? FM_PI / 2 : -FM_PI / 2);
     double end[3] = {p[0] + r * cos(alpha), p[1] + r * sin(alpha), p[2]};
     set_endpoint(c, cur[0], cur[1]);
     double dir[2] = {cos(alpha), sin(alpha)};
@@ -372,23 +372,23 @@ static fm_status straight_next(gc_interp *g, int rapid, double feed, const doubl
         double alpha = atan2(p[1] - o[1], p[0] - o[0]);     /* the new direction */
         double beta, gamma;
         if (left) {
-            if (theta < alpha) theta += 2 * GC_PI;
-            beta = theta - alpha - GC_PI / 2;
-            gamma = GC_PI / 2;
+            if (theta < alpha) theta += 2 * FM_PI;
+            beta = theta - alpha - FM_PI / 2;
+            gamma = FM_PI / 2;
         } else {
-            if (alpha < theta) alpha += 2 * GC_PI;
-            beta = alpha - theta - GC_PI / 2;
-            gamma = -GC_PI / 2;
+            if (alpha < theta) alpha += 2 * FM_PI;
+            beta = alpha - theta - FM_PI / 2;
+            gamma = -FM_PI / 2;
         }
         end[0] = p[0] + r * cos(alpha + gamma);
         end[1] = p[1] + r * sin(alpha + gamma);
         double mid[2] = {o[0] + r * cos(alpha + gamma), o[1] + r * sin(alpha + gamma)};
         const gc_comp_move *front = c->nq ? &c->q[0] : NULL;
         int front_arc = front && front->kind == GC_COMP_ARC;
-        int concave = beta < -COMP_CORNER_TOL || beta > GC_PI + COMP_CORNER_TOL;
+        int concave = beta < -COMP_CORNER_TOL || beta > FM_PI + COMP_CORNER_TOL;
         /* an "h" shape: over a round top and down beside a straight side;
          * LinuxCNC keeps the tool above and beside rather than looping round */
-        if (!concave && beta > GC_PI - COMP_CORNER_TOL && front_arc &&
+        if (!concave && beta > FM_PI - COMP_CORNER_TOL && front_arc &&
             ((!left && front->turn > 0) || (left && front->turn < 0)))
             concave = 1;
         if (!concave && beta > COMP_CORNER_TOL) {
@@ -410,7 +410,7 @@ static fm_status straight_next(gc_interp *g, int rapid, double feed, const doubl
             if (!front_arc) {
                 /* line to line: pull the previous end back along its path (beta
                  * >= -pi/2 by construction, so half the corner is >= pi/4) */
-                double halfcorner = (beta + GC_PI) / 2;
+                double halfcorner = (beta + FM_PI) / 2;
                 double retreat = r / tan(halfcorner);
                 meet[0] = cur[0] + retreat * cos(theta + gamma);
                 meet[1] = cur[1] + retreat * sin(theta + gamma);
@@ -420,7 +420,7 @@ static fm_status straight_next(gc_interp *g, int rapid, double feed, const doubl
                 const gc_comp_move *prev = front;
                 double oldrad = hypot(prev->center[1] - prev->end[1], prev->center[0] - prev->end[0]);
                 double base_dir = atan2(p[1] - o[1], p[0] - o[0]);
-                double th = prev->turn > 0 ? base_dir + GC_PI / 2 : base_dir - GC_PI / 2;
+                double th = prev->turn > 0 ? base_dir + FM_PI / 2 : base_dir - FM_PI / 2;
                 double phi = atan2(prev->center[1] - o[1], prev->center[0] - o[0]);
                 int inside = tool_inside(c->side, prev->turn);
                 double oldrad_uncomp = inside ? oldrad + r : oldrad - r;
@@ -432,8 +432,8 @@ static fm_status straight_next(gc_interp *g, int rapid, double feed, const doubl
                                    "this line is too tight for the tool without gouging",
                                    prev->snap.line);
                 double ang;
-                if (inside) ang = (prev->turn > 0 ? -acos(l) : acos(l)) + th + GC_PI;
-                else ang = (prev->turn > 0 ? acos(l) : -acos(l)) + th + GC_PI;
+                if (inside) ang = (prev->turn > 0 ? -acos(l) : acos(l)) + th + FM_PI;
+                else ang = (prev->turn > 0 ? acos(l) : -acos(l)) + th + FM_PI;
                 meet[0] = prev->center[0] + oldrad * cos(ang);
                 meet[1] = prev->center[1] + oldrad * sin(ang);
             }
@@ -523,12 +523,12 @@ static fm_status arc_next(gc_interp *g, const gc_arc_data *a, double feed, int c
     int left = c->side == GC_COMP_LEFT;
     double arc_radius = hypot(center[0] - p[0], center[1] - p[1]);
     double theta = atan2(cur[1] - o[1], cur[0] - o[0]);
-    theta = left ? theta - GC_PI / 2 : theta + GC_PI / 2; /* direction of the last move */
+    theta = left ? theta - FM_PI / 2 : theta + FM_PI / 2; /* direction of the last move */
     double delta = atan2(center[1] - o[1], center[0] - o[0]);
-    double alpha = turn > 0 ? delta - GC_PI / 2 : delta + GC_PI / 2; /* the arc's start direction */
+    double alpha = turn > 0 ? delta - FM_PI / 2 : delta + FM_PI / 2; /* the arc's start direction */
     double beta = left ? theta - alpha : alpha - theta;
-    if (beta > 1.5 * GC_PI) beta -= 2 * GC_PI;
-    else if (beta < -GC_PI / 2) beta += 2 * GC_PI;
+    if (beta > 1.5 * FM_PI) beta -= 2 * FM_PI;
+    else if (beta < -FM_PI / 2) beta += 2 * FM_PI;
     double gamma;
     int inside = tool_inside(c->side, turn);
     if (inside) {
@@ -539,19 +539,19 @@ static fm_status arc_next(gc_interp *g, const gc_arc_data *a, double feed, int c
                            "%.4f of this inside arc; expected a smaller tool", r, arc_radius);
     } else {
         gamma = atan2(p[1] - center[1], p[0] - center[0]);
-        delta += GC_PI;
+        delta += FM_PI;
     }
     double new_end[3] = {p[0] + r * cos(gamma), p[1] + r * sin(gamma), p[2]};
     double sweep = arc_sweep(o[0], o[1], center[0], center[1], turn, p[0], p[1]);
     const gc_comp_move *front = c->nq ? &c->q[0] : NULL;
     fm_status st;
-    if (beta < -COMP_CORNER_TOL || beta > GC_PI + COMP_CORNER_TOL ||
-        (fabs(beta - GC_PI) < COMP_CORNER_TOL && !inside)) {
+    if (beta < -COMP_CORNER_TOL || beta > FM_PI + COMP_CORNER_TOL ||
+        (fabs(beta - FM_PI) < COMP_CORNER_TOL && !inside)) {
         /* concave */
         double meet[2];
         if (!front || front->kind != GC_COMP_ARC) {
             /* line to arc */
-            double cy = arc_radius * sin(beta - GC_PI / 2);
+            double cy = arc_radius * sin(beta - FM_PI / 2);
             double dist, l, ang;
             if (inside) {
                 dist = arc_radius - r;
@@ -565,7 +565,7 @@ static fm_status arc_next(gc_interp *g, const gc_arc_data *a, double feed, int c
                                "cutter compensation: this arc in a concave corner cannot be "
                                "reached by the tool without gouging");
             if (inside) ang = turn > 0 ? theta + asin(l) : theta - asin(l);
-            else ang = turn > 0 ? theta + GC_PI - asin(l) : theta + GC_PI + asin(l);
+            else ang = turn > 0 ? theta + FM_PI - asin(l) : theta + FM_PI + asin(l);
             meet[0] = center[0] + dist * cos(ang);
             meet[1] = center[1] + dist * sin(ang);
         } else {

@@ -58,7 +58,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define PI 3.14159265358979323846
 #define EPS 1e-9         /* lengths (program units) and angles (radians) */
 #define TANGENT_TOL 1e-3 /* radians: a junction this close to tangent is one */
 
@@ -85,8 +84,8 @@ static double angle(pt a) { return atan2(a.v, a.u); }
 
 static double wrap_pi(double a)
 {
-    while (a > PI) a -= 2 * PI;
-    while (a <= -PI) a += 2 * PI;
+    while (a > FM_PI) a -= 2 * FM_PI;
+    while (a <= -FM_PI) a += 2 * FM_PI;
     return a;
 }
 
@@ -94,9 +93,9 @@ static double wrap_pi(double a)
 static double arc_sweep(pt from, pt cen, int turn, pt to)
 {
     double d = angle(sub(to, cen)) - angle(sub(from, cen));
-    if (turn > 0 && d <= 0) d += 2 * PI;
-    if (turn < 0 && d >= 0) d -= 2 * PI;
-    return d + (turn > 0 ? turn - 1 : turn + 1) * 2 * PI;
+    if (turn > 0 && d <= 0) d += 2 * FM_PI;
+    if (turn < 0 && d >= 0) d -= 2 * FM_PI;
+    return d + (turn > 0 ? turn - 1 : turn + 1) * 2 * FM_PI;
 }
 
 static int is_arc(const gc_compc_elem *e) { return e->kind == GC_COMPC_ARC; }
@@ -270,7 +269,7 @@ static fm_status emit_plane(gc_compc *c, const gc_compc_item *it, pt to, int che
                                "(its sweep vanishes or reverses) with a tool of radius %g; "
                                "expected a smaller tool or a longer arc (Fanuc alarm 041, "
                                "interference)", it->radius);
-        double turns = fabs(sweep) / (2 * PI);
+        double turns = fabs(sweep) / (2 * FM_PI);
         if (len(sub(to, from)) <= EPS) { /* a full circle: the same point */
             to = from;
             e.turn = sign * (int)fmax(1, floor(turns + 0.5));
@@ -334,7 +333,7 @@ static fm_status corner(gc_compc *c, gc_compc_item *nx, fm_error *err)
         /* a reversal: the side nx bends to (the difference of the two
          * curvature vectors) decides; two lines are an outer corner */
         double bend = cross(t1, sub(curvature(nx, p), curvature(pv, p)));
-        turn = fabs(bend) < 1e-12 ? -PI : s * (bend > 0 ? PI : -PI);
+        turn = fabs(bend) < 1e-12 ? -FM_PI : s * (bend > 0 ? FM_PI : -FM_PI);
     }
     pt end1, tail = a1, head[2] = {a2, a2};
     int ntail = 0, nhead = 0;
@@ -352,7 +351,7 @@ static fm_status corner(gc_compc *c, gc_compc_item *nx, fm_error *err)
         nhead = 1;
     } else {
         pt x1, x2; /* the earlier path's last point, the later's first */
-        if (turn >= -PI / 2 - EPS) { /* 90 <= alpha < 180 */
+        if (turn >= -FM_PI / 2 - EPS) { /* 90 <= alpha < 180 */
             if (!line_line(a1, t1, a2, t2, &x1)) x1 = a1; /* not reached: |turn| <= 90 */
             x2 = x1;
         } else {

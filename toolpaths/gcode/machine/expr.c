@@ -11,8 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-static double deg(double r) { return r * 180.0 / GC_PI; }
-static double rad(double d) { return d * GC_PI / 180.0; }
+static double deg(double r) { return r * 180.0 / FM_PI; }
+static double rad(double d) { return d * FM_PI / 180.0; }
 static double number_of(double v) { return isnan(v) ? 0.0 : v; } /* vacant: 0 */
 
 static int is_number_start(char c) { return (c >= '0' && c <= '9') || c == '.'; }

@@ -29,7 +29,6 @@
 
 #include <stddef.h>
 
-#define GC_PI 3.14159265358979323846
 #define GC_INCH 25.4          /* mm per inch */
 
 /* G codes as LinuxCNC keeps them: ten times the number, so that G28.1 is

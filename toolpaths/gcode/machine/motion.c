@@ -18,7 +18,7 @@ void gc_to_machine(const gc_interp *g, const double p[3], double out[3])
 {
     double x = p[0] + g->g92[0], y = p[1] + g->g92[1];
     if (g->rotation != 0) {
-        double t = g->rotation * GC_PI / 180.0, c = cos(t), s = sin(t);
+        double t = g->rotation * FM_PI / 180.0, c = cos(t), s = sin(t);
         double xr = x * c - y * s;
         y = x * s + y * c;
         x = xr;
@@ -32,7 +32,7 @@ void gc_from_machine(const gc_interp *g, const double m[3], double p[3])
 {
     double x = m[0] / g->unit - g->g5x[0], y = m[1] / g->unit - g->g5x[1];
     if (g->rotation != 0) {
-        double t = -g->rotation * GC_PI / 180.0, c = cos(t), s = sin(t);
+        double t = -g->rotation * FM_PI / 180.0, c = cos(t), s = sin(t);
         double xr = x * c - y * s;
         y = x * s + y * c;
         x = xr;
@@ -220,8 +220,8 @@ fm_status gc_find_ends(gc_interp *g, const gc_block *b, int g53, double end[3])
     int col = b->has_radius ? b->radius_col : b->theta_col;
     if (g->absolute) {
         if (b->has_radius && b->has_theta) {
-            x = b->radius * cos(b->theta * GC_PI / 180.0);
-            y = b->radius * sin(b->theta * GC_PI / 180.0);
+            x = b->radius * cos(b->theta * FM_PI / 180.0);
+            y = b->radius * sin(b->theta * FM_PI / 180.0);
         } else if (b->has_radius) {
             if (x == 0 && y == 0)
                 return gc_fail(g, FM_ERR_INPUT, col,
@@ -231,8 +231,8 @@ fm_status gc_find_ends(gc_interp *g, const gc_block *b, int g53, double end[3])
             y = b->radius * sin(th);
         } else {
             double r = hypot(x, y);
-            x = r * cos(b->theta * GC_PI / 180.0);
-            y = r * sin(b->theta * GC_PI / 180.0);
+            x = r * cos(b->theta * FM_PI / 180.0);
+            y = r * sin(b->theta * FM_PI / 180.0);
         }
     } else {
         if (x == 0 && y == 0)
@@ -245,7 +245,7 @@ fm_status gc_find_ends(gc_interp *g, const gc_block *b, int g53, double end[3])
             y = r * sin(th);
         }
         if (b->has_theta) {
-            double th = atan2(y, x) + b->theta * GC_PI / 180.0, r = hypot(x, y);
+            double th = atan2(y, x) + b->theta * FM_PI / 180.0, r = hypot(x, y);
             x = r * cos(th);
             y = r * sin(th);
         }
@@ -310,9 +310,9 @@ fm_status gc_arc_center(gc_interp *g, int iso, int code, const gc_arc_words *w,
         /* positive R: the arc of at most 180 degrees; negative: the longer one */
         double theta;
         if ((code == GC_G2 && radius > 0) || (code == GC_G3 && radius < 0))
-            theta = atan2(end[bb] - start[bb], end[a] - start[a]) - GC_PI / 2;
+            theta = atan2(end[bb] - start[bb], end[a] - start[a]) - FM_PI / 2;
         else
-            theta = atan2(end[bb] - start[bb], end[a] - start[a]) + GC_PI / 2;
+            theta = atan2(end[bb] - start[bb], end[a] - start[a]) + FM_PI / 2;
         double off = iso ? sqrt(ar * ar - half * half) : ar * cos(asin(half / ar));
         ca = mid_a + off * cos(theta);
         cb = mid_b + off * sin(theta);
@@ -582,7 +582,7 @@ static fm_status exec_cycle_moves(gc_interp *g, const gc_block *b, int code, int
         if (b->has_radius || b->has_theta) {
             /* polar (G17 only): about the program origin */
             double rad = b->has_radius ? b->radius : hypot(g->pos[1], g->pos[0]);
-            double th = b->has_theta ? b->theta * GC_PI / 180.0 : atan2(g->pos[1], g->pos[0]);
+            double th = b->has_theta ? b->theta * FM_PI / 180.0 : atan2(g->pos[1], g->pos[0]);
             aa = rad * cos(th);
             bb = rad * sin(th);
         }
@@ -590,7 +590,7 @@ static fm_status exec_cycle_moves(gc_interp *g, const gc_block *b, int code, int
         if (HAS(b, la)) aa_inc = VAL(b, la);
         if (HAS(b, lb)) bb_inc = VAL(b, lb);
         if (b->has_radius) radius_inc = b->radius;
-        if (b->has_theta) theta_inc = b->theta * GC_PI / 180.0;
+        if (b->has_theta) theta_inc = b->theta * FM_PI / 180.0;
         r = r_word + old_cc;
         cc = r + c_word;
         aa = g->pos[k.a];

@@ -178,7 +178,7 @@ fm_status gc_exec_g10(gc_interp *g, const gc_block *b, int col)
         double m[3], spindle[3], p[3];
         gc_to_machine(g, g->pos, m);
         for (int i = 0; i < 3; i++) spindle[i] = m[i] / g->unit + g->tlo[i];
-        double t = g->params[base + 9] * GC_PI / 180.0, c = cos(t), sn = sin(t);
+        double t = g->params[base + 9] * FM_PI / 180.0, c = cos(t), sn = sin(t);
         /* the current point in system P, then the given axes replaced */
         double dx = spindle[0] - g->params[base], dy = spindle[1] - g->params[base + 1];
         p[0] = dx * c + dy * sn - g->g92[0];

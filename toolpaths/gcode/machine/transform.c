@@ -109,7 +109,7 @@ void gc_frame_target(gc_interp *g, const gc_axis_words *w, double end[3])
         f->polar_origin[1] = g->absolute ? 0.0 : f->prog[bb];
     }
     if (given[bb]) f->polar_angle = (g->absolute ? 0.0 : f->polar_angle) + value[bb];
-    double r = f->polar_radius, ang = f->polar_angle * GC_PI / 180.0;
+    double r = f->polar_radius, ang = f->polar_angle * FM_PI / 180.0;
     end[a] = f->polar_origin[0] + r * cos(ang);
     end[bb] = f->polar_origin[1] + r * sin(ang);
 }
@@ -126,7 +126,7 @@ void gc_frame_polar(gc_interp *g, int on)
     gc_plane_axes(g->plane, &a, &b, &c);
     f->polar = 1;
     f->polar_radius = hypot(f->prog[a], f->prog[b]);
-    f->polar_angle = atan2(f->prog[b], f->prog[a]) * 180.0 / GC_PI;
+    f->polar_angle = atan2(f->prog[b], f->prog[a]) * 180.0 / FM_PI;
     f->polar_origin[0] = f->polar_origin[1] = 0;
 }
 
@@ -150,8 +150,8 @@ void gc_frame_rotate(gc_interp *g, int on, const double center[2], double degree
         f->rot_center[0] = center[0];
         f->rot_center[1] = center[1];
         f->rot_angle = degrees;
-        f->rot_cos = cos(degrees * GC_PI / 180.0);
-        f->rot_sin = sin(degrees * GC_PI / 180.0);
+        f->rot_cos = cos(degrees * FM_PI / 180.0);
+        f->rot_sin = sin(degrees * FM_PI / 180.0);
     }
     gc_frame_reprogram(g);
 }
