@@ -3,8 +3,10 @@
  * error kind with its line:column and message. (Positions against LinuxCNC
  * itself are checked by rs274_diff.py.) */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "test.h"
 #include "toolpaths/gcode/gcode.h"
@@ -263,15 +265,14 @@ static void test_errors(void)
  * length) = R_comp / R of it whatever its sweep: 0.8 s and 1.2 s. */
 static void test_arc_angles_inverse_time_comp(void)
 {
-    FILE *f = fopen("gcode/programs/g93_comp_arcs.ngc", "rb");
-    CHECK(f != NULL);
-    if (!f) return;
-    char text[2048];
-    size_t n = fread(text, 1, sizeof text - 1, f);
-    fclose(f);
-    text[n] = 0;
+    char *text;
+    size_t n;
     fm_error err;
+    const char *path = "gcode/programs/g93_comp_arcs.ngc";
+    CHECK(fm_file_read(path, NULL, 1 << 16, &text, &n, &err) == FM_OK);
+    if (!text) return;
     CHECK(run(text, &err) == FM_OK);
+    free(text);
     CHECK(ngot == 5);
     if (ngot != 5) return;
     double s3 = 5 * sqrt(3.0);
@@ -297,6 +298,86 @@ static void test_arc_angles_inverse_time_comp(void)
     CHECK_NEAR(b->t1 - b->t0, 1.2, 1e-6);
 }
 
+static void put_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "wb");
+    CHECK(f != NULL);
+    if (!f) return;
+    fputs(text, f);
+    fclose(f);
+}
+
+/* A program file and the subroutine (LinuxCNC) and subprogram (Fanuc) files
+ * it loads are read within max_program_bytes, which counts what the program
+ * has loaded already: a budget of exactly both files runs, one byte less
+ * refuses the second file and names it; a program file over the budget and
+ * a missing one are refused with the file named. */
+static void test_program_files(void)
+{
+    char dir[] = "/tmp/fm_gcode_files_XXXXXX";
+    CHECK(mkdtemp(dir) != NULL);
+    char prog[256], sub[256], fprog[256], fsub[256], missing[256], want[512];
+    snprintf(prog, sizeof prog, "%s/main.ngc", dir);
+    snprintf(sub, sizeof sub, "%s/twice.ngc", dir);
+    snprintf(fprog, sizeof fprog, "%s/main.nc", dir);
+    snprintf(fsub, sizeof fsub, "%s/O4000.nc", dir);
+    snprintf(missing, sizeof missing, "%s/missing.ngc", dir);
+    const char *prog_text = "o<twice> call\nM2\n";
+    const char *sub_text = "o<twice> sub\nG0 X1\no<twice> endsub\n";
+    const char *fprog_text = "O0001\nM98 P4000\nM30\n";
+    const char *fsub_text = "O4000\nG00 X2.\nM99\n";
+    put_file(prog, prog_text);
+    put_file(sub, sub_text);
+    put_file(fprog, fprog_text);
+    put_file(fsub, fsub_text);
+    fm_gcode_options o;
+    fm_error err;
+
+    fm_gcode_options_default(&o);
+    o.subroutine_path = dir;
+    o.max_program_bytes = strlen(prog_text) + strlen(sub_text);
+    ngot = 0;
+    CHECK(fm_gcode_run_file(prog, &o, collect, NULL, NULL, &err) == FM_OK);
+    CHECK(ngot == 1 && got[0].end[0] == 1);
+    o.max_program_bytes--;
+    CHECK(fm_gcode_run_file(prog, &o, collect, NULL, NULL, &err) == FM_ERR_LIMIT);
+    snprintf(want, sizeof want, "subroutine file %s makes the program larger than %zu bytes", sub,
+             o.max_program_bytes);
+    CHECK_STR_CONTAINS(err.message, want);
+    CHECK(strcmp(err.file, prog) == 0 && err.line == 1);
+
+    o.max_program_bytes = strlen(prog_text) - 1;
+    CHECK(fm_gcode_run_file(prog, &o, collect, NULL, NULL, &err) == FM_ERR_LIMIT);
+    snprintf(want, sizeof want, "larger than the limit of %zu bytes (max_program_bytes)",
+             strlen(prog_text) - 1);
+    CHECK_STR_CONTAINS(err.message, want);
+    CHECK(strcmp(err.file, prog) == 0);
+
+    fm_gcode_options_default(&o);
+    CHECK(fm_gcode_run_file(missing, &o, collect, NULL, NULL, &err) == FM_ERR_IO);
+    CHECK_STR_CONTAINS(err.message, "cannot open");
+    CHECK_STR_CONTAINS(err.message, missing);
+
+    fm_gcode_options_default(&o);
+    o.dialect = FM_GCODE_FANUC;
+    o.max_program_bytes = strlen(fprog_text) + strlen(fsub_text);
+    ngot = 0;
+    CHECK(fm_gcode_run_file(fprog, &o, collect, NULL, NULL, &err) == FM_OK);
+    CHECK(ngot == 1 && got[0].end[0] == 2);
+    o.max_program_bytes--;
+    CHECK(fm_gcode_run_file(fprog, &o, collect, NULL, NULL, &err) == FM_ERR_LIMIT);
+    snprintf(want, sizeof want, "subprogram file %s makes the program larger than %zu bytes",
+             fsub, o.max_program_bytes);
+    CHECK_STR_CONTAINS(err.message, want);
+    CHECK(strcmp(err.file, fprog) == 0 && err.line == 2);
+
+    remove(prog);
+    remove(sub);
+    remove(fprog);
+    remove(fsub);
+    rmdir(dir);
+}
+
 int main(void)
 {
     test_arc_angles_inverse_time_comp();
@@ -306,5 +387,6 @@ int main(void)
     test_skip_and_stop();
     test_words();
     test_errors();
+    test_program_files();
     return test_summary("gcode_unit");
 }

@@ -4,13 +4,11 @@
  * the dialect's front end started on it, the summary taken. */
 #include "machine/machine.h"
 
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
-#include <sys/stat.h>
 
 void fm_gcode_options_default(fm_gcode_options *opt)
 {
@@ -96,44 +94,19 @@ fm_status fm_gcode_run_file(const char *path, const fm_gcode_options *opt, fm_mo
     if (opt) o = *opt;
     else fm_gcode_options_default(&o);
     size_t limit = o.max_program_bytes ? o.max_program_bytes : (size_t)256 << 20;
-    FILE *f = fopen(path, "rb");
-    if (!f) return fm_error_at(err, FM_ERR_IO, path, 0, 0, "cannot open: %s", strerror(errno));
-    struct stat sb;
-    if (fstat(fileno(f), &sb) == 0 && S_ISREG(sb.st_mode) && (unsigned long long)sb.st_size > limit) {
-        fclose(f);
+    char *buf;
+    size_t len;
+    fm_error ferr;
+    fm_status st = fm_file_read(path, "program", limit, &buf, &len, &ferr);
+    if (st != FM_OK && !strcmp(ferr.reason, "too_large"))
         return fm_error_at(err, FM_ERR_LIMIT, path, 0, 0,
-                           "program of %lld bytes is larger than the limit of %zu bytes "
-                           "(max_program_bytes)", (long long)sb.st_size, limit);
+                           "program is larger than the limit of %zu bytes (max_program_bytes)",
+                           limit);
+    if (st != FM_OK) {
+        if (err) *err = ferr;
+        return st;
     }
-    size_t cap = S_ISREG(sb.st_mode) && sb.st_size > 0 ? (size_t)sb.st_size + 1 : 65536, len = 0;
-    char *buf = malloc(cap);
-    if (!buf) {
-        fclose(f);
-        return fm_error_set(err, FM_ERR_LIMIT, "out of memory reading %s", path);
-    }
-    for (;;) {
-        if (len == cap) {
-            if (cap > limit) break;
-            char *nb = realloc(buf, cap * 2);
-            if (!nb) {
-                free(buf);
-                fclose(f);
-                return fm_error_set(err, FM_ERR_LIMIT, "out of memory reading %s", path);
-            }
-            buf = nb;
-            cap *= 2;
-        }
-        size_t r = fread(buf + len, 1, cap - len, f);
-        if (r == 0) break;
-        len += r;
-    }
-    int bad = ferror(f);
-    fclose(f);
-    if (bad) {
-        free(buf);
-        return fm_error_at(err, FM_ERR_IO, path, 0, 0, "read error");
-    }
-    fm_status st = run_text(buf, len, path, 1, &o, sink, user, summary, err);
+    st = run_text(buf, len, path, 1, &o, sink, user, summary, err);
     free(buf);
     return st;
 }

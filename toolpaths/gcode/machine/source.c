@@ -13,7 +13,6 @@
  * the program's folder, then on the subroutine path, by the same reading. */
 #include "machine.h"
 
-#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -111,44 +110,13 @@ void gc_sources_free(gc_interp *g)
 static fm_status read_file(gc_interp *g, const char *path, size_t limit, const char *what,
                            char **text, size_t *len, int col)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) return gc_fail(g, FM_ERR_IO, col, "cannot open %s: %s", path, strerror(errno));
-    size_t cap = 65536, n = 0;
-    char *buf = malloc(cap);
-    if (!buf) {
-        fclose(f);
-        return fm_error_set(g->err, FM_ERR_LIMIT, "out of memory reading %s", path);
-    }
-    for (;;) {
-        if (n == cap) {
-            if (cap > limit) break;
-            char *nb = realloc(buf, cap * 2);
-            if (!nb) {
-                free(buf);
-                fclose(f);
-                return fm_error_set(g->err, FM_ERR_LIMIT, "out of memory reading %s", path);
-            }
-            buf = nb;
-            cap *= 2;
-        }
-        size_t r = fread(buf + n, 1, cap - n, f);
-        if (r == 0) break;
-        n += r;
-    }
-    int bad = ferror(f);
-    fclose(f);
-    if (bad) {
-        free(buf);
-        return gc_fail(g, FM_ERR_IO, col, "read error in %s", path);
-    }
-    if (n > limit) {
-        free(buf);
+    fm_error ferr;
+    fm_status st = fm_file_read(path, NULL, limit, text, len, &ferr);
+    if (st != FM_OK && !strcmp(ferr.reason, "too_large"))
         return gc_fail(g, FM_ERR_LIMIT, col,
                        "%s file %s makes the program larger than %zu bytes "
                        "(max_program_bytes)", what, path, g->opt.max_program_bytes);
-    }
-    *text = buf;
-    *len = n;
+    if (st != FM_OK) return gc_fail(g, st, col, "%s", ferr.message);
     return FM_OK;
 }
 
