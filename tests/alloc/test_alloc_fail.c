@@ -42,19 +42,12 @@ typedef struct alloc_case {
 
 static char *slurp(const char *path, size_t *len)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        fprintf(stderr, "cannot open %s\n", path);
+    char *text;
+    fm_error err;
+    if (fm_file_read(path, NULL, (size_t)64 << 20, &text, len, &err) != FM_OK) {
+        fprintf(stderr, "%s\n", err.message);
         exit(1);
     }
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *text = malloc((size_t)n + 1);
-    if (!text || fread(text, 1, (size_t)n, f) != (size_t)n) exit(1);
-    text[n] = 0;
-    fclose(f);
-    *len = (size_t)n;
     return text;
 }
 

@@ -463,12 +463,9 @@ static void test_design(void)
 /* A file's whole contents, NUL-terminated (NULL when it cannot be read). */
 static char *slurp(const char *path, size_t *size)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    char *buf = calloc(1, 4096);
-    *size = buf ? fread(buf, 1, 4095, f) : 0;
-    fclose(f);
-    return buf;
+    char *buf;
+    fm_error err;
+    return fm_file_read(path, NULL, 4095, &buf, size, &err) == FM_OK ? buf : NULL;
 }
 
 static int writes_seen;

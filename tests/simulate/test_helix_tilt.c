@@ -32,17 +32,6 @@ static const char *tool_json =
     "{\"units\": \"mm\", \"tools\": ["
     "{\"number\": 1, \"shape\": \"flat\", \"diameter\": 6, \"flute_length\": 20, \"length\": 40}]}";
 
-static char *slurp(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    char *buf = malloc(1 << 16);
-    *len = buf ? fread(buf, 1, (1 << 16) - 1, f) : 0;
-    fclose(f);
-    if (buf) buf[*len] = 0;
-    return buf;
-}
-
 int main(void)
 {
     fm_error err;
@@ -52,7 +41,9 @@ int main(void)
         return 1;
     }
     size_t len = 0;
-    char *program = slurp("../examples/helix_tilt.json", &len);
+    char *program = NULL;
+    CHECK(fm_file_read("../examples/helix_tilt.json", NULL, 1 << 16, &program, &len, &err) ==
+          FM_OK);
     CHECK(program != NULL && len > 100);
     if (!program) return 1;
 

@@ -70,18 +70,11 @@ typedef struct ply {
 static int read_ply(const char *path, ply *out)
 {
     memset(out, 0, sizeof *out);
-    FILE *f = fopen(path, "rb");
-    if (!f) return 0;
-    fseek(f, 0, SEEK_END);
-    long size = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    out->file = malloc((size_t)size + 1);
-    if (!out->file || fread(out->file, 1, (size_t)size, f) != (size_t)size) {
-        fclose(f);
-        return 0;
-    }
-    fclose(f);
-    out->file[size] = 0;
+    char *text;
+    size_t size;
+    fm_error err;
+    if (fm_file_read(path, "PLY", (size_t)1 << 30, &text, &size, &err) != FM_OK) return 0;
+    out->file = (unsigned char *)text;
     const char *h = (const char *)out->file;
     const char *end = strstr(h, "end_header\n");
     const char *ev = strstr(h, "element vertex ");
@@ -89,7 +82,7 @@ static int read_ply(const char *path, ply *out)
         return 0;
     out->n = strtoul(ev + 15, NULL, 10);
     out->data = out->file + (end - h) + 11;
-    return (size_t)size >= (size_t)(out->data - out->file) + 27 * out->n;
+    return size >= (size_t)(out->data - out->file) + 27 * out->n;
 }
 
 static void check_colours(fm_stock *stock, fm_mesh_coloring coloring, const char *path)

@@ -89,20 +89,11 @@ static unsigned char *make_snapshot(size_t *meta_len)
     if (fm_stock_save(s, path, "job 1 block 12", &err)) die("save", &err);
     fm_stock_free(s);
 
-    FILE *f = fopen(path, "rb");
-    if (!f) die("cannot reopen the snapshot", NULL);
-    unsigned char *p = NULL;
-    size_t n = 0, cap = 0, got;
-    do {
-        if (n == cap) {
-            cap = cap ? 2 * cap : 65536;
-            p = realloc(p, cap);
-            if (!p) die("out of memory", NULL);
-        }
-        got = fread(p + n, 1, cap - n, f);
-        n += got;
-    } while (got > 0);
-    fclose(f);
+    char *text;
+    size_t n;
+    if (fm_file_read(path, "snapshot", (size_t)1 << 30, &text, &n, &err))
+        die("cannot reopen the snapshot", &err);
+    const unsigned char *p = (const unsigned char *)text;
     unlink(path);
     rmdir(dir);
     if (n < HEADER + 8) die("snapshot too short", NULL);
@@ -116,7 +107,7 @@ static unsigned char *make_snapshot(size_t *meta_len)
     unsigned char *meta = malloc((size_t)mlen);
     if (!meta) die("out of memory", NULL);
     memcpy(meta, p + HEADER, (size_t)mlen);
-    free(p);
+    free(text);
     *meta_len = (size_t)mlen;
     return meta;
 }

@@ -80,15 +80,11 @@ static int write_bytes(const char *path, const unsigned char *p, size_t n)
 
 static unsigned char *read_bytes(const char *path, size_t *n)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    fseek(f, 0, SEEK_END);
-    long len = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    unsigned char *p = malloc((size_t)len);
-    *n = fread(p, 1, (size_t)len, f);
-    fclose(f);
-    return p;
+    char *p;
+    fm_error err;
+    return fm_file_read(path, "snapshot", (size_t)1 << 30, &p, n, &err) == FM_OK
+               ? (unsigned char *)p
+               : NULL;
 }
 
 static void test_round_trip(double *vol_a, double *vol_b, double *save_time)
