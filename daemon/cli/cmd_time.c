@@ -7,7 +7,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "runner/dynamics.h"
 #include "runner/job.h"
@@ -199,8 +198,7 @@ int fm_cmd_time(int argc, char **argv)
     tm.top = nblocks ? calloc((size_t)nblocks, sizeof *tm.top) : NULL;
     fm_planner *p = fm_planner_new(&dyn, on_planned, &tm, &err);
     fm_status st = p ? FM_OK : err.code;
-    struct timespec c0, c1;
-    clock_gettime(CLOCK_MONOTONIC, &c0);
+    double c0 = fm_clock_monotonic_s();
     fm_plan_totals tot = {0};
     fm_gcode_options opt;
     fm_traj_options topt;
@@ -210,8 +208,7 @@ int fm_cmd_time(int argc, char **argv)
         if (st && fm_planner_error(p)->code) err = *fm_planner_error(p);
         if (!st) st = fm_planner_finish(p, &tot, &err);
     }
-    clock_gettime(CLOCK_MONOTONIC, &c1);
-    double secs = (double)(c1.tv_sec - c0.tv_sec) + 1e-9 * (double)(c1.tv_nsec - c0.tv_nsec);
+    double secs = fm_clock_monotonic_s() - c0;
     fm_planner_free(p);
     fm_tool_table_free(&table);
     if (!st && tm.failed) st = fm_error_set(&err, FM_ERR_LIMIT, "frepmill time: out of memory");

@@ -138,11 +138,15 @@ fm_status fm_job_tools_from_program(const fm_job_spec *spec, const fm_tooltable_
     if (spec->program_text) {
         inch = gcode_selects_inch(spec->program_text, spec->program_length);
     } else if (spec->program_path) {
-        FILE *f = fopen(spec->program_path, "rb");
-        char *head = f ? malloc(1 << 20) : NULL;
-        if (head) inch = gcode_selects_inch(head, fread(head, 1, 1 << 20, f));
-        free(head);
-        if (f) fclose(f);
+        /* within the interpreter's own default budget; a file it cannot read
+         * is reported by the interpretation below */
+        char *text = NULL;
+        size_t len = 0;
+        fm_error ignored;
+        if (fm_file_read(spec->program_path, "program", (size_t)256 << 20, &text, &len,
+                         &ignored) == FM_OK)
+            inch = gcode_selects_inch(text, len);
+        free(text);
     }
     fm_tooltable_comments *c = fm_tooltable_comments_new(name, inch);
     if (!c) return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
