@@ -246,6 +246,26 @@ static void test_same_in_both(void)
     CHECK_NEAR(got[7].end[1], 3, 1e-9);
 }
 
+/* A compensated block keeps the feed it was programmed with while it waits
+ * for the next block: the start-up and the side after it are programmed in
+ * G95 (F0.5 mm/rev at S1000: 500 mm/min) and leave the queue after the next
+ * block has switched to G94 F300. Start-up (-20,0) -> (-5,0): 15 mm, 1.8 s;
+ * the side (-5,0) -> (-5,25): 25 mm, 3 s; the top (-5,25) -> (45,25) at
+ * 300 mm/min: 50 mm, 10 s. */
+static void test_feed_modes(void)
+{
+    fm_error err;
+    fm_status st = run("G21 G17 G90\nT1 M06\nS1000 M03\nG00 X-20. Y0\nG01 Z-5. F300.\n"
+                       "G95 G41 D1 X0 Y0 F0.5\nY20.\nG94 X40. F300.\nY0\nG40 X60. Y0\nM30\n",
+                       FM_GCODE_FANUC, &err);
+    CHECK(st == FM_OK && ngot >= 5);
+    if (st || ngot < 5) return;
+    CHECK_NEAR(got[2].t1 - got[2].t0, 15.0 / 500.0 * 60.0, 1e-9);
+    CHECK_NEAR(got[3].t1 - got[3].t0, 25.0 / 500.0 * 60.0, 1e-9);
+    CHECK_NEAR(got[4].t1 - got[4].t0, 50.0 / 300.0 * 60.0, 1e-9);
+    CHECK_NEAR(got[3].feed, 500, 1e-9);
+}
+
 int main(void)
 {
     tool_specs[0].number = 1;
@@ -258,5 +278,6 @@ int main(void)
     test_interference();
     test_second_start();
     test_same_in_both();
+    test_feed_modes();
     return test_summary("gcode_fanuc_comp");
 }

@@ -42,34 +42,13 @@ static fm_status emit(void *ctx, const gc_compc_elem *e, fm_error *err)
     gc_interp *g = ctx;
     (void)err; /* the motions fail into g->err, which is err */
     const comp_c_payload *p = e->payload;
-    double feed = g->feed, speed = g->speed;
-    int inverse = g->inverse_time, dir = g->spindle_dir, coolant = g->coolant;
-    int lineno = g->lineno;
-    long block = g->cur_block;
-    g->feed = p->snap.feed;
-    g->inverse_time = 0;
-    g->speed = p->snap.speed;
-    g->spindle_dir = p->snap.spindle_dir;
-    g->coolant = p->snap.coolant;
-    g->lineno = p->snap.line;
-    g->cur_block = p->snap.block;
+    static const gc_comp_kind kinds[] = {[GC_COMPC_LINE] = GC_COMP_LINE,
+                                         [GC_COMPC_RAPID] = GC_COMP_RAPID,
+                                         [GC_COMPC_ARC] = GC_COMP_ARC,
+                                         [GC_COMPC_OTHER] = GC_COMP_DWELL};
     double xyz[3];
     from_plane(g->comp_c_plane, e->end, xyz);
-    fm_status st;
-    switch (e->kind) {
-    case GC_COMPC_RAPID: st = gc_move_line(g, 1, xyz); break;
-    case GC_COMPC_LINE: st = gc_move_line(g, 0, xyz); break;
-    case GC_COMPC_ARC: st = gc_move_arc(g, xyz, e->center, e->turn); break;
-    default: st = gc_dwell(g, p->seconds); break;
-    }
-    g->feed = feed;
-    g->inverse_time = inverse;
-    g->speed = speed;
-    g->spindle_dir = dir;
-    g->coolant = coolant;
-    g->lineno = lineno;
-    g->cur_block = block;
-    return st;
+    return gc_emit_queued(g, &p->snap, kinds[e->kind], xyz, e->center, e->turn, p->seconds);
 }
 
 int gc_comp_c_routing(const gc_interp *g) { return g->comp_c && !gc_compc_idle(g->comp_c); }
@@ -121,14 +100,15 @@ fm_status gc_comp_c_cancel(gc_interp *g)
     return gc_compc_cancel(g->comp_c, g->err);
 }
 
-/* The state the block is programmed with; in inverse time the feed is the
- * programmed length over the block's time, as comp.c keeps it. */
+/* The state the block is programmed with; the feed per minute as comp.c
+ * keeps it (gc_queued_feed: G93 the programmed length over the block's
+ * time, G95 F x S). */
 static void payload_of(const gc_interp *g, double programmed_len, comp_c_payload *p)
 {
     memset(p, 0, sizeof *p);
     p->snap.line = g->lineno;
     p->snap.block = g->cur_block;
-    p->snap.feed = g->inverse_time ? g->feed * programmed_len : g->feed;
+    p->snap.feed = gc_queued_feed(g, programmed_len);
     p->snap.speed = g->speed;
     p->snap.spindle_dir = g->spindle_dir;
     p->snap.coolant = g->coolant;

@@ -454,6 +454,13 @@ void gc_comp_scale(gc_interp *g, double f);
 fm_status gc_comp_dwell(gc_interp *g, double seconds);
 fm_status gc_comp_straight(gc_interp *g, int rapid, double feed, const double end_xyz[3], int col);
 fm_status gc_comp_arc(gc_interp *g, const gc_arc_data *a, double feed, int col);
+/* The feed a queued (compensated) block keeps, per minute: in G93 its
+ * programmed length over its time, in G95 F x S (motion.c). */
+double gc_queued_feed(const gc_interp *g, double programmed_len);
+/* Emit a queued block's motion (a line, rapid, arc or dwell; xyz program
+ * coordinates) with the state it was programmed with (motion.c). */
+fm_status gc_emit_queued(gc_interp *g, const gc_comp_snap *snap, gc_comp_kind kind,
+                         const double xyz[3], const double center_ab[2], int turn, double seconds);
 /* Emit a queued motion (motion.c). */
 fm_status gc_emit_comp_move(gc_interp *g, const gc_comp_move *m);
 

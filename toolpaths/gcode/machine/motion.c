@@ -374,7 +374,7 @@ double gc_arc_sweep(gc_plane plane, const double start[3], const double end[3],
 
 /* The feed a compensated motion keeps while queued: program units per
  * minute; in inverse time, the programmed length over the block's time. */
-static double queued_feed(const gc_interp *g, double programmed_len)
+double gc_queued_feed(const gc_interp *g, double programmed_len)
 {
     return g->inverse_time ? g->feed * programmed_len : feed_per_minute(g);
 }
@@ -440,7 +440,7 @@ fm_status gc_exec_arc(gc_interp *g, const gc_block *b, int code, int col)
                        "%s: the tool radius %.4f is larger than the radius %.4f of this "
                        "inside arc; expected a smaller tool", name, g->comp.radius, arc_r);
     double sweep = fabs(gc_arc_sweep(g->plane, start, end, cab, turn));
-    return gc_comp_arc(g, &arc, queued_feed(g, arc_r * sweep), col);
+    return gc_comp_arc(g, &arc, gc_queued_feed(g, arc_r * sweep), col);
 }
 
 fm_status gc_exec_straight(gc_interp *g, const gc_block *b, int rapid, int g53, int col)
@@ -457,13 +457,14 @@ fm_status gc_exec_straight(gc_interp *g, const gc_block *b, int rapid, int g53, 
         double len = sqrt((end[0] - base[0]) * (end[0] - base[0]) +
                           (end[1] - base[1]) * (end[1] - base[1]) +
                           (end[2] - base[2]) * (end[2] - base[2]));
-        return gc_comp_straight(g, rapid, rapid ? 0 : queued_feed(g, len), end, col);
+        return gc_comp_straight(g, rapid, rapid ? 0 : gc_queued_feed(g, len), end, col);
     }
     g->comp.arc_not_allowed = 0;
     return gc_move_line(g, rapid, end);
 }
 
-fm_status gc_emit_comp_move(gc_interp *g, const gc_comp_move *m)
+fm_status gc_emit_queued(gc_interp *g, const gc_comp_snap *snap, gc_comp_kind kind,
+                         const double xyz[3], const double center_ab[2], int turn, double seconds)
 {
     /* the motion carries the state it was programmed with */
     double feed = g->feed, speed = g->speed;
@@ -471,22 +472,20 @@ fm_status gc_emit_comp_move(gc_interp *g, const gc_comp_move *m)
     int coolant = g->coolant;
     int lineno = g->lineno;
     long block = g->cur_block;
-    g->feed = m->snap.feed; /* per minute (queued_feed) */
+    g->feed = snap->feed; /* per minute (gc_queued_feed) */
     g->inverse_time = 0;
     g->per_rev = 0;
-    g->speed = m->snap.speed;
-    g->spindle_dir = m->snap.spindle_dir;
-    g->coolant = m->snap.coolant;
-    g->lineno = m->snap.line;
-    g->cur_block = m->snap.block;
-    double xyz[3];
-    gc_comp_from_plane(g->plane, m->end, xyz);
+    g->speed = snap->speed;
+    g->spindle_dir = snap->spindle_dir;
+    g->coolant = snap->coolant;
+    g->lineno = snap->line;
+    g->cur_block = snap->block;
     fm_status st;
-    switch (m->kind) {
+    switch (kind) {
     case GC_COMP_RAPID: st = gc_move_line(g, 1, xyz); break;
     case GC_COMP_LINE: st = gc_move_line(g, 0, xyz); break;
-    case GC_COMP_ARC: st = gc_move_arc(g, xyz, m->center, m->turn); break;
-    default: st = gc_dwell(g, m->seconds); break;
+    case GC_COMP_ARC: st = gc_move_arc(g, xyz, center_ab, turn); break;
+    default: st = gc_dwell(g, seconds); break;
     }
     g->feed = feed;
     g->inverse_time = inverse;
@@ -497,6 +496,13 @@ fm_status gc_emit_comp_move(gc_interp *g, const gc_comp_move *m)
     g->lineno = lineno;
     g->cur_block = block;
     return st;
+}
+
+fm_status gc_emit_comp_move(gc_interp *g, const gc_comp_move *m)
+{
+    double xyz[3];
+    gc_comp_from_plane(g->plane, m->end, xyz);
+    return gc_emit_queued(g, &m->snap, m->kind, xyz, m->center, m->turn, m->seconds);
 }
 
 /* Canned cycles: LinuxCNC's convert_cycle_xy/yz/zx with aa, bb in the plane
