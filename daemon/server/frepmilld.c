@@ -19,6 +19,7 @@
 #include "log.h"
 #include "http_service.h"
 #include "modbus_service.h"
+#include "mtconnect_service.h"
 #include "queue_redis.h"
 #include "store.h"
 
@@ -243,9 +244,19 @@ int main(int argc, char **argv)
     hcfg.log = http_log;
     fm_http_service hsvc;
     fm_jobs_http_service(jobs, &hsvc);
+    fm_mtc_agent *mtconnect = NULL;
+    if (cfg.mtconnect) {
+        if (fm_mtconnect_start(jobs, &cfg, &mtconnect, &err) != FM_OK) {
+            fm_log(FM_LOG_ERROR, "mtconnect: %s", err.message);
+            fm_jobs_close(jobs);
+            return 2;
+        }
+        fm_mtconnect_mount(mtconnect, &hsvc);
+    }
     fm_http_server *http = NULL;
     if (fm_http_server_start(&hcfg, &hsvc, &http, &err) != FM_OK) {
         fm_log(FM_LOG_ERROR, "http: %s", err.message);
+        fm_mtc_agent_free(mtconnect);
         fm_jobs_close(jobs);
         return 4;
     }
@@ -313,6 +324,7 @@ int main(int argc, char **argv)
         if (!queue) {
             fm_log(FM_LOG_ERROR, "queue: %s", err.message);
             fm_http_server_stop(http);
+            fm_mtc_agent_free(mtconnect);
             fm_modbus_server_stop(modbus);
             fm_jobs_close(jobs);
             return 2;
@@ -343,6 +355,7 @@ int main(int argc, char **argv)
     fm_redis_queue_stop(queue); /* takes no more; writes the results it holds */
     fm_jobs_begin_shutdown(jobs);
     fm_http_server_stop(http);
+    fm_mtc_agent_free(mtconnect); /* after the server: its streams read the agent */
     fm_modbus_server_stop(modbus);
     fm_jobs_close(jobs);
     fm_log(FM_LOG_INFO, "frepmilld stopped");
