@@ -50,6 +50,8 @@ void fm_daemon_config_default(fm_daemon_config *cfg)
     snprintf(cfg->mtconnect_uuid, sizeof cfg->mtconnect_uuid, "frepmill-%s", host);
     cfg->mtconnect_buffer = 16384;
     cfg->mtconnect_sample_ms = 50;
+    snprintf(cfg->live_units, sizeof cfg->live_units, "mm");
+    cfg->live_reconnect_max_s = 30;
 }
 
 int fm_daemon_split_addr(const char *spec, char *addr, size_t addr_size, unsigned *port)
@@ -147,6 +149,10 @@ static const key_def keys[] = {
     TEXT("mtconnect_machine", mtconnect_machine),
     INT("mtconnect_buffer", mtconnect_buffer, 4, 1048576),
     INT("mtconnect_sample_ms", mtconnect_sample_ms, 1, 60000),
+    TEXT("live_source", live_source),
+    TEXT("live_map", live_map),
+    TEXT("live_units", live_units),
+    REAL("live_reconnect_max_s", live_reconnect_max_s, 1, 3600),
 };
 
 int fm_daemon_config_set(fm_daemon_config *cfg, const char *key, const char *value, char *msg,

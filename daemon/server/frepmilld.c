@@ -19,6 +19,7 @@
 #include "log.h"
 #include "http_service.h"
 #include "modbus_service.h"
+#include "live_source.h"
 #include "mtconnect_service.h"
 #include "queue_redis.h"
 #include "store.h"
@@ -333,6 +334,34 @@ int main(int argc, char **argv)
                cfg.queue_group);
     }
 
+    fm_live_source *live_source = NULL;
+    if (cfg.live_source[0]) {
+        if (strcmp(cfg.live_units, "mm") != 0 && strcmp(cfg.live_units, "inch") != 0) {
+            fm_log(FM_LOG_ERROR, "live_units must be mm or inch, not %s", cfg.live_units);
+            fm_redis_queue_stop(queue);
+            fm_jobs_begin_shutdown(jobs);
+            fm_http_server_stop(http);
+            fm_mtc_agent_free(mtconnect);
+            fm_modbus_server_stop(modbus);
+            fm_jobs_close(jobs);
+            return 2;
+        }
+        fm_live_source_config lcfg = {.source = cfg.live_source,
+                                      .map = cfg.live_map,
+                                      .scale = strcmp(cfg.live_units, "inch") ? 1.0 : 25.4,
+                                      .reconnect_max_s = cfg.live_reconnect_max_s};
+        if (fm_live_source_start(&lcfg, jobs, &live_source, &err) != FM_OK) {
+            fm_log(FM_LOG_ERROR, "live_source: %s", err.message);
+            fm_redis_queue_stop(queue);
+            fm_jobs_begin_shutdown(jobs);
+            fm_http_server_stop(http);
+            fm_mtc_agent_free(mtconnect);
+            fm_modbus_server_stop(modbus);
+            fm_jobs_close(jobs);
+            return 2;
+        }
+    }
+
     if (cfg.demo) submit_demo(jobs, &cfg, port);
     fm_log(FM_LOG_INFO, "frepmilld ready: %d workers, state in %s", cfg.workers, cfg.state_dir);
 
@@ -352,6 +381,7 @@ int main(int argc, char **argv)
     }
     /* Order: no new requests, then jobs stop at their next cut and are
      * snapshotted for the next start. */
+    fm_live_source_stop(live_source); /* gives no more positions */
     fm_redis_queue_stop(queue); /* takes no more; writes the results it holds */
     fm_jobs_begin_shutdown(jobs);
     fm_http_server_stop(http);

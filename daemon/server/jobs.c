@@ -536,6 +536,11 @@ int fm_jobs_live_active(fm_jobs *jobs)
     return fm_live_active(&jobs->live);
 }
 
+void fm_jobs_live_note(fm_jobs *jobs, const char *note)
+{
+    fm_live_note(&jobs->live, note);
+}
+
 json_t *fm_jobs_status_list(fm_jobs *jobs)
 {
     /* References first, statuses after: never hold the table lock while

@@ -130,5 +130,8 @@ fm_status fm_jobs_live_start(fm_jobs *jobs, int from_slot, fm_error *err);
 fm_status fm_jobs_live_position(fm_jobs *jobs, const double xyz[3], int tool, fm_error *err);
 fm_status fm_jobs_live_stop(fm_jobs *jobs, fm_error *err);
 int fm_jobs_live_active(fm_jobs *jobs);
+/* What live mode's source says of its connection (live_source.c), shown
+ * as "live_source" in the live job's status. */
+void fm_jobs_live_note(fm_jobs *jobs, const char *note);
 
 #endif

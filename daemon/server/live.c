@@ -361,6 +361,18 @@ fm_status fm_live_position(fm_live_session *s, const double xyz[3], int tool, fm
     return rc;
 }
 
+void fm_live_note(fm_live_session *s, const char *note)
+{
+    pthread_mutex_lock(&s->lock);
+    job *j = s->job;
+    if (j) {
+        pthread_mutex_lock(&j->lock);
+        snprintf(j->live_note, sizeof j->live_note, "%s", note);
+        pthread_mutex_unlock(&j->lock);
+    }
+    pthread_mutex_unlock(&s->lock);
+}
+
 void fm_live_stop(fm_live_session *s)
 {
     /* The Modbus thread does not wait for the queued moves to be cut: the

@@ -31,6 +31,8 @@ fm_status fm_live_position(fm_live_session *s, const double xyz[3], int tool, fm
 /* Live mode off: the session lets its job go, which cuts what is queued
  * and ends on its own thread. */
 void fm_live_stop(fm_live_session *s);
+/* The source's state into the live job's live_note (nothing without one). */
+void fm_live_note(fm_live_session *s, const char *note);
 
 /* The live job's document: the configured stock (a SPEC string) and tool
  * table file, or where NULL or "" those of src (a job, or NULL); voxel and
