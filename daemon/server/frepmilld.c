@@ -257,7 +257,7 @@ int main(int argc, char **argv)
     fm_http_server *http = NULL;
     if (fm_http_server_start(&hcfg, &hsvc, &http, &err) != FM_OK) {
         fm_log(FM_LOG_ERROR, "http: %s", err.message);
-        fm_mtc_agent_free(mtconnect);
+        fm_mtconnect_stop(jobs, mtconnect);
         fm_jobs_close(jobs);
         return 4;
     }
@@ -325,7 +325,7 @@ int main(int argc, char **argv)
         if (!queue) {
             fm_log(FM_LOG_ERROR, "queue: %s", err.message);
             fm_http_server_stop(http);
-            fm_mtc_agent_free(mtconnect);
+            fm_mtconnect_stop(jobs, mtconnect);
             fm_modbus_server_stop(modbus);
             fm_jobs_close(jobs);
             return 2;
@@ -341,7 +341,7 @@ int main(int argc, char **argv)
             fm_redis_queue_stop(queue);
             fm_jobs_begin_shutdown(jobs);
             fm_http_server_stop(http);
-            fm_mtc_agent_free(mtconnect);
+            fm_mtconnect_stop(jobs, mtconnect);
             fm_modbus_server_stop(modbus);
             fm_jobs_close(jobs);
             return 2;
@@ -355,7 +355,7 @@ int main(int argc, char **argv)
             fm_redis_queue_stop(queue);
             fm_jobs_begin_shutdown(jobs);
             fm_http_server_stop(http);
-            fm_mtc_agent_free(mtconnect);
+            fm_mtconnect_stop(jobs, mtconnect);
             fm_modbus_server_stop(modbus);
             fm_jobs_close(jobs);
             return 2;
@@ -385,7 +385,7 @@ int main(int argc, char **argv)
     fm_redis_queue_stop(queue); /* takes no more; writes the results it holds */
     fm_jobs_begin_shutdown(jobs);
     fm_http_server_stop(http);
-    fm_mtc_agent_free(mtconnect); /* after the server: its streams read the agent */
+    fm_mtconnect_stop(jobs, mtconnect); /* after the server: its streams read the agent */
     fm_modbus_server_stop(modbus);
     fm_jobs_close(jobs);
     fm_log(FM_LOG_INFO, "frepmilld stopped");

@@ -541,6 +541,16 @@ void fm_jobs_live_note(fm_jobs *jobs, const char *note)
     fm_live_note(&jobs->live, note);
 }
 
+int fm_jobs_live_machine(fm_jobs *jobs, double xyz[3], int *tool)
+{
+    return fm_live_machine(&jobs->live, xyz, tool);
+}
+
+void fm_jobs_live_on_position(fm_jobs *jobs, void (*fn)(void *user), void *user)
+{
+    fm_live_on_position(&jobs->live, fn, user);
+}
+
 json_t *fm_jobs_status_list(fm_jobs *jobs)
 {
     /* References first, statuses after: never hold the table lock while

@@ -16,6 +16,7 @@
 #include "live_source.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <libxml/parser.h>
 #include <libxml/tree.h>
 #include <math.h>
@@ -39,6 +40,7 @@
 #define SILENCE_WITHOUT_HEARTBEAT_S 600.0
 #define AGENT_POLL_MS 50
 #define AGENT_REPLY_MAX ((size_t)64 << 20)
+#define CONNECT_TIMEOUT_MS 5000
 
 static const char *const map_keys[8] = {"X", "Y", "Z", "A", "B", "C", "tool", "line"};
 
@@ -277,10 +279,29 @@ static int connect_to(fm_live_source *s, char *why, size_t why_size)
     for (struct addrinfo *a = res; a && fd < 0; a = a->ai_next) {
         fd = socket(a->ai_family, a->ai_socktype | SOCK_CLOEXEC, a->ai_protocol);
         if (fd < 0) continue;
-        if (connect(fd, a->ai_addr, a->ai_addrlen) != 0) {
-            snprintf(why, why_size, "%.100s:%.15s: %.100s", s->host, s->port, strerror(errno));
+        /* Non-blocking, so that an unreachable host costs CONNECT_TIMEOUT_MS
+         * and a stopping daemon no more than a poll. */
+        int flags = fcntl(fd, F_GETFL);
+        fcntl(fd, F_SETFL, flags | O_NONBLOCK);
+        int rc2 = connect(fd, a->ai_addr, a->ai_addrlen);
+        int e = rc2 == 0 ? 0 : errno;
+        if (e == EINPROGRESS) {
+            e = ETIMEDOUT;
+            for (int waited = 0; waited < CONNECT_TIMEOUT_MS && !atomic_load(&s->stopping); waited += 100) {
+                struct pollfd p = {fd, POLLOUT, 0};
+                if (poll(&p, 1, 100) > 0) {
+                    socklen_t len = sizeof e;
+                    if (getsockopt(fd, SOL_SOCKET, SO_ERROR, &e, &len) != 0) e = errno;
+                    break;
+                }
+            }
+        }
+        if (e != 0) {
+            snprintf(why, why_size, "%.100s:%.15s: %.100s", s->host, s->port, strerror(e));
             close(fd);
             fd = -1;
+        } else {
+            fcntl(fd, F_SETFL, flags);
         }
     }
     freeaddrinfo(res);
@@ -398,9 +419,12 @@ static char *http_get(fm_live_source *s, const char *path, size_t *size, int *st
     size_t cap = 65536, len = 0;
     char *buf = malloc(cap + 1);
     while (buf) {
-        struct pollfd p = {fd, POLLIN, 0};
-        int ready = poll(&p, 1, 10000);
-        if (ready <= 0) {
+        int ready = 0;
+        for (int waited = 0; waited < 10000 && !ready && !atomic_load(&s->stopping); waited += 100) {
+            struct pollfd p = {fd, POLLIN, 0};
+            ready = poll(&p, 1, 100) > 0;
+        }
+        if (!ready) {
             snprintf(why, why_size, "the agent did not answer within 10 s");
             free(buf);
             buf = NULL;

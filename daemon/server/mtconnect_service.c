@@ -63,6 +63,14 @@ static void svc_snapshot(void *ctx, fm_mtc_snapshot *out)
     out->stock_mm3 = json_number_value(json_object_get(st, "stock_volume_mm3"));
     out->progress_percent = 100.0 * json_number_value(json_object_get(st, "progress"));
     out->uncertain_voxels = (double)json_integer_value(json_object_get(st, "voxels_uncertain"));
+    /* A live job: where the machine is (its latest position), which the
+     * cut reaches a little later; so a follower sees every position. */
+    double live_xyz[3];
+    int live_tool;
+    if (fm_jobs_live_machine(jobs, live_xyz, &live_tool)) {
+        memcpy(out->position, live_xyz, sizeof live_xyz);
+        out->tool = live_tool > 0 ? live_tool : out->tool;
+    }
     json_t *error = json_object_get(st, "error");
     if (json_is_object(error)) {
         const char *m = json_string_value(json_object_get(error, "message"));
@@ -140,6 +148,13 @@ static fm_status svc_mounted(void *ctx, const char *path, const char *query, fm_
     return FM_OK;
 }
 
+/* Each live position observed at once, not only when the sampler next
+ * looks: a follower of this agent sees every one. */
+static void live_position_seen(void *agent)
+{
+    fm_mtc_agent_update(agent);
+}
+
 fm_status fm_mtconnect_start(fm_jobs *jobs, const fm_daemon_config *cfg, fm_mtc_agent **out,
                              fm_error *err)
 {
@@ -156,7 +171,16 @@ fm_status fm_mtconnect_start(fm_jobs *jobs, const fm_daemon_config *cfg, fm_mtc_
             mcfg.device.rotary[mcfg.device.rotary_count++] = (char)('A' + machine.chain.rotary[i].letter);
     }
     fm_mtc_service svc = {jobs, svc_snapshot, svc_tools};
-    return fm_mtc_agent_new(&mcfg, &svc, out, err);
+    fm_status st = fm_mtc_agent_new(&mcfg, &svc, out, err);
+    if (st == FM_OK) fm_jobs_live_on_position(jobs, live_position_seen, *out);
+    return st;
+}
+
+void fm_mtconnect_stop(fm_jobs *jobs, fm_mtc_agent *agent)
+{
+    if (!agent) return;
+    fm_jobs_live_on_position(jobs, NULL, NULL); /* waits for a call in progress */
+    fm_mtc_agent_free(agent);
 }
 
 void fm_mtconnect_mount(fm_mtc_agent *agent, fm_http_service *http)

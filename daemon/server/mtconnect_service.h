@@ -18,5 +18,7 @@ fm_status fm_mtconnect_start(fm_jobs *jobs, const fm_daemon_config *cfg, fm_mtc_
  * before the server starts; the server must be stopped before the agent is
  * freed, since its streams read the agent). */
 void fm_mtconnect_mount(fm_mtc_agent *agent, fm_http_service *http);
+/* Stop telling the agent of live positions, and free it (NULL is fine). */
+void fm_mtconnect_stop(fm_jobs *jobs, fm_mtc_agent *agent);
 
 #endif

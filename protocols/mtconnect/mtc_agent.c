@@ -18,6 +18,7 @@ struct fm_mtc_agent {
     mtc_model model;
     double model_time;
 
+    pthread_mutex_t update_lock; /* one update at a time: snapshots enter in the order taken */
     pthread_mutex_t lock;
     pthread_cond_t changed;
     mtc_obs *ring;            /* buffer_size observations; seq s at ring[s % buffer_size] */
@@ -185,6 +186,7 @@ void fm_mtc_agent_update(fm_mtc_agent *a)
 {
     fm_mtc_snapshot s;
     snapshot_blank(&s);
+    pthread_mutex_lock(&a->update_lock);
     if (a->svc.snapshot) a->svc.snapshot(a->svc.ctx, &s);
     s.program[sizeof s.program - 1] = '\0';
     s.system_fault[sizeof s.system_fault - 1] = '\0';
@@ -230,6 +232,7 @@ void fm_mtc_agent_update(fm_mtc_agent *a)
     update_findings(a, &s, t);
     if (a->next != before) pthread_cond_broadcast(&a->changed);
     pthread_mutex_unlock(&a->lock);
+    pthread_mutex_unlock(&a->update_lock);
 }
 
 static void *sampler_main(void *arg)
@@ -281,6 +284,7 @@ fm_status fm_mtc_agent_new(const fm_mtc_config *cfg, const fm_mtc_service *svc, 
     if (svc) a->svc = *svc;
     mtc_model_build(&a->model, &a->cfg.device);
     a->model_time = now_s();
+    pthread_mutex_init(&a->update_lock, NULL);
     pthread_mutex_init(&a->lock, NULL);
     pthread_cond_init(&a->changed, NULL);
     a->first = a->next = 1;
@@ -318,6 +322,7 @@ void fm_mtc_agent_free(fm_mtc_agent *a)
     if (a->sampler_started) pthread_join(a->sampler, NULL);
     pthread_cond_destroy(&a->changed);
     pthread_mutex_destroy(&a->lock);
+    pthread_mutex_destroy(&a->update_lock);
     free(a->ring);
     free(a);
 }
