@@ -347,16 +347,20 @@ static void shdr_malformed(void *ctx, uint64_t line, size_t column, const char *
            (unsigned long long)line, column, why);
 }
 
-/* Follow an adapter until the connection ends; the reason in why. */
-static void run_shdr(fm_live_source *s, int fd, char *why, size_t why_size)
+/* Follow an adapter until the connection ends; the reason in why. Returns
+ * 1 when the adapter sent anything (the wait before the next attempt
+ * starts again from 1 s only then: an adapter that accepts and closes at
+ * once is tried less and less often). */
+static int run_shdr(fm_live_source *s, int fd, char *why, size_t why_size)
 {
     shdr_ctx c = {s, -1};
     fm_shdr_handlers h = {&c, NULL, shdr_observation, NULL, shdr_command, shdr_malformed};
     fm_shdr_reader *r = fm_shdr_reader_new(NULL, &h);
     if (!r) {
         snprintf(why, why_size, "out of memory");
-        return;
+        return 0;
     }
+    int received = 0;
     double last_data = mono_s(), last_ping = -1e9;
     char buf[65536];
     while (!atomic_load(&s->stopping)) {
@@ -395,11 +399,13 @@ static void run_shdr(fm_live_source *s, int fd, char *why, size_t why_size)
             break;
         }
         last_data = mono_s();
+        received = 1;
         fm_shdr_reader_feed(r, buf, (size_t)got);
     }
     fm_shdr_reader_finish(r);
     fm_shdr_reader_free(r);
     flush(s);
+    return received;
 }
 
 /* GET path from the agent (HTTP/1.0, the connection closed after): the
@@ -599,8 +605,7 @@ static void *source_main(void *arg)
             if (fd >= 0) {
                 fm_log(FM_LOG_INFO, "live: connected to %s", s->source);
                 note(s, "following %s", s->source);
-                wait = 1.0;
-                run_shdr(s, fd, why, sizeof why);
+                if (run_shdr(s, fd, why, sizeof why)) wait = 1.0;
                 close(fd);
             }
         } else {

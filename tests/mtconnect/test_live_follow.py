@@ -17,23 +17,9 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "daemon"))
 from daemon_util import INSTRUMENTED, Daemon, check, skip  # noqa: E402
-from test_live_shdr import BOX, RADIUS, TOOLS, Replay, live_status, recorded_positions  # noqa: E402
+from test_live_shdr import BOX, RADIUS, TOOLS, Replay, recorded_positions, wait_volume  # noqa: E402
 
 LINES = 1370
-
-
-def wait_steady(url, seconds, deadline):
-    last, since, status = None, time.time(), None
-    while time.time() < deadline:
-        status = live_status(url)
-        if status:
-            removed = status["removed_volume_mm3"]
-            if removed != last:
-                last, since = removed, time.time()
-            elif removed > 0 and time.time() - since > seconds:
-                return status
-        time.sleep(0.5)
-    return status
 
 
 def main():
@@ -68,9 +54,10 @@ def main():
             deadline = time.time() + (900 if INSTRUMENTED else 400)
             while not replay.sent and time.time() < deadline:
                 time.sleep(0.5)
-            sa = wait_steady(a.url, 5, deadline)
-            sb = wait_steady(b.url, 5, deadline)
-            check(sa and sb, "both daemons have a live job")
+            sa = wait_volume(a.url, expect, 0.005, deadline)
+            check(sa is not None, "A has a live job")
+            sb = wait_volume(b.url, sa["removed_volume_mm3"], 0.001, deadline)
+            check(sb is not None, "B has a live job")
             ra, rb = sa["removed_volume_mm3"], sb["removed_volume_mm3"]
             print("A removed %.3f, B removed %.3f, the closed form %.3f" % (ra, rb, expect))
             check(abs(ra - expect) <= 0.005 * expect, "A cut the hole (%.3f of %.3f)" % (ra, expect))
