@@ -41,6 +41,7 @@
 #define AGENT_POLL_MS 50
 #define AGENT_REPLY_MAX ((size_t)64 << 20)
 #define CONNECT_TIMEOUT_MS 5000
+#define STREAM_HEARTBEAT_MS 1000
 
 static const char *const map_keys[8] = {"X", "Y", "Z", "A", "B", "C", "tool", "line"};
 
@@ -556,6 +557,121 @@ static int apply_streams(fm_live_source *s, const char *body, size_t size, uint6
     return 0;
 }
 
+/* The sample stream (interval=0, heartbeat 1 s): each multipart part a
+ * Streams document applied as it arrives. Returns 0 when the agent does
+ * not stream (the caller polls instead), else 1 when the stream ended
+ * (why says how). */
+static int stream_samples(fm_live_source *s, uint64_t next, char *why, size_t why_size)
+{
+    int fd = connect_to(s, why, why_size);
+    if (fd < 0) return 1;
+    char req[1024];
+    int n = snprintf(req, sizeof req,
+                     "GET /%s%ssample?from=%llu&count=1000&interval=0&heartbeat=%d HTTP/1.0\r\nHost: "
+                     "%s\r\n\r\n",
+                     s->device, s->device[0] ? "/" : "", (unsigned long long)next, STREAM_HEARTBEAT_MS,
+                     s->host);
+    if (n <= 0 || (size_t)n >= sizeof req || send_all(fd, req, (size_t)n) != 0) {
+        snprintf(why, why_size, "cannot ask the agent for its sample stream");
+        close(fd);
+        return 1;
+    }
+    size_t cap = 65536, len = 0;
+    char *buf = malloc(cap + 1);
+    char boundary[128] = "";
+    int streamed = 1;
+    double last_data = mono_s();
+    while (buf && !atomic_load(&s->stopping)) {
+        struct pollfd p = {fd, POLLIN, 0};
+        int ready = poll(&p, 1, 100);
+        if (ready < 0 && errno != EINTR) {
+            snprintf(why, why_size, "poll: %s", strerror(errno));
+            break;
+        }
+        if (ready > 0) {
+            if (len == cap) {
+                if (cap >= AGENT_REPLY_MAX) {
+                    snprintf(why, why_size, "a part of the agent's stream is over %zu bytes", AGENT_REPLY_MAX);
+                    break;
+                }
+                char *b = realloc(buf, cap * 2 + 1);
+                if (!b) break;
+                buf = b;
+                cap *= 2;
+            }
+            ssize_t got = recv(fd, buf + len, cap - len, 0);
+            if (got < 0 && errno == EINTR) continue;
+            if (got <= 0) {
+                snprintf(why, why_size, "the agent closed its sample stream");
+                break;
+            }
+            len += (size_t)got;
+            buf[len] = '\0';
+            last_data = mono_s();
+        } else if (mono_s() - last_data > 3.0 * STREAM_HEARTBEAT_MS / 1000.0) {
+            snprintf(why, why_size, "the agent's sample stream was silent for %.1f s", mono_s() - last_data);
+            break;
+        }
+        if (!boundary[0]) {
+            char *end = strstr(buf, "\r\n\r\n");
+            if (!end) continue;
+            int status = 0;
+            const char *b = strstr(buf, "boundary=");
+            if (sscanf(buf, "HTTP/%*s %d", &status) != 1 || status != 200 || !b || b > end) {
+                streamed = 0; /* no stream: poll */
+                break;
+            }
+            b += 9;
+            size_t bl = strcspn(b, "\r\n;\" ");
+            if (bl == 0 || bl + 3 >= sizeof boundary) {
+                streamed = 0;
+                break;
+            }
+            boundary[0] = boundary[1] = '-';
+            memcpy(boundary + 2, b, bl);
+            boundary[bl + 2] = '\0';
+            end += 4;
+            len -= (size_t)(end - buf);
+            memmove(buf, end, len + 1);
+        }
+        /* Whole parts: "--BOUNDARY\r\n", headers with Content-length, a blank
+         * line, the document. */
+        int failed = 0;
+        for (;;) {
+            char *start = strstr(buf, boundary);
+            if (!start) break;
+            char *head_end = strstr(start, "\r\n\r\n");
+            if (!head_end) break;
+            const char *cl = NULL;
+            for (const char *c = start; c < head_end && !cl; c++)
+                if (!strncasecmp(c, "content-length:", 15)) cl = c;
+            if (!cl) {
+                snprintf(why, why_size, "a part of the agent's stream has no Content-length");
+                failed = 1;
+                break;
+            }
+            size_t size = strtoul(cl + 15, NULL, 10);
+            char *body = head_end + 4;
+            if ((size_t)(buf + len - body) < size) break;
+            uint64_t after = next;
+            if (apply_streams(s, body, size, &after, why, why_size) != 0) {
+                failed = 1;
+                break;
+            }
+            next = after;
+            flush(s);
+            size_t used = (size_t)(body + size - buf);
+            len -= used;
+            memmove(buf, buf + used, len + 1);
+        }
+        if (failed) break;
+    }
+    free(buf);
+    close(fd);
+    if (streamed && !why[0]) snprintf(why, why_size, "the sample stream ended");
+    return streamed;
+}
+
 /* Follow an agent: current, then samples from its nextSequence. */
 static void run_agent(fm_live_source *s, char *why, size_t why_size)
 {
@@ -573,6 +689,9 @@ static void run_agent(fm_live_source *s, char *why, size_t why_size)
     if (!s->started) start_live_job(s);
     note(s, "following %s", s->source);
     flush(s);
+    if (stream_samples(s, next, why, why_size)) return;
+    fm_log(FM_LOG_INFO, "live: %s does not stream its samples; polling", s->source);
+    why[0] = '\0';
     while (!atomic_load(&s->stopping)) {
         snprintf(path, sizeof path, "/%s%ssample?from=%llu&count=1000", s->device, s->device[0] ? "/" : "",
                  (unsigned long long)next);

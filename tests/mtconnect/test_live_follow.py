@@ -3,7 +3,8 @@ Daemon A follows the recorded Okuma adapter (the first 1,370 lines of
 ../shared/mtconnect/recordings/okuma_multus_imts2022.shdr, its assets and
 the whole Z pecking stretch of test_live_shdr.py, played at a machine's
 pace) in live mode; daemon B follows A's agent with live_source =
-mtconnect://A/mtconnect/frepmill (the agent's root, then the device) and live_map = X=Xpos,Y=Ypos,Z=Zpos (A's device's
+mtconnect://A/mtconnect/frepmill (the agent's root, then the device: its current
+document, then its sample stream) and live_map = X=Xpos,Y=Ypos,Z=Zpos (A's device's
 tool tip). B's live job must cut the volume A's live job cut, which is the
 hole pi * 3^2 * 50 mm^3 of test_live_shdr.py's closed form.
 Usage: test_live_follow.py FREPMILLD MTCONNECT_DATA"""
@@ -64,6 +65,9 @@ def main():
             check(abs(rb - ra) <= 0.001 * ra, "B cut what A cut (%.3f vs %.3f)" % (rb, ra))
             check(sb.get("live_source", "").startswith("following mtconnect://"),
                   "B's status says it follows A's agent (%s)" % sb.get("live_source"))
+            log = b.read_log()
+            check("does not stream" not in log and "trying again" not in log,
+                  "B read A's sample stream from start to end (no polling, no reconnection)")
         finally:
             replay.drop.set()
             replay.stop = True
