@@ -74,9 +74,7 @@ static void sleep_ms(long ms)
 
 static double mono_s(void)
 {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+    return fm_clock_monotonic_s();
 }
 
 int fm_live_map_parse(const char *text, fm_live_map *out, char *msg, size_t msg_size)

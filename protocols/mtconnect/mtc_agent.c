@@ -46,18 +46,15 @@ struct fm_mtc_stream {
     size_t pending_size, pending_off;
 };
 
+/* lib/core's clocks: timestamps on the wall clock, waits on the monotonic. */
 static double now_s(void)
 {
-    struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
-    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+    return fm_clock_wall_s();
 }
 
 static double mono_s(void)
 {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+    return fm_clock_monotonic_s();
 }
 
 void fm_mtc_config_default(fm_mtc_config *cfg)
@@ -244,10 +241,7 @@ static void *sampler_main(void *arg)
         fm_mtc_agent_update(a);
         pthread_mutex_lock(&a->lock);
         struct timespec until;
-        clock_gettime(CLOCK_REALTIME, &until);
-        long ns = until.tv_nsec + (long)a->cfg.sample_ms * 1000000L;
-        until.tv_sec += ns / 1000000000L;
-        until.tv_nsec = ns % 1000000000L;
+        fm_clock_deadline(&until, a->cfg.sample_ms / 1000.0);
         if (!a->stopping) pthread_cond_timedwait(&a->changed, &a->lock, &until);
     }
     pthread_mutex_unlock(&a->lock);
@@ -660,13 +654,8 @@ long fm_mtc_stream_read(fm_mtc_stream *st, char *buf, size_t max, int timeout_ms
             double iv = st->last_sent + st->query.interval_ms / 1000.0;
             if (iv > now && iv < until) until = iv;
             if (until <= now) until = now + 0.001;
-            /* The condition variable runs on CLOCK_REALTIME: wait that long. */
             struct timespec ts;
-            clock_gettime(CLOCK_REALTIME, &ts);
-            double w = until - now;
-            long ns = ts.tv_nsec + (long)((w - floor(w)) * 1e9);
-            ts.tv_sec += (time_t)floor(w) + ns / 1000000000L;
-            ts.tv_nsec = ns % 1000000000L;
+            fm_clock_deadline(&ts, until - now);
             pthread_cond_timedwait(&a->changed, &a->lock, &ts);
         }
         if (st->next < a->first) st->next = a->first; /* the stream fell behind the buffer */

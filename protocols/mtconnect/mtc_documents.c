@@ -291,9 +291,7 @@ static char *writer_close(writer *w, size_t *size)
 static void header(writer *w, const mtc_header *h, int streams, int assets)
 {
     char now[40], model[40];
-    struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
-    mtc_format_time((double)ts.tv_sec + ts.tv_nsec * 1e-9, now, sizeof now);
+    mtc_format_time(fm_clock_wall_s(), now, sizeof now);
     mtc_format_time(h->model_time, model, sizeof model);
     start(w, "Header");
     attr(w, "creationTime", now);

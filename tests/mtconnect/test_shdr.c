@@ -224,15 +224,11 @@ static int test_recording(const char *data_dir)
 {
     char path[1024];
     snprintf(path, sizeof path, "%s/recordings/okuma_multus_imts2022.shdr", data_dir);
-    FILE *f = fopen(path, "rb");
-    if (!f) return 0;
-    fseek(f, 0, SEEK_END);
-    long size = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *text = malloc((size_t)size + 1);
-    CHECK(text && fread(text, 1, (size_t)size, f) == (size_t)size);
-    fclose(f);
-    text[size] = '\0';
+    char *text = NULL;
+    size_t text_size = 0;
+    fm_error err;
+    if (fm_file_read(path, "SHDR recording", (size_t)64 << 20, &text, &text_size, &err) != FM_OK) return 0;
+    long size = (long)text_size;
     /* The scan: the fields of each line, "|X1actw|" followed by a value,
      * and lines whose second field is @ASSET@. */
     long x_values = 0, x_unavailable = 0, assets = 0, lines = 0;
