@@ -3,7 +3,7 @@
 # idempotently (packages already present are not touched; apt-get update
 # runs only when something is missing). Usage:
 #   deploy/install-deps.sh build   compilers and libraries to build frepmill
-#   deploy/install-deps.sh test    build + everything the tests use: valgrind, rs274, mbpoll,
+#   deploy/install-deps.sh test    build + everything the tests use: valgrind, rs274, mbpoll, xmllint,
 #                                  python3, chromium, clang with libFuzzer (the sanitizer and fuzz
 #                                  runs of deploy/test.sh), and from npm the viewer's packages
 #                                  (deploy/install-viewer.sh --dev) and the Node Modbus client of the
@@ -14,8 +14,9 @@ set -eu
 group=${1:-build}
 
 build_pkgs="build-essential cmake ninja-build pkg-config libopenvdb-dev libboost-iostreams-dev libtbb-dev libhiredis-dev \
-libblosc-dev libdraco-dev libmodbus-dev libmicrohttpd-dev libjansson-dev libzip-dev libstb-dev curl"
-test_pkgs="valgrind python3 linuxcnc-uspace mbpoll draco curl chromium redis-server clang libclang-rt-14-dev"
+libblosc-dev libdraco-dev libmodbus-dev libmicrohttpd-dev libjansson-dev libxml2-dev libzip-dev libstb-dev curl"
+test_pkgs="valgrind python3 linuxcnc-uspace mbpoll draco curl chromium redis-server clang libclang-rt-14-dev \
+libxml2-utils"
 
 case "$group" in
 build) pkgs=$build_pkgs ;;

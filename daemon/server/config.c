@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "log.h"
 #include "toolpaths/gcode/gcode.h"
@@ -41,6 +42,16 @@ void fm_daemon_config_default(fm_daemon_config *cfg)
     snprintf(cfg->queue_stream, sizeof cfg->queue_stream, "frepmill:jobs");
     snprintf(cfg->queue_group, sizeof cfg->queue_group, "frepmilld");
     cfg->queue_claim_s = 30;
+    cfg->mtconnect = 1;
+    snprintf(cfg->mtconnect_device, sizeof cfg->mtconnect_device, "frepmill");
+    char host[48] = "localhost";
+    gethostname(host, sizeof host - 1);
+    host[sizeof host - 1] = '\0';
+    snprintf(cfg->mtconnect_uuid, sizeof cfg->mtconnect_uuid, "frepmill-%s", host);
+    cfg->mtconnect_buffer = 16384;
+    cfg->mtconnect_sample_ms = 50;
+    snprintf(cfg->live_units, sizeof cfg->live_units, "mm");
+    cfg->live_reconnect_max_s = 30;
 }
 
 int fm_daemon_split_addr(const char *spec, char *addr, size_t addr_size, unsigned *port)
@@ -132,6 +143,16 @@ static const key_def keys[] = {
     TEXT("queue_group", queue_group),
     TEXT("queue_consumer", queue_consumer),
     REAL("queue_claim_s", queue_claim_s, 0.1, 86400),
+    BOOL("mtconnect", mtconnect),
+    TEXT("mtconnect_device", mtconnect_device),
+    TEXT("mtconnect_uuid", mtconnect_uuid),
+    TEXT("mtconnect_machine", mtconnect_machine),
+    INT("mtconnect_buffer", mtconnect_buffer, 4, 1048576),
+    INT("mtconnect_sample_ms", mtconnect_sample_ms, 1, 60000),
+    TEXT("live_source", live_source),
+    TEXT("live_map", live_map),
+    TEXT("live_units", live_units),
+    REAL("live_reconnect_max_s", live_reconnect_max_s, 1, 3600),
 };
 
 int fm_daemon_config_set(fm_daemon_config *cfg, const char *key, const char *value, char *msg,

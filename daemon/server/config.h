@@ -49,6 +49,20 @@ typedef struct fm_daemon_config {
     char queue_group[256];     /* default frepmilld */
     char queue_consumer[256];  /* default HOST-PID */
     double queue_claim_s;      /* claim entries idle longer than this; default 30 */
+    /* The MTConnect agent under /mtconnect (docs/mtconnect.md). */
+    int mtconnect;             /* serve it; default on */
+    char mtconnect_device[64]; /* the Device's name; default frepmill */
+    char mtconnect_uuid[64];   /* its uuid; default frepmill-HOST */
+    char mtconnect_machine[1024]; /* a machine file: its rotary axes join the device */
+    int mtconnect_buffer;      /* observations kept; default 16384 */
+    int mtconnect_sample_ms;   /* how often the job's status is sampled; default 50 */
+    /* Live mode from MTConnect (docs/mtconnect.md): "" (off),
+     * shdr://HOST:PORT or mtconnect://HOST:PORT/DEVICE; the data items of
+     * X/Y/Z and the tool ("X=Xact,Z=Zact,tool=Tool"); their unit. */
+    char live_source[512];
+    char live_map[512];
+    char live_units[8];        /* mm (default) or inch */
+    double live_reconnect_max_s; /* the longest wait between attempts; default 30 */
 } fm_daemon_config;
 
 void fm_daemon_config_default(fm_daemon_config *cfg);

@@ -19,6 +19,8 @@
 #include "log.h"
 #include "http_service.h"
 #include "modbus_service.h"
+#include "live_source.h"
+#include "mtconnect_service.h"
 #include "queue_redis.h"
 #include "store.h"
 
@@ -243,9 +245,19 @@ int main(int argc, char **argv)
     hcfg.log = http_log;
     fm_http_service hsvc;
     fm_jobs_http_service(jobs, &hsvc);
+    fm_mtc_agent *mtconnect = NULL;
+    if (cfg.mtconnect) {
+        if (fm_mtconnect_start(jobs, &cfg, &mtconnect, &err) != FM_OK) {
+            fm_log(FM_LOG_ERROR, "mtconnect: %s", err.message);
+            fm_jobs_close(jobs);
+            return 2;
+        }
+        fm_mtconnect_mount(mtconnect, &hsvc);
+    }
     fm_http_server *http = NULL;
     if (fm_http_server_start(&hcfg, &hsvc, &http, &err) != FM_OK) {
         fm_log(FM_LOG_ERROR, "http: %s", err.message);
+        fm_mtconnect_stop(jobs, mtconnect);
         fm_jobs_close(jobs);
         return 4;
     }
@@ -313,12 +325,41 @@ int main(int argc, char **argv)
         if (!queue) {
             fm_log(FM_LOG_ERROR, "queue: %s", err.message);
             fm_http_server_stop(http);
+            fm_mtconnect_stop(jobs, mtconnect);
             fm_modbus_server_stop(modbus);
             fm_jobs_close(jobs);
             return 2;
         }
         fm_log(FM_LOG_INFO, "queue: consuming %s as %s of group %s", cfg.queue_stream, consumer,
                cfg.queue_group);
+    }
+
+    fm_live_source *live_source = NULL;
+    if (cfg.live_source[0]) {
+        if (strcmp(cfg.live_units, "mm") != 0 && strcmp(cfg.live_units, "inch") != 0) {
+            fm_log(FM_LOG_ERROR, "live_units must be mm or inch, not %s", cfg.live_units);
+            fm_redis_queue_stop(queue);
+            fm_jobs_begin_shutdown(jobs);
+            fm_http_server_stop(http);
+            fm_mtconnect_stop(jobs, mtconnect);
+            fm_modbus_server_stop(modbus);
+            fm_jobs_close(jobs);
+            return 2;
+        }
+        fm_live_source_config lcfg = {.source = cfg.live_source,
+                                      .map = cfg.live_map,
+                                      .scale = strcmp(cfg.live_units, "inch") ? 1.0 : 25.4,
+                                      .reconnect_max_s = cfg.live_reconnect_max_s};
+        if (fm_live_source_start(&lcfg, jobs, &live_source, &err) != FM_OK) {
+            fm_log(FM_LOG_ERROR, "live_source: %s", err.message);
+            fm_redis_queue_stop(queue);
+            fm_jobs_begin_shutdown(jobs);
+            fm_http_server_stop(http);
+            fm_mtconnect_stop(jobs, mtconnect);
+            fm_modbus_server_stop(modbus);
+            fm_jobs_close(jobs);
+            return 2;
+        }
     }
 
     if (cfg.demo) submit_demo(jobs, &cfg, port);
@@ -340,9 +381,11 @@ int main(int argc, char **argv)
     }
     /* Order: no new requests, then jobs stop at their next cut and are
      * snapshotted for the next start. */
+    fm_live_source_stop(live_source); /* gives no more positions */
     fm_redis_queue_stop(queue); /* takes no more; writes the results it holds */
     fm_jobs_begin_shutdown(jobs);
     fm_http_server_stop(http);
+    fm_mtconnect_stop(jobs, mtconnect); /* after the server: its streams read the agent */
     fm_modbus_server_stop(modbus);
     fm_jobs_close(jobs);
     fm_log(FM_LOG_INFO, "frepmilld stopped");

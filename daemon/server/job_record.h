@@ -109,6 +109,7 @@ typedef struct job {
     int ended;             /* the "end" event was emitted */
     pthread_mutex_t load_lock; /* one lazy mesh load at a time */
     job_live *live;        /* a live job's positions and journal (live.c), else NULL */
+    char live_note[200];   /* its source's connection (live_source.c); "" when none */
     void (*live_free)(job_live *live); /* set with live */
 } job;
 

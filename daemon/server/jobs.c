@@ -536,6 +536,21 @@ int fm_jobs_live_active(fm_jobs *jobs)
     return fm_live_active(&jobs->live);
 }
 
+void fm_jobs_live_note(fm_jobs *jobs, const char *note)
+{
+    fm_live_note(&jobs->live, note);
+}
+
+int fm_jobs_live_machine(fm_jobs *jobs, double xyz[3], int *tool)
+{
+    return fm_live_machine(&jobs->live, xyz, tool);
+}
+
+void fm_jobs_live_on_position(fm_jobs *jobs, void (*fn)(void *user), void *user)
+{
+    fm_live_on_position(&jobs->live, fn, user);
+}
+
 json_t *fm_jobs_status_list(fm_jobs *jobs)
 {
     /* References first, statuses after: never hold the table lock while

@@ -130,5 +130,12 @@ fm_status fm_jobs_live_start(fm_jobs *jobs, int from_slot, fm_error *err);
 fm_status fm_jobs_live_position(fm_jobs *jobs, const double xyz[3], int tool, fm_error *err);
 fm_status fm_jobs_live_stop(fm_jobs *jobs, fm_error *err);
 int fm_jobs_live_active(fm_jobs *jobs);
+/* What live mode's source says of its connection (live_source.c), shown
+ * as "live_source" in the live job's status. */
+void fm_jobs_live_note(fm_jobs *jobs, const char *note);
+/* The live machine's latest position and tool (1), or 0 (live.h's
+ * fm_live_machine); who is told of each position (fm_live_on_position). */
+int fm_jobs_live_machine(fm_jobs *jobs, double xyz[3], int *tool);
+void fm_jobs_live_on_position(fm_jobs *jobs, void (*fn)(void *user), void *user);
 
 #endif

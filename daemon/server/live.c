@@ -231,12 +231,37 @@ void fm_live_session_init(fm_live_session *s)
 {
     pthread_mutex_init(&s->lock, NULL);
     s->job = NULL;
+    s->has_last = 0;
+    pthread_mutex_init(&s->hook_lock, NULL);
+    s->on_position = NULL;
+    s->on_position_user = NULL;
+}
+
+int fm_live_machine(fm_live_session *s, double xyz[3], int *tool)
+{
+    pthread_mutex_lock(&s->lock);
+    int has = s->job && s->has_last;
+    if (has) {
+        memcpy(xyz, s->last_xyz, sizeof s->last_xyz);
+        *tool = s->last_tool;
+    }
+    pthread_mutex_unlock(&s->lock);
+    return has;
+}
+
+void fm_live_on_position(fm_live_session *s, void (*fn)(void *user), void *user)
+{
+    pthread_mutex_lock(&s->hook_lock);
+    s->on_position = fn;
+    s->on_position_user = user;
+    pthread_mutex_unlock(&s->hook_lock);
 }
 
 void fm_live_session_destroy(fm_live_session *s)
 {
     fm_job_unref(s->job);
     s->job = NULL;
+    pthread_mutex_destroy(&s->hook_lock);
     pthread_mutex_destroy(&s->lock);
 }
 
@@ -253,6 +278,7 @@ fm_status fm_live_attach(fm_live_session *s, job *j, fm_error *err)
     job *old = s->job;
     fm_job_ref(j); /* the live session's */
     s->job = j;
+    s->has_last = 0;
     pthread_mutex_unlock(&s->lock);
     fm_job_unref(old);
     return FM_OK;
@@ -354,11 +380,31 @@ fm_status fm_live_position(fm_live_session *s, const double xyz[3], int tool, fm
             L->count++;
             journal_append(j, p);
             pthread_cond_broadcast(&j->cond);
+            memcpy(s->last_xyz, xyz, sizeof s->last_xyz);
+            s->last_tool = tool;
+            s->has_last = 1;
         }
         pthread_mutex_unlock(&j->lock);
     }
     pthread_mutex_unlock(&s->lock);
+    if (rc == FM_OK) {
+        pthread_mutex_lock(&s->hook_lock);
+        if (s->on_position) s->on_position(s->on_position_user);
+        pthread_mutex_unlock(&s->hook_lock);
+    }
     return rc;
+}
+
+void fm_live_note(fm_live_session *s, const char *note)
+{
+    pthread_mutex_lock(&s->lock);
+    job *j = s->job;
+    if (j) {
+        pthread_mutex_lock(&j->lock);
+        snprintf(j->live_note, sizeof j->live_note, "%s", note);
+        pthread_mutex_unlock(&j->lock);
+    }
+    pthread_mutex_unlock(&s->lock);
 }
 
 void fm_live_stop(fm_live_session *s)

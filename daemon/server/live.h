@@ -17,6 +17,15 @@ fm_status fm_live_prepare(job *j, fm_job_motion_source *src, fm_error *err);
 typedef struct fm_live_session {
     pthread_mutex_t lock;
     job *job;
+    /* The live machine's latest position (guarded by lock), and who is told
+     * of each (the MTConnect agent): the hook is called after the position
+     * is queued, under hook_lock, never under lock. */
+    int has_last;
+    double last_xyz[3];
+    int last_tool;
+    pthread_mutex_t hook_lock;
+    void (*on_position)(void *user);
+    void *on_position_user;
 } fm_live_session;
 void fm_live_session_init(fm_live_session *s);
 void fm_live_session_destroy(fm_live_session *s);
@@ -31,6 +40,14 @@ fm_status fm_live_position(fm_live_session *s, const double xyz[3], int tool, fm
 /* Live mode off: the session lets its job go, which cuts what is queued
  * and ends on its own thread. */
 void fm_live_stop(fm_live_session *s);
+/* The live machine's latest position and tool: 1, or 0 when live mode is
+ * off or no position came yet. */
+int fm_live_machine(fm_live_session *s, double xyz[3], int *tool);
+/* Call fn(user) after each position queued (NULL: nobody); returns once a
+ * call in progress has ended. */
+void fm_live_on_position(fm_live_session *s, void (*fn)(void *user), void *user);
+/* The source's state into the live job's live_note (nothing without one). */
+void fm_live_note(fm_live_session *s, const char *note);
 
 /* The live job's document: the configured stock (a SPEC string) and tool
  * table file, or where NULL or "" those of src (a job, or NULL); voxel and

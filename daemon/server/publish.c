@@ -91,6 +91,7 @@ json_t *fm_publish_status_json(job *j)
         /* the viewer asks for GET .../deviation once such a job is done */
         json_object_set_new(out, "design", json_boolean(j->doc->spec.design_path != NULL));
         json_object_set_new(out, "voxels_uncertain", json_integer((json_int_t)v->voxels_uncertain));
+        if (j->live_note[0]) json_object_set_new(out, "live_source", json_string(j->live_note));
         json_object_set_new(out, "uncertain_line", v->voxels_uncertain && v->uncertain_line > 0
                                                        ? json_integer(v->uncertain_line)
                                                        : json_null());

@@ -440,6 +440,115 @@ static enum MHD_Result serve_events(fm_http_server *s, struct MHD_Connection *co
     return queue(con, 200, r);
 }
 
+/* ----------------------------------------------------------- mounted -- */
+
+/* The query string of a mounted request, its arguments percent-encoded
+ * again (libmicrohttpd hands them decoded). */
+typedef struct query_text {
+    char text[4096];
+    size_t len;
+    int overflow;
+} query_text;
+
+static void query_put(query_text *q, const char *s)
+{
+    static const char hex[] = "0123456789ABCDEF";
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        int plain = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') ||
+                    c == '-' || c == '_' || c == '.' || c == '~' || c == '/' || c == '@' || c == '*';
+        if (q->len + 4 >= sizeof q->text) {
+            q->overflow = 1;
+            return;
+        }
+        if (plain) {
+            q->text[q->len++] = (char)c;
+        } else {
+            q->text[q->len++] = '%';
+            q->text[q->len++] = hex[c >> 4];
+            q->text[q->len++] = hex[c & 15];
+        }
+    }
+    q->text[q->len] = '\0';
+}
+
+static enum MHD_Result query_arg(void *cls, enum MHD_ValueKind kind, const char *key,
+                                 const char *value)
+{
+    (void)kind;
+    query_text *q = cls;
+    if (q->len && q->len + 1 < sizeof q->text) q->text[q->len++] = '&';
+    query_put(q, key);
+    if (value) {
+        if (q->len + 1 < sizeof q->text) q->text[q->len++] = '=';
+        query_put(q, value);
+    }
+    q->text[q->len] = '\0';
+    return MHD_YES;
+}
+
+typedef struct mounted_stream {
+    fm_http_server *server;
+    fm_http_reply reply;
+} mounted_stream;
+
+static ssize_t mounted_read(void *cls, uint64_t pos, char *buf, size_t max)
+{
+    (void)pos;
+    mounted_stream *ms = cls;
+    if (ms->server->stopping) return MHD_CONTENT_READER_END_OF_STREAM;
+    long n = ms->reply.read(ms->reply.stream, buf, max, SSE_WAIT_MS);
+    if (n < 0) return MHD_CONTENT_READER_END_OF_STREAM;
+    return (ssize_t)n;
+}
+
+static void mounted_free(void *cls)
+{
+    mounted_stream *ms = cls;
+    if (ms->reply.free) ms->reply.free(ms->reply.stream);
+    free(ms);
+}
+
+static enum MHD_Result serve_mounted(fm_http_server *s, struct MHD_Connection *con, const char *path)
+{
+    query_text q;
+    memset(&q, 0, sizeof q);
+    MHD_get_connection_values(con, MHD_GET_ARGUMENT_KIND, query_arg, &q);
+    if (q.overflow) return fail(con, 414, "uri_too_long", "the query is over 4 KiB");
+    fm_http_reply reply;
+    memset(&reply, 0, sizeof reply);
+    fm_error err;
+    fm_error_clear(&err);
+    if (s->svc.mounted(s->svc.mount_ctx, path, q.text, &reply, &err) != FM_OK)
+        return respond_service_error(con, &err);
+    if (reply.stream) {
+        mounted_stream *ms = calloc(1, sizeof *ms);
+        if (!ms) {
+            if (reply.free) reply.free(reply.stream);
+            return MHD_NO;
+        }
+        ms->server = s;
+        ms->reply = reply;
+        struct MHD_Response *r =
+            MHD_create_response_from_callback(MHD_SIZE_UNKNOWN, 16384, mounted_read, ms, mounted_free);
+        if (!r) {
+            mounted_free(ms);
+            return MHD_NO;
+        }
+        MHD_add_response_header(r, "Content-Type", reply.content_type);
+        MHD_add_response_header(r, "Cache-Control", "no-store");
+        return queue(con, reply.status, r);
+    }
+    struct MHD_Response *r =
+        MHD_create_response_from_buffer(reply.size, reply.body, MHD_RESPMEM_MUST_FREE);
+    if (!r) {
+        free(reply.body);
+        return MHD_NO;
+    }
+    MHD_add_response_header(r, "Content-Type", reply.content_type);
+    return queue(con, reply.status, r);
+}
+
 /* ------------------------------------------------------------ routing -- */
 
 static int token_ok(fm_http_server *s, struct MHD_Connection *con)
@@ -726,6 +835,13 @@ static enum MHD_Result route(fm_http_server *s, struct MHD_Connection *con, cons
         fm_status st = s->svc.check(s->svc.ctx, in, &out, &err);
         json_decref(in);
         return reply_json_call(con, st, out, &err, 200);
+    }
+    if (s->svc.mounted && s->svc.mount_prefix && s->svc.mount_prefix[0]) {
+        size_t n = strlen(s->svc.mount_prefix);
+        if (!strncmp(url, s->svc.mount_prefix, n) && (url[n] == '\0' || url[n] == '/')) {
+            if (!is_get) return method_not_allowed(con, method, url, "GET");
+            return serve_mounted(s, con, url[n] == '/' ? url + n + 1 : "");
+        }
     }
     if (!strncmp(url, "/v1/", 4) || !strcmp(url, "/v1"))
         return fail(con, 404, "not_found", "no such endpoint: %s", url);

@@ -86,6 +86,19 @@ typedef struct fm_http_event {
     char *data;        /* one line of JSON, malloc'd (freed by the server) */
 } fm_http_event;
 
+/* The answer of a mounted protocol (fm_http_service.mounted): a whole body,
+ * or a stream whose bytes read() gives (0: nothing yet, -1: the end) until
+ * the server frees it. */
+typedef struct fm_http_reply {
+    int status;
+    char content_type[128];
+    char *body;           /* malloc'd (freed by the server); NULL with a stream */
+    size_t size;
+    void *stream;
+    long (*read)(void *stream, char *buf, size_t max, int timeout_ms);
+    void (*free)(void *stream);
+} fm_http_reply;
+
 /* What the daemon implements. Calls come from the server's connection
  * threads, many at once: each must be thread-safe and must never wait for a
  * job's simulation (read the published snapshots). Calls return FM_OK, or
@@ -136,6 +149,15 @@ typedef struct fm_http_service {
      * the path of the file the daemon wrote. NULL: 404. */
     fm_status (*deviation_path)(void *ctx, const char *id, int mesh, char *path, size_t size,
                                 fm_error *err);
+    /* Another protocol served on this server (the MTConnect agent): GET
+     * and HEAD of mount_prefix ("/mtconnect") and below, with path what
+     * follows the prefix and its '/', query the request's arguments
+     * percent-encoded again (at most 4 KiB). Reads only: no token. NULL:
+     * nothing is mounted. */
+    const char *mount_prefix;
+    void *mount_ctx;
+    fm_status (*mounted)(void *mount_ctx, const char *path, const char *query, fm_http_reply *out,
+                         fm_error *err);
 } fm_http_service;
 
 enum { FM_HTTP_LOG_ERROR = 0, FM_HTTP_LOG_WARN = 1, FM_HTTP_LOG_INFO = 2, FM_HTTP_LOG_DEBUG = 3 };
