@@ -141,6 +141,32 @@ static void test_tool_tip(void)
     CHECK(run_opt("T7 M6\n", &o, &err) == FM_ERR_INPUT);
     CHECK(err.line == 1 && err.column == 1);
     CHECK_STR_CONTAINS(err.message, "tool 7 is not in the tool table");
+    /* H names the tool whose library register it is (Fusion's post-process
+     * length-offset): T5 with register 15 and length 30 under G43 H15 has its
+     * tip on the programmed point (30 - 30); with no such register H15 is
+     * tool 15, which the table does not have */
+    fm_tool_spec reg[2];
+    memset(reg, 0, sizeof reg);
+    reg[0].number = 5;
+    reg[0].length_offset = 30;
+    reg[0].length_register = 15;
+    reg[1].number = 15;
+    reg[1].length_offset = 7;
+    fm_tool_table regs = {2, reg};
+    o.tools = &regs;
+    CHECK(run_opt("T5 M6\nG43 H15\nG0 Z5\n", &o, &err) == FM_OK);
+    CHECK(ngot == 1 && got[0].tool == 5);
+    CHECK_NEAR(got[0].tip_offset[2], 0, 1e-12);
+    fm_gcode_options fo = o;
+    fo.dialect = FM_GCODE_FANUC;
+    CHECK(run_opt("T5 M06\nG43 H15 Z5.\n#1 = #2015\nG00 X#1\n", &fo, &err) == FM_OK);
+    CHECK(ngot == 2);
+    CHECK_NEAR(got[0].tip_offset[2], 0, 1e-12);
+    CHECK_NEAR(got[1].end[0], 30, 1e-12); /* #2015: register 15's length */
+    reg[0].length_register = 0;
+    CHECK(run_opt("T5 M6\nG43 H15\nG0 Z5\n", &o, &err) == FM_OK);
+    CHECK_NEAR(got[0].tip_offset[2], 7 - 30, 1e-12);
+    o.tools = &table;
     /* without a table any tool is fine and offsets are zero */
     CHECK(run("T7 M6 G43\nG0 Z1\n", &err) == FM_OK);
     CHECK_NEAR(got[0].tip_offset[2], 0, 0);

@@ -549,6 +549,10 @@ void gc_to_machine(const gc_interp *g, const double p[3], double out[3]);
 void gc_from_machine(const gc_interp *g, const double m[3], double p[3]);
 /* #5403, #5410: the spindle tool's table values, refreshed at M6 and G10. */
 void gc_refresh_tool_params(gc_interp *g);
+/* The tool an offset register (H n, Fanuc's #2000 + n) names: the table's
+ * tool whose length_register is n (a CAM library's numbering: Fusion's
+ * post-process length-offset), else tool n. */
+int gc_register_tool(const gc_interp *g, int h);
 /* Tool diameter and length in mm, after G10 L1/L10/L11 edits. */
 double gc_tool_diameter_mm(gc_interp *g, int tool);
 void gc_set_units(gc_interp *g, double unit);

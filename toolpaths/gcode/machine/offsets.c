@@ -17,6 +17,14 @@ static gc_tool_edit *tool_edit(gc_interp *g, int tool)
     return NULL;
 }
 
+int gc_register_tool(const gc_interp *g, int h)
+{
+    const fm_tool_table *t = g->opt.tools;
+    for (size_t i = 0; t && h > 0 && i < t->count; i++)
+        if (t->tools[i].length_register == h) return t->tools[i].number;
+    return h;
+}
+
 double gc_tool_length_mm(gc_interp *g, int tool)
 {
     const gc_tool_edit *e = tool_edit(g, tool);
@@ -283,6 +291,7 @@ fm_status gc_exec_tool_length(gc_interp *g, const gc_block *b, int code, int col
         if (code == GC_G43_4 && (st = gc_rot_tcp(g, 1, col))) return st;
         int h = g->tool;
         if (HAS(b, 'h') && (st = gc_int_word(g, b, 'h', &h))) return st;
+        h = gc_register_tool(g, h);
         if ((st = gc_check_tool(g, h, HAS(b, 'h') ? COL(b, 'h') : col, "H"))) return st;
         double nv[3] = {0, 0, gc_tool_length_mm(g, h) / g->unit};
         gc_set_tlo(g, nv);
