@@ -69,6 +69,12 @@ typedef struct fm_tool_spec {
      * when the table does not say). */
     int flute_count;       /* Fusion NOF */
     int length_register;   /* Fusion post-process length-offset: the H register its posts write */
+    int diameter_register; /* Fusion post-process diameter-offset: the D register its posts write */
+    /* Cutter radius compensation (G41/G42 D): the radius D compensates by,
+     * mm (0: half the diameter), and the wear added to it (mm, usually
+     * negative), as a control's geometry and wear registers hold them. */
+    double radius_offset;
+    double radius_wear;
     int preset_count;
     fm_tool_preset presets[FM_TOOL_MAX_PRESETS];
 } fm_tool_spec;

@@ -26,9 +26,11 @@ static int collect(void *user, const fm_motion *m)
     return 0;
 }
 
-/* Tool 1: 10 mm (r = 5); tool 2: 6 mm (r = 3). */
-static fm_tool_spec tool_specs[2];
-static fm_tool_table tools = {2, tool_specs};
+/* Tool 1: 10 mm (r = 5); tool 2: 6 mm (r = 3); tool 3: 10 mm with a wear of
+ * -0.02 (r = 4.98); tool 4: 6 mm, named by D register 14 (a Fusion library's
+ * diameter-offset); tool 5: 10 mm with a radius offset of 4.5 (r = 4.5). */
+static fm_tool_spec tool_specs[5];
+static fm_tool_table tools = {5, tool_specs};
 
 static fm_gcode_options options(fm_gcode_dialect dialect)
 {
@@ -190,8 +192,8 @@ static void test_interference(void)
                  "reference point return with cutter radius compensation on");
     expect_error("G21 G90\nT1 M06\nG41 D1 G01 X10. Y0 F100.\nT2 M06\n", 4, 4,
                  "tool change (M06) with cutter radius compensation on");
-    expect_error("G21 G90\nT1 M06\nG41 D3 G01 X10. Y0 F100.\n", 3, 5,
-                 "tool 3 is not in the tool table");
+    expect_error("G21 G90\nT1 M06\nG41 D7 G01 X10. Y0 F100.\n", 3, 5,
+                 "tool 7 is not in the tool table");
 }
 
 /* Compensation started again after G40 with another offset (D2, r = 3): the
@@ -266,12 +268,47 @@ static void test_feed_modes(void)
     CHECK_NEAR(got[3].feed, 500, 1e-9);
 }
 
+/* D takes the table's compensation registers: the G41 boss of test_boss
+ * with r = 4.98 (D3: radius 5 and wear -0.02), r = 3 (D14: the tool whose
+ * diameter register is 14) and r = 4.5 (D5: its radius offset): start-up
+ * (-r, 0), corners (-r, 20 + r), (40 + r, 20 + r), (40 + r, -r), the last
+ * side's end (0, -r). */
+static void test_registers(void)
+{
+    const struct {
+        int d;
+        double r;
+    } cases[] = {{3, 4.98}, {14, 3}, {5, 4.5}};
+    for (int k = 0; k < 3; k++) {
+        double r = cases[k].r;
+        char text[400];
+        snprintf(text, sizeof text,
+                 "G21 G17 G90 G94\nG00 X-20. Y0 S1000 M03\nG01 Z-5. F300.\nG41 D%d X0 Y0\nY20.\n"
+                 "X40.\nY0\nX0\nG40 X-20. Y-10.\nG00 Z20.\nM30\n", cases[k].d);
+        const em e[] = {{'R', -20, 0, 0, 0, 0, 0},        {'L', -20, 0, -5, 0, 0, 0},
+                        {'L', -r, 0, -5, 0, 0, 0},        {'L', -r, 20 + r, -5, 0, 0, 0},
+                        {'L', 40 + r, 20 + r, -5, 0, 0, 0}, {'L', 40 + r, -r, -5, 0, 0, 0},
+                        {'L', 0, -r, -5, 0, 0, 0},        {'L', -20, -10, -5, 0, 0, 0},
+                        {'R', -20, -10, 20, 0, 0, 0}};
+        expect("G41 with the table's registers", text, e, 9);
+    }
+}
+
 int main(void)
 {
     tool_specs[0].number = 1;
     tool_specs[0].diameter = 10;
     tool_specs[1].number = 2;
     tool_specs[1].diameter = 6;
+    tool_specs[2].number = 3;
+    tool_specs[2].diameter = 10;
+    tool_specs[2].radius_wear = -0.02;
+    tool_specs[3].number = 4;
+    tool_specs[3].diameter = 6;
+    tool_specs[3].diameter_register = 14;
+    tool_specs[4].number = 5;
+    tool_specs[4].diameter = 10;
+    tool_specs[4].radius_offset = 4.5;
     test_boss();
     test_pocket();
     test_arcs_lead_in_out();
@@ -279,5 +316,6 @@ int main(void)
     test_second_start();
     test_same_in_both();
     test_feed_modes();
+    test_registers();
     return test_summary("gcode_fanuc_comp");
 }

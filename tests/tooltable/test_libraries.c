@@ -172,6 +172,7 @@ static void test_fusion_json(void)
     const fm_tool_spec *t1 = fm_tool_table_find(&got, 1);
     CHECK(t1 && !strcmp(t1->comment, "flat end mill T1"));
     CHECK(t1 && t1->flute_count == 3 && t1->length_register == 1 && t1->preset_count == 1);
+    CHECK(t1 && t1->diameter_register == 1);
     if (t1 && t1->preset_count == 1) {
         CHECK(!strcmp(t1->presets[0].name, "Alu rough"));
         CHECK_NEAR(t1->presets[0].spindle_rpm, 10000, 0);

@@ -62,6 +62,12 @@ static void test_json(void)
     CHECK_NEAR(tt.tools[0].length_offset, 25.4, 1e-12);
     CHECK_NEAR(tt.tools[0].shank_diameter, 12.7, 1e-12);
     CHECK_NEAR(tt.tools[0].angle, 90, 0);
+    /* compensation's registers, in the table's unit */
+    CHECK(json("{\"units\":\"inch\",\"tools\":[{\"number\":1,\"shape\":\"flat\",\"diameter\":0.5,"
+               "\"flute_length\":1,\"length\":2,\"radius_offset\":0.24,\"radius_wear\":-0.001}]}",
+               &err) == FM_OK);
+    CHECK_NEAR(tt.tools[0].radius_offset, 0.24 * 25.4, 1e-12);
+    CHECK_NEAR(tt.tools[0].radius_wear, -0.001 * 25.4, 1e-12);
 
     expect_json_error("{\"tools\": [", "invalid JSON");
     expect_json_error("[]", "expected an object");

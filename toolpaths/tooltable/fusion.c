@@ -342,6 +342,11 @@ static fm_status entry(const fentry *e0, json_t *t, fm_tool_spec *s, int *skip)
         json_integer_value(lo) <= 99999)
         s->length_register = (int)json_integer_value(lo);
     else if (lo) return efail(e, "post-process.length-offset", "expected a register number");
+    json_t *dor = json_object_get(pp, "diameter-offset");
+    if (dor && json_is_integer(dor) && json_integer_value(dor) >= 0 &&
+        json_integer_value(dor) <= 99999)
+        s->diameter_register = (int)json_integer_value(dor);
+    else if (dor) return efail(e, "post-process.diameter-offset", "expected a register number");
     json_t *geom = json_object_get(t, "geometry");
     if (!json_is_object(geom))
         return efail(e, "geometry", geom ? "expected an object" : "missing; expected {\"DC\": ...}");

@@ -80,7 +80,7 @@ static fm_status parse_tool(jctx *c, json_t *t, fm_tool_spec *s)
         "number", "shape", "diameter", "flute_length", "length", "shank_diameter", "holder",
         "center_cutting", "corner_radius", "angle", "tip_diameter", "point_angle",
         "taper_angle", "tip_radius", "neck_diameter", "file", "bound_radius", "length_offset",
-        "comment", NULL};
+        "radius_offset", "radius_wear", "comment", NULL};
     fm_status st;
     memset(s, 0, sizeof *s);
     c->number = -1;
@@ -102,7 +102,7 @@ static fm_status parse_tool(jctx *c, json_t *t, fm_tool_spec *s)
                              "flute_length, length, shank_diameter, holder, center_cutting, "
                              "corner_radius, angle, tip_diameter, point_angle, taper_angle, "
                              "tip_radius, neck_diameter, file, bound_radius, length_offset, "
-                             "comment", NULL);
+                             "radius_offset, radius_wear, comment", NULL);
     }
     json_t *shape = json_object_get(t, "shape");
     if (!shape) return tool_fail(c, "shape", "missing; expected flat, ball, bull, vbit, drill, "
@@ -127,6 +127,8 @@ static fm_status parse_tool(jctx *c, json_t *t, fm_tool_spec *s)
                       &s->shank_diameter)))
         return st;
     if ((st = get_num(c, t, "length_offset", 0, 0, 1, -1e9, 0, 1e9, &s->length_offset))) return st;
+    if ((st = get_num(c, t, "radius_offset", 0, 0, 1, 0, 0, 1e6, &s->radius_offset))) return st;
+    if ((st = get_num(c, t, "radius_wear", 0, 0, 1, -1e6, 0, 1e6, &s->radius_wear))) return st;
     json_t *cc = json_object_get(t, "center_cutting");
     s->center_cutting = 1;
     if (cc) {

@@ -5,8 +5,6 @@
  * go through compensation by the machine's gc_frame_* (transform.c). */
 #include "fanuc.h"
 
-#include <string.h>
-
 /* Codes a Fanuc control refuses (or that change what compensation was set
  * up with) between G41/G42 and the end of the cancel block. */
 static fm_status refuse(gc_interp *g, int col, const char *what)
@@ -61,16 +59,15 @@ fm_status gc_fanuc_comp_mode(gc_interp *g, const gc_fanuc_block *fb, int code, i
     gc_fanuc *f = FANUC(g);
     const gc_block *b = &fb->b;
     int dcol = b->has[L('d')] ? b->col[L('d')] : col;
+    int tool = gc_register_tool(g, 'd', f->d);
     if (b->has[L('d')] && f->d) {
-        fm_status st = gc_check_tool(g, f->d, dcol, "D");
+        fm_status st = gc_check_tool(g, tool, dcol, "D");
         if (st) return st;
     }
-    double radius = f->d ? gc_tool_diameter_mm(g, f->d) / g->unit / 2 : 0.0;
+    double radius = f->d ? gc_tool_comp_radius_mm(g, tool) / g->unit : 0.0;
     if (code == GC_G40) return gc_comp_c_cancel(g);
     if (code == GC_G41 || code == GC_G42) {
-        if (g->plane != GC_PLANE_XY && g->plane != GC_PLANE_XZ && g->plane != GC_PLANE_YZ)
-            return gc_fail(g, FM_ERR_INPUT, col, "cutter radius compensation without a plane");
-        /* a mirror of one plane axis (G51.1) turns G41 into G42 (haas.c) */
+        /* a mirror of one plane axis (G51.1) turns G41 into G42 (transform.c) */
         int left = (code == GC_G41) != (gc_frame_mirror_sense(g) < 0);
         return gc_comp_c_start(g, left, radius, col);
     }

@@ -185,7 +185,7 @@ static fm_status tool_length(gc_interp *g, const gc_fanuc_block *fb, int code, i
     if (b->has[L('h')]) {
         long h;
         if ((st = whole_word(g, b, 'h', 0, 999999, &h))) return st;
-        f->h = gc_register_tool(g, (int)h);
+        f->h = gc_register_tool(g, 'h', (int)h);
         if ((st = gc_check_tool(g, f->h, b->col[L('h')], "H"))) return st;
     }
     /* G43.4: G43 with tool centre point control on (rotary.c); G49 off */

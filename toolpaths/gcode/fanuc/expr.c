@@ -80,7 +80,7 @@ fm_status gc_fanuc_get_var(gc_interp *g, long n, int col, double *out)
     } else if (n >= 2001 && n <= 2200) {
         /* the tool table's length of offset number n - 2000 (Haas: length
          * geometry; Fanuc memory A: the offset value) */
-        *out = gc_tool_length_mm(g, gc_register_tool(g, (int)(n - 2000))) / g->unit;
+        *out = gc_tool_length_mm(g, gc_register_tool(g, 'h', (int)(n - 2000))) / g->unit;
     } else if (n == 3001) {
         *out = g->t * 1000.0 + f->timer_base_ms;
     } else if (n == 3002) {

@@ -245,11 +245,11 @@ fm_status gc_comp_on(gc_interp *g, const gc_block *b, int code, int col)
             if (r > 1e9)
                 return gc_fail(g, FM_ERR_INPUT, COL(b, 'd'),
                                "%s D%g: expected a tool number up to 1000000000", name, d);
-            tool = (int)r;
+            tool = gc_register_tool(g, 'd', (int)r);
             fm_status st = gc_check_tool(g, tool, COL(b, 'd'), "D");
             if (st) return st;
         }
-        radius = gc_tool_diameter_mm(g, tool) / g->unit / 2;
+        radius = gc_tool_comp_radius_mm(g, tool) / g->unit;
     }
     if (radius < 0) { /* a negative diameter in the table: the other side */
         radius = -radius;

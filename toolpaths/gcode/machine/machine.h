@@ -549,10 +549,15 @@ void gc_to_machine(const gc_interp *g, const double p[3], double out[3]);
 void gc_from_machine(const gc_interp *g, const double m[3], double p[3]);
 /* #5403, #5410: the spindle tool's table values, refreshed at M6 and G10. */
 void gc_refresh_tool_params(gc_interp *g);
-/* The tool an offset register (H n, Fanuc's #2000 + n) names: the table's
- * tool whose length_register is n (a CAM library's numbering: Fusion's
- * post-process length-offset), else tool n. */
-int gc_register_tool(const gc_interp *g, int h);
+/* The tool an offset register names (word 'h': H n and Fanuc's #2000 + n;
+ * 'd': D n): the table's tool whose length_register or diameter_register is
+ * n (a CAM library's numbering: Fusion's post-process length-offset and
+ * diameter-offset), else tool n. */
+int gc_register_tool(const gc_interp *g, char word, int n);
+/* The radius G41/G42 compensate by for tool `tool`, mm: a G10 L1/L10/L11
+ * edit's diameter / 2, else the table's radius_offset, else its diameter /
+ * 2; plus the table's radius_wear. */
+double gc_tool_comp_radius_mm(gc_interp *g, int tool);
 /* Tool diameter and length in mm, after G10 L1/L10/L11 edits. */
 double gc_tool_diameter_mm(gc_interp *g, int tool);
 void gc_set_units(gc_interp *g, double unit);

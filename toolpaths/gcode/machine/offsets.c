@@ -17,12 +17,14 @@ static gc_tool_edit *tool_edit(gc_interp *g, int tool)
     return NULL;
 }
 
-int gc_register_tool(const gc_interp *g, int h)
+int gc_register_tool(const gc_interp *g, char word, int n)
 {
     const fm_tool_table *t = g->opt.tools;
-    for (size_t i = 0; t && h > 0 && i < t->count; i++)
-        if (t->tools[i].length_register == h) return t->tools[i].number;
-    return h;
+    for (size_t i = 0; t && n > 0 && i < t->count; i++) {
+        const fm_tool_spec *s = &t->tools[i];
+        if ((word == 'd' ? s->diameter_register : s->length_register) == n) return s->number;
+    }
+    return n;
 }
 
 double gc_tool_length_mm(gc_interp *g, int tool)
@@ -31,6 +33,16 @@ double gc_tool_length_mm(gc_interp *g, int tool)
     if (e) return e->length;
     const fm_tool_spec *t = fm_tool_table_find(g->opt.tools, tool);
     return t ? t->length_offset : 0.0;
+}
+
+double gc_tool_comp_radius_mm(gc_interp *g, int tool)
+{
+    const gc_tool_edit *e = tool_edit(g, tool);
+    const fm_tool_spec *t = fm_tool_table_find(g->opt.tools, tool);
+    double wear = t ? t->radius_wear : 0.0;
+    if (e) return e->diameter / 2 + wear;
+    if (!t) return 0.0;
+    return (t->radius_offset > 0 ? t->radius_offset : t->diameter / 2) + wear;
 }
 
 double gc_tool_diameter_mm(gc_interp *g, int tool)
@@ -291,7 +303,7 @@ fm_status gc_exec_tool_length(gc_interp *g, const gc_block *b, int code, int col
         if (code == GC_G43_4 && (st = gc_rot_tcp(g, 1, col))) return st;
         int h = g->tool;
         if (HAS(b, 'h') && (st = gc_int_word(g, b, 'h', &h))) return st;
-        h = gc_register_tool(g, h);
+        h = gc_register_tool(g, 'h', h);
         if ((st = gc_check_tool(g, h, HAS(b, 'h') ? COL(b, 'h') : col, "H"))) return st;
         double nv[3] = {0, 0, gc_tool_length_mm(g, h) / g->unit};
         gc_set_tlo(g, nv);
