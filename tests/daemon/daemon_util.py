@@ -178,3 +178,28 @@ def modbus_read(port, start, count, fc=4):
         while len(data) < n:
             data += s.recv(n - len(data))
     return list(struct.unpack(">%dH" % count, data))
+
+
+def modbus_write(port, start, values):
+    """One FC06 (a single value) or FC16 write over a raw socket; returns
+    the exception code of the answer, 0 when the write was accepted."""
+    if len(values) == 1:
+        pdu = struct.pack(">BHH", 6, start, values[0])
+    else:
+        pdu = struct.pack(">BHHB%dH" % len(values), 16, start, len(values), 2 * len(values), *values)
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as s:
+        s.sendall(struct.pack(">HHHB", 1, 0, len(pdu) + 1, 1) + pdu)
+        head = b""
+        while len(head) < 8:
+            data = s.recv(8 - len(head))
+            if not data:
+                raise RuntimeError("Modbus server closed the connection")
+            head += data
+        length = struct.unpack_from(">H", head, 4)[0]
+        rest = b""
+        while len(rest) < length - 2:
+            data = s.recv(length - 2 - len(rest))
+            if not data:
+                raise RuntimeError("Modbus server closed the connection")
+            rest += data
+    return rest[0] if head[7] & 0x80 else 0

@@ -1,0 +1,159 @@
+"""test_modbus_watchdog.py: the Modbus HMI watchdog (docs/modbus.md,
+"Commands": register 103) against the real daemon and a running job, with
+raw Modbus/TCP frames (FC06, FC16, FC04):
+
+- an HMI that never writes 103 is never subject to the watchdog: the job
+  runs on past the watchdog time;
+- the first write arms it; while the value keeps changing the job runs;
+- once the value stops changing (writes of the same value do not count),
+  the running job is paused after modbus_watchdog_ms, not before, and
+  register 26 shows 20 (and the status bits say paused);
+- a paused job does not advance; the resume command (100 = 1) resumes it
+  and sets register 26 back to 0;
+- the watchdog fires once: with 103 unchanged the resumed job keeps
+  running; a new value re-arms it and it pauses the job again.
+Usage: test_modbus_watchdog.py FREPMILLD FREPMILL"""
+import os
+import sys
+import tempfile
+import time
+
+from daemon_util import (INSTRUMENTED, Daemon, check, curl_json, demo_job, modbus_port, modbus_read,
+                         modbus_write, submit, wait_state)
+
+WATCHDOG_MS = 1000
+# How late after the watchdog time the pause may be seen: the server's loop
+# ticks at least every heartbeat (docs/modbus.md) and this test polls HTTP
+# every 50 ms. Instrumented daemons get twice the slack.
+LATE_S = 4.0 if INSTRUMENTED else 2.0
+# The job must still be running after about ten seconds of unpaused work:
+# the demo on a fine grid with one OpenVDB thread (cancelled at the end).
+VOXEL = 0.1
+
+
+def status(d, job_id):
+    code, st = curl_json(d.url + "/v1/jobs/" + job_id)
+    if code != 200:
+        raise RuntimeError("GET status: %d %s" % (code, st))
+    return st
+
+
+def wait_paused(d, job_id, since, timeout):
+    """Poll until the job is paused; returns seconds since `since`."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        st = status(d, job_id)
+        if st["paused"]:
+            return time.monotonic() - since
+        if st["state"] != "running":
+            raise RuntimeError("the job ended (%s) before the watchdog paused it" % st["state"])
+        time.sleep(0.05)
+    return None
+
+
+def motions_settled(d, job_id, still_s=1.5, timeout=60):
+    """motions_done once it has not changed for still_s (a paused worker
+    publishes its count once more when it reaches its next progress
+    report)."""
+    last = status(d, job_id)["motions_done"]
+    since = time.monotonic()
+    deadline = since + timeout
+    while time.monotonic() < deadline and time.monotonic() - since < still_s:
+        time.sleep(0.25)
+        now = status(d, job_id)["motions_done"]
+        if now != last:
+            last, since = now, time.monotonic()
+    return last
+
+
+def main():
+    frepmilld = sys.argv[1]
+    with tempfile.TemporaryDirectory(prefix="fm-watchdog-") as tmp:
+        d = Daemon(frepmilld, os.path.join(tmp, "state"), "--workers", "1", "--threads-per-job", "1",
+                   "--modbus-listen", "127.0.0.1:0", "--modbus-commands", "yes",
+                   "--modbus-watchdog-ms", str(WATCHDOG_MS), "--publish-interval-s", "0.5")
+        try:
+            port = modbus_port(d)
+            job = demo_job(VOXEL, name="watchdog")
+            job["options"]["check"] = False
+            job_id = submit(d.url, job, tmp)
+            wait_state(d.url, job_id, ("running",), 60)
+
+            # Never written: twice the watchdog time passes, nothing happens.
+            time.sleep(2 * WATCHDOG_MS / 1000)
+            st = status(d, job_id)
+            check(st["state"] == "running" and not st["paused"],
+                  "103 never written: the job still runs after 2 watchdog periods")
+            check(modbus_read(port, 26, 1)[0] == 0, "register 26 is 0 (no watchdog event)")
+
+            # Armed and alive: a new value every 0.3 s for 2.4 s.
+            refused = []
+            for value in range(1, 9):
+                if modbus_write(port, 103, [value]) != 0:
+                    refused.append(value)
+                time.sleep(0.3)
+                st = status(d, job_id)
+                if st["paused"]:
+                    break
+            check(not refused, "FC06 writes of 103 = 1..8 accepted")
+            check(not st["paused"] and st["state"] == "running",
+                  "103 changing every 0.3 s: the job is not paused")
+
+            # Silent HMI: the same value written again does not count.
+            last_change = time.monotonic()
+            check(modbus_write(port, 103, [9]) == 0, "103 = 9 (the last new value)")
+            time.sleep(0.3)
+            check(modbus_write(port, 103, [9]) == 0, "103 = 9 again")
+            waited = wait_paused(d, job_id, last_change, WATCHDOG_MS / 1000 + LATE_S + 5)
+            check(waited is not None and WATCHDOG_MS / 1000 - 0.05 <= waited <= WATCHDOG_MS / 1000 + LATE_S,
+                  "the job paused %s s after 103 last changed (watchdog %d ms)" % (
+                      "%.2f" % waited if waited else "never", WATCHDOG_MS))
+            regs = modbus_read(port, 0, 29)
+            check(regs[1] & 0x04 and regs[26] == 20,
+                  "registers: paused bit set (status 0x%x), last error 20 (%d)" % (regs[1], regs[26]))
+            check("HMI watchdog expired" in d.read_log(), "the expiry is logged")
+            m1 = motions_settled(d, job_id)
+            time.sleep(1.0)
+            st = status(d, job_id)
+            check(st["paused"] and st["motions_done"] == m1,
+                  "the paused job does not advance (motion %d)" % m1)
+
+            # Resume by command 1 (sequence 1): runs again, register 26 back to 0.
+            check(modbus_write(port, 100, [1, 1, 0]) == 0, "FC16 100-102 = resume, sequence 1")
+            deadline = time.monotonic() + 10
+            while time.monotonic() < deadline and status(d, job_id)["paused"]:
+                time.sleep(0.05)
+            regs = modbus_read(port, 0, 29)
+            check(regs[28] == 1 and regs[26] == 0,
+                  "resume acknowledged (sequence %d), last error back to 0 (%d)" % (regs[28], regs[26]))
+
+            # Fires once: 103 unchanged, the job keeps running and advances.
+            time.sleep(2 * WATCHDOG_MS / 1000 + 0.5)
+            st = status(d, job_id)
+            check(st["state"] == "running" and not st["paused"] and st["motions_done"] > m1,
+                  "after the resume, 103 unchanged: not paused again, motions %d -> %d" % (
+                      m1, st["motions_done"]))
+
+            # A new value re-arms it.
+            last_change = time.monotonic()
+            check(modbus_write(port, 103, [10]) == 0, "103 = 10 re-arms the watchdog")
+            waited = wait_paused(d, job_id, last_change, WATCHDOG_MS / 1000 + LATE_S + 5)
+            check(waited is not None and WATCHDOG_MS / 1000 - 0.05 <= waited <= WATCHDOG_MS / 1000 + LATE_S,
+                  "re-armed: the job paused again %s s after the new value" % (
+                      "%.2f" % waited if waited else "never"))
+            check(modbus_read(port, 26, 1)[0] == 20, "register 26 is 20 again")
+
+            # Cancel (command 3, sequence 2): the test needs no more of the job.
+            check(modbus_write(port, 100, [3, 2, 0]) == 0, "FC16 cancel, sequence 2")
+            st = wait_state(d.url, job_id, ("cancelled", "done", "failed"), 60)
+            check(st["state"] == "cancelled", "the job was cancelled")
+        finally:
+            rc = d.stop()
+            if rc != 0:
+                print(d.read_log()[-6000:])
+        check(rc == 0, "the daemon stopped cleanly")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
