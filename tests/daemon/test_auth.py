@@ -16,11 +16,9 @@
 Usage: test_auth.py FREPMILLD FREPMILL"""
 import json
 import os
-import socket
 import subprocess
 import sys
 import tempfile
-import time
 
 from daemon_util import Daemon, check, curl_json
 
@@ -45,46 +43,6 @@ def post(url, path, body, token=None, auth=None):
     elif token is not None:
         args += ["-H", "Authorization: Bearer " + token]
     return curl_json(*args, url + path)
-
-
-def raw_request(port, head, body_pieces, pause=0.0, timeout=20):
-    """Send head, then body_pieces one at a time with pause seconds between
-    them; return the whole answer (b"" if the server closed without one)."""
-    with socket.create_connection(("127.0.0.1", port), timeout=timeout) as s:
-        s.sendall(head)
-        try:
-            for piece in body_pieces:
-                if pause:
-                    time.sleep(pause)
-                s.sendall(piece)
-        except (BrokenPipeError, ConnectionResetError):
-            pass
-        answer = b""
-        try:
-            while True:
-                data = s.recv(65536)
-                if not data:
-                    break
-                answer += data
-                if b"\r\n\r\n" in answer:
-                    head_part, _, rest = answer.partition(b"\r\n\r\n")
-                    for line in head_part.split(b"\r\n"):
-                        if line.lower().startswith(b"content-length:"):
-                            if len(rest) >= int(line.split(b":")[1]):
-                                return answer
-        except (ConnectionResetError, socket.timeout):
-            pass
-        return answer
-
-
-def parse_answer(answer):
-    head, _, body = answer.partition(b"\r\n\r\n")
-    status = int(head.split(b" ")[1]) if head.startswith(b"HTTP/") else 0
-    return status, json.loads(body) if body.strip() else None
-
-
-def port_of(url):
-    return int(url.rsplit(":", 1)[1])
 
 
 def error_code(body):

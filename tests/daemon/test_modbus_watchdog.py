@@ -26,9 +26,26 @@ WATCHDOG_MS = 1000
 # ticks at least every heartbeat (docs/modbus.md) and this test polls HTTP
 # every 50 ms. Instrumented daemons get twice the slack.
 LATE_S = 4.0 if INSTRUMENTED else 2.0
-# The job must still be running after about ten seconds of unpaused work:
-# the demo on a fine grid with one OpenVDB thread (cancelled at the end).
+# The job must still be running after about ten seconds of unpaused work
+# and advance steadily: ten layers of an 81-pass zigzag (1,663 motions) on a
+# 0.1 mm grid with one OpenVDB thread, about 45 s here; cancelled at the end.
 VOXEL = 0.1
+
+
+def zigzag_job():
+    lines = ["G21 G90", "T1 M6", "S10000 M3", "G0 Z5", "G0 X0 Y0", "G1 Z0 F1000"]
+    for layer in range(1, 11):
+        lines.append("G1 Z-%d" % layer)
+        for i in range(81):
+            lines.append("G1 X%d Y%.1f" % (40 if i % 2 == 0 else 0, 0.5 * i))
+            lines.append("G1 Y%.1f" % (0.5 * i + 0.5))
+        lines += ["G0 Z5", "G0 X0 Y0", "G1 Z-%d" % layer]
+    lines.append("M2")
+    job = demo_job(VOXEL, name="watchdog")
+    job["stock"] = "box:0,0,-12,40,40,0"
+    job["program"] = {"gcode": "\n".join(lines) + "\n"}
+    job["options"]["check"] = False
+    return job
 
 
 def status(d, job_id):
@@ -51,16 +68,21 @@ def wait_paused(d, job_id, since, timeout):
     return None
 
 
-def motions_settled(d, job_id, still_s=1.5, timeout=60):
-    """motions_done once it has not changed for still_s (a paused worker
-    publishes its count once more when it reaches its next progress
-    report)."""
-    last = status(d, job_id)["motions_done"]
+def work_done(st):
+    """How far the job got: motions, program time and removed volume (a
+    long motion is cut in several batches, each published)."""
+    return (st["motions_done"], st["program_time_s"], st["removed_volume_mm3"])
+
+
+def work_settled(d, job_id, still_s=1.5, timeout=60):
+    """work_done once it has not changed for still_s (a paused worker
+    publishes once more when it reaches its next progress report)."""
+    last = work_done(status(d, job_id))
     since = time.monotonic()
     deadline = since + timeout
     while time.monotonic() < deadline and time.monotonic() - since < still_s:
         time.sleep(0.25)
-        now = status(d, job_id)["motions_done"]
+        now = work_done(status(d, job_id))
         if now != last:
             last, since = now, time.monotonic()
     return last
@@ -74,9 +96,7 @@ def main():
                    "--modbus-watchdog-ms", str(WATCHDOG_MS), "--publish-interval-s", "0.5")
         try:
             port = modbus_port(d)
-            job = demo_job(VOXEL, name="watchdog")
-            job["options"]["check"] = False
-            job_id = submit(d.url, job, tmp)
+            job_id = submit(d.url, zigzag_job(), tmp)
             wait_state(d.url, job_id, ("running",), 60)
 
             # Never written: twice the watchdog time passes, nothing happens.
@@ -112,11 +132,11 @@ def main():
             check(regs[1] & 0x04 and regs[26] == 20,
                   "registers: paused bit set (status 0x%x), last error 20 (%d)" % (regs[1], regs[26]))
             check("HMI watchdog expired" in d.read_log(), "the expiry is logged")
-            m1 = motions_settled(d, job_id)
+            w1 = work_settled(d, job_id)
             time.sleep(1.0)
             st = status(d, job_id)
-            check(st["paused"] and st["motions_done"] == m1,
-                  "the paused job does not advance (motion %d)" % m1)
+            check(st["paused"] and work_done(st) == w1,
+                  "the paused job does not advance (motions, program time, removed: %s)" % (w1,))
 
             # Resume by command 1 (sequence 1): runs again, register 26 back to 0.
             check(modbus_write(port, 100, [1, 1, 0]) == 0, "FC16 100-102 = resume, sequence 1")
@@ -127,12 +147,21 @@ def main():
             check(regs[28] == 1 and regs[26] == 0,
                   "resume acknowledged (sequence %d), last error back to 0 (%d)" % (regs[28], regs[26]))
 
-            # Fires once: 103 unchanged, the job keeps running and advances.
-            time.sleep(2 * WATCHDOG_MS / 1000 + 0.5)
-            st = status(d, job_id)
-            check(st["state"] == "running" and not st["paused"] and st["motions_done"] > m1,
-                  "after the resume, 103 unchanged: not paused again, motions %d -> %d" % (
-                      m1, st["motions_done"]))
+            # Fires once: 103 unchanged, the job keeps running (twice the
+            # watchdog time at least) and advances.
+            start = time.monotonic()
+            while True:
+                st = status(d, job_id)
+                if st["paused"] or st["state"] != "running":
+                    break
+                if time.monotonic() - start >= 2 * WATCHDOG_MS / 1000 + 0.5 and work_done(st) > w1:
+                    break
+                if time.monotonic() - start > 20:
+                    break
+                time.sleep(0.1)
+            check(st["state"] == "running" and not st["paused"] and work_done(st) > w1,
+                  "after the resume, 103 unchanged: not paused again and advancing (%s -> %s)" % (
+                      w1, work_done(st)))
 
             # A new value re-arms it.
             last_change = time.monotonic()
