@@ -29,18 +29,12 @@ import subprocess
 import sys
 import tempfile
 
-ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+from cli_util import ROOT, check, summary
+
 EX = os.path.join(ROOT, "examples")
 PROGRAM = os.path.join(EX, "trunnion_5axis.ngc")
 ARGS = ["--tools", os.path.join(EX, "rotary_tools.json"), "--machine", os.path.join(EX, "trunnion_machine.json")]
 STOCK = "box:-30,-30,-20,30,30,0"
-failures = []
-
-
-def check(cond, message):
-    print(("ok: " if cond else "FAIL: ") + message)
-    if not cond:
-        failures.append(message)
 
 
 def near(a, b, tol=1e-4):
@@ -112,10 +106,7 @@ def main():
         check(rep["motions"] == len(moves) and rep.get("voxels_uncertain") == 0,
               "report: %d motions, no uncertain voxel" % rep["motions"])
         check(os.path.getsize(os.path.join(tmp, "chamfer.png")) > 0, "the picture was written")
-    if failures:
-        print("%d failed" % len(failures))
-        return 1
-    return 0
+    return summary("test_trunnion_cli")
 
 
 if __name__ == "__main__":
