@@ -14,19 +14,20 @@ texts of (debug,...) and (msg,...) comments in order. rs274 prints no
 geometry for NURBS_FEED (G5, G5.1, G5.2/G5.3): those are compared by kind
 (frepmill's exact "param" motion) and the motions after them by position.
 
-usage: rs274_diff.py FREPMILL [--linuxcnc-examples DIR] [--tools TABLE_MM.tbl]
+usage: rs274_diff.py FREPMILL [--linuxcnc-examples DIR [--min-examples N]] [--tools TABLE_MM.tbl]
                      [--subroutine-path DIR] [PROGRAM ...]
 
 --linuxcnc-examples runs every LinuxCNC example program in DIR (the list
 NCFILES below says, for each, the tool table it needs or why it is not
 compared; a program in DIR that the list does not know fails the test, so
-that the list stays complete). PROGRAMs use TABLE (or NAME.tbl next to the
+that the list stays complete). With --min-examples N, fewer than N example
+programs compared (an emptied or partial folder) fails. PROGRAMs use TABLE (or NAME.tbl next to the
 program when there is one). Tool tables are in mm; rs274 gets them converted
 to its machine unit, inches.
 
 Exit 0 when all agree, 1 on a difference. When rs274 or the example folder
 is missing: exit 77 (skipped) with a message, or 1 when the environment has
-CI=true (CI never skips).
+CI=true or CI=1 (CI never skips; tests/support/fm_skip.py).
 """
 import json
 import math
@@ -36,6 +37,9 @@ import shutil
 import subprocess
 import sys
 import tempfile
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from fm_skip import in_ci  # noqa: E402  (the tests' skip rule: CI=true or CI=1)
 
 SKIP = 77
 CALL = re.compile(r"^\s*\d+\s+N\S*\s+([A-Z_0-9]+)\((.*)\)\s*$")
@@ -294,8 +298,8 @@ def inch_table(tbl_mm, tmpdir):
 
 
 def missing(what):
-    if os.environ.get("CI") == "true":
-        print("FAIL: %s (CI=true never skips)" % what)
+    if in_ci():
+        print("FAIL: %s (CI never skips)" % what)
         return 1
     print("SKIP: %s" % what)
     return SKIP
@@ -303,14 +307,14 @@ def missing(what):
 
 def main():
     args = sys.argv[1:]
-    opts = {"--tools": None, "--linuxcnc-examples": None, "--subroutine-path": None}
+    opts = {"--tools": None, "--linuxcnc-examples": None, "--subroutine-path": None, "--min-examples": None}
     for k in list(opts):
         if k in args:
             i = args.index(k)
             if i + 1 >= len(args):
                 print(__doc__)
                 return 2
-            opts[k] = os.path.abspath(args[i + 1])
+            opts[k] = args[i + 1] if k == "--min-examples" else os.path.abspath(args[i + 1])
             del args[i:i + 2]
     if not args:
         print(__doc__)
@@ -358,7 +362,7 @@ def main():
 
     tmpdir = tempfile.mkdtemp()
     try:
-        total = 0
+        total = examples = 0
         for program, tbl, ini_text, subpath in jobs:
             ini = None
             if ini_text or subpath:
@@ -380,6 +384,8 @@ def main():
                 continue
             problems = compare(ref, got, ref_msgs, got_msgs)
             total += len(ref)
+            if ncdir and os.path.dirname(program) == ncdir:
+                examples += 1
             if problems:
                 failed += 1
                 print("FAIL %s (%d rs274 motions):" % (name, len(ref)))
@@ -388,6 +394,12 @@ def main():
             else:
                 print("ok   %s: %d motions, %d messages agree" % (name, len(ref), len(ref_msgs)))
         print("%d programs, %d motions compared, %d failed" % (len(jobs), total, failed))
+        if ncdir:
+            print("%d LinuxCNC example programs compared" % examples)
+        if opts["--min-examples"] is not None and examples < int(opts["--min-examples"]):
+            print("FAIL: %d LinuxCNC example programs compared, fewer than --min-examples %s" %
+                  (examples, opts["--min-examples"]))
+            failed += 1
         return 1 if failed else 0
     finally:
         shutil.rmtree(tmpdir)
