@@ -6,7 +6,12 @@ started with `--subroutine-path DIR` runs a LinuxCNC
 program whose o<slot> call is found in DIR. Each cuts one slot whose volume
 is computed here in closed form: a 6 mm flat end mill 2 mm deep from
 (10,20) to (50,20): (40 * 6 + pi * 3^2) * 2 mm3. A dialect the daemon does
-not know stops its start, and a job naming one is refused (400).
+not know stops its start, and a job naming one is refused (400). POST
+/v1/check of each job finds what a reading of the program gives: it never
+starts the spindle (no M3), so its one finding is a spindle_off_cut error
+2 mm deep (the slot's depth) from the plunge to the slot's end (the Fanuc
+file's lines 7-8 after %, O1000, G21, T1, Z5. and X10. Y20.; lines 2-3 of
+the LinuxCNC subroutine file slot.ngc).
 Usage: test_dialect.py FREPMILLD FREPMILL"""
 import json
 import math
@@ -33,7 +38,7 @@ LINUXCNC_MAIN = "G21 G17 G90\nT1 M6\nG00 Z5\nG00 X10 Y20\no<slot> call\nM2\n"
 LINUXCNC_SUB = "o<slot> sub\nG01 Z-2 F300\nG01 X50 F600\nG00 Z5\no<slot> endsub\nM2\n"
 
 
-def run(frepmilld, state, flags, program, tmp, what, options=None):
+def run(frepmilld, state, flags, program, tmp, what, lines, options=None):
     d = Daemon(frepmilld, state, "--workers", "1", *flags)
     try:
         job = {"stock": STOCK, "voxel": VOXEL, "tools": TOOLS, "program": {"gcode": program}}
@@ -55,8 +60,13 @@ def run(frepmilld, state, flags, program, tmp, what, options=None):
         # other dialect, or without the folder, it is an error: 400)
         code, body = curl_json("-X", "POST", "--data-binary", json.dumps(job),
                                d.url + "/v1/check")
-        check(code == 200 and isinstance(body.get("findings"), list),
-              "%s: POST /v1/check reads it too (%d, %s)" % (what, code, body))
+        found = body.get("findings") if code == 200 and body else None
+        check(isinstance(found, list) and len(found) == 1 and found[0]["kind"] == "spindle_off_cut"
+              and found[0]["severity"] == "error"
+              and (found[0]["line"], found[0]["last_line"]) == lines
+              and abs(found[0]["penetration_mm"] - 2.0) <= 0.25 and body["errors"] == 1,
+              "%s: POST /v1/check reads it too: one spindle_off_cut error 2 mm deep at lines %d-%d "
+              "(%d, %s)" % (what, lines[0], lines[1], code, body))
     finally:
         rc = d.stop()
         if rc != 0:
@@ -72,12 +82,12 @@ def main():
         with open(os.path.join(subs, "slot.ngc"), "w") as f:
             f.write(LINUXCNC_SUB)
         run(frepmilld, os.path.join(tmp, "a"), ["--dialect", "fanuc"], FANUC, tmp,
-            "--dialect fanuc: a Fanuc program")
+            "--dialect fanuc: a Fanuc program", (7, 8))
         run(frepmilld, os.path.join(tmp, "a2"), [], FANUC_CALCULATOR, tmp,
-            "options.dialect fanuc on a linuxcnc daemon",
+            "options.dialect fanuc on a linuxcnc daemon", (7, 8),
             {"dialect": "fanuc", "calculator_input": True})
         run(frepmilld, os.path.join(tmp, "b"), ["--subroutine-path", subs], LINUXCNC_MAIN, tmp,
-            "--subroutine-path: o<slot> call found in the configured folder")
+            "--subroutine-path: o<slot> call found in the configured folder", (2, 3))
         out = subprocess.run([frepmilld, "--dialect", "haas", "--state-dir",
                               os.path.join(tmp, "c")], stdout=subprocess.PIPE,
                              stderr=subprocess.PIPE, timeout=30)
