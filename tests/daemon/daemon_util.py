@@ -203,3 +203,84 @@ def modbus_write(port, start, values):
                 raise RuntimeError("Modbus server closed the connection")
             rest += data
     return rest[0] if head[7] & 0x80 else 0
+
+
+def mesh_measures(vertices, faces):
+    """(enclosed volume, bounding box low corner, high corner) of a
+    triangle mesh: the volume by the divergence theorem as stl_volume,
+    independent of lib/mesh."""
+    total = 0.0
+    for a, b, c in faces:
+        ax, ay, az = vertices[a]
+        bx, by, bz = vertices[b]
+        cx, cy, cz = vertices[c]
+        total += (ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx))
+    lo = [min(v[k] for v in vertices) for k in range(3)]
+    hi = [max(v[k] for v in vertices) for k in range(3)]
+    return total / 6.0, lo, hi
+
+
+def read_obj(data):
+    """Vertices and triangles of a Wavefront OBJ ("v x y z ...", "f a/.. b c")."""
+    vertices, faces = [], []
+    for line in data.decode().splitlines():
+        if line.startswith("v "):
+            vertices.append(tuple(float(t) for t in line.split()[1:4]))
+        elif line.startswith("f "):
+            idx = [int(t.split("/")[0]) - 1 for t in line.split()[1:]]
+            faces.extend((idx[0], idx[i], idx[i + 1]) for i in range(1, len(idx) - 1))
+    return vertices, faces
+
+
+def read_ply(data):
+    """Vertices and triangles of a binary little-endian PLY whose vertex
+    properties are scalars and whose faces are one list property."""
+    head, _, body = data.partition(b"end_header\n")
+    sizes = {"float": ("f", 4), "double": ("d", 8), "uchar": ("B", 1), "char": ("b", 1),
+             "int": ("i", 4), "uint": ("I", 4), "short": ("h", 2), "ushort": ("H", 2)}
+    elements, current = [], None
+    for line in head.decode().splitlines():
+        words = line.split()
+        if words[:1] == ["format"] and words[1] != "binary_little_endian":
+            raise ValueError("PLY format %s" % words[1])
+        if words[:1] == ["element"]:
+            current = [words[1], int(words[2]), []]
+            elements.append(current)
+        elif words[:1] == ["property"]:
+            current[2].append(words[1:])
+    offset, vertices, faces = 0, [], []
+    for name, count, props in elements:
+        if name == "vertex":
+            fmt = "<" + "".join(sizes[p[0]][0] for p in props)
+            names = [p[-1] for p in props]
+            ix, iy, iz = names.index("x"), names.index("y"), names.index("z")
+            step = struct.calcsize(fmt)
+            for i in range(count):
+                v = struct.unpack_from(fmt, body, offset + i * step)
+                vertices.append((v[ix], v[iy], v[iz]))
+            offset += count * step
+        elif name == "face":
+            (_, count_type, index_type, _) = props[0]
+            cf, cs = sizes[count_type]
+            inf, ins = sizes[index_type]
+            for i in range(count):
+                n = struct.unpack_from("<" + cf, body, offset)[0]
+                idx = struct.unpack_from("<%d%s" % (n, inf), body, offset + cs)
+                offset += cs + n * ins
+                faces.extend((idx[0], idx[j], idx[j + 1]) for j in range(1, n - 1))
+        else:
+            raise ValueError("PLY element %s" % name)
+    return vertices, faces
+
+
+def decode_draco(data, tmpdir):
+    """A Draco blob decoded by Google's draco_decoder (Debian's draco),
+    independent of the daemon's encoder: vertices and triangles."""
+    drc = os.path.join(tmpdir, "decode.drc")
+    obj = os.path.join(tmpdir, "decode.obj")
+    with open(drc, "wb") as f:
+        f.write(data)
+    subprocess.run(["draco_decoder", "-i", drc, "-o", obj], check=True, timeout=120,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    with open(obj, "rb") as f:
+        return read_obj(f.read())

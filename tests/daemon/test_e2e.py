@@ -2,19 +2,25 @@
 bundled demo job, follow its server-sent events to the end, fetch the final
 mesh and compare with the CLI's result for the same inputs (frepmill
 simulate --report --out): removed volume, and the enclosed volume of the
-STL meshes, each within a voxel-based tolerance. Also checks the JSON
+STL meshes, each within a voxel-based tolerance; the Draco (decoded by
+draco_decoder), PLY and OBJ downloads read back: the same triangles,
+bounding box and volume; a multipart upload of the same job runs to the
+same result. Also checks the JSON
 errors of bad requests. Usage: test_e2e.py FREPMILLD FREPMILL"""
 import json
 import os
+import shutil
+import struct
 import subprocess
 import sys
 import tempfile
 import time
 
-from daemon_util import (Daemon, check, cli_reference, curl, curl_json, demo_job, stl_volume,
-                         submit)
+from daemon_util import (Daemon, check, cli_reference, curl, curl_json, decode_draco, demo_job,
+                         mesh_measures, read_obj, read_ply, skip, stl_volume, submit, wait_state)
 
 VOXEL = 0.25
+STOCK_BOX = (0, 0, -30, 100, 60, 0)  # daemon_util.DEMO_STOCK
 
 
 def follow_events(url, job_id, timeout):
@@ -39,6 +45,8 @@ def follow_events(url, job_id, timeout):
 
 def main():
     frepmilld, frepmill = sys.argv[1], sys.argv[2]
+    if not shutil.which("draco_decoder"):
+        skip("draco_decoder is not installed (Debian package draco)")
     with tempfile.TemporaryDirectory(prefix="fm-e2e-") as tmp:
         ref = cli_reference(frepmill, VOXEL, tmp)
         d = Daemon(frepmilld, os.path.join(tmp, "state"), "--workers", "1")
@@ -91,9 +99,24 @@ def main():
                   "chunk %s is a Draco blob of %d bytes" % (full["id"], len(drc)))
             code, later = curl_json(d.url + "/v1/jobs/%s/chunks?since=%d" % (job_id, chunks["version"]))
             check(code == 200 and later["chunks"] == [], "no chunk changed since the last version")
+            # Every download format read back here (Draco by Google's
+            # draco_decoder): the same closed surface as the STL, whose
+            # bounding box is the stock's (the demo leaves its outer faces).
+            stl_triangles = struct.unpack_from("<I", stl, 80)[0]
             for fmt in ("drc", "ply", "obj"):
                 code, body = curl(d.url + "/v1/jobs/%s/mesh?format=%s" % (job_id, fmt))
-                check(code == 200 and len(body) > 1000, "mesh?format=%s is %d bytes" % (fmt, len(body)))
+                if fmt == "drc":
+                    verts, faces = decode_draco(body, tmp)
+                else:
+                    verts, faces = (read_ply if fmt == "ply" else read_obj)(body)
+                fvol, lo, hi = mesh_measures(verts, faces)
+                check(code == 200 and len(faces) == stl_triangles,
+                      "mesh?format=%s: %d bytes, %d triangles like the STL" % (fmt, len(body), len(faces)))
+                check(all(abs(a - b) <= VOXEL / 2 for a, b in zip(lo + hi, STOCK_BOX)),
+                      "mesh?format=%s: bounding box %s %s is the stock's" % (fmt, lo, hi))
+                check(abs(fvol - vol) <= tol_mesh,
+                      "mesh?format=%s: volume %.2f mm3 = the STL's %.2f (tolerance %.2f)" %
+                      (fmt, fvol, vol, tol_mesh))
             code, vdb = curl(d.url + "/v1/jobs/%s/stock.vdb" % job_id)
             check(code == 200 and len(vdb) > 1000, "stock.vdb is %d bytes" % len(vdb))
             code, lst = curl_json(d.url + "/v1/jobs")
@@ -138,6 +161,15 @@ def main():
                                                                     "deploy", "demo", "pocket.ngc"),
                                    d.url + "/v1/jobs")
             check(code == 202, "multipart upload: 202 %s" % body)
+            # The uploaded job runs and gives what the JSON job gave.
+            up = wait_state(d.url, body["id"], ("done", "failed", "cancelled"), 300)
+            code, up_rep = curl_json(d.url + "/v1/jobs/%s/report" % body["id"])
+            check(up["state"] == "done" and code == 200 and up_rep["motions"] == rep["motions"]
+                  and abs(up["removed_volume_mm3"] - status["removed_volume_mm3"]) <=
+                  1e-9 * status["removed_volume_mm3"],
+                  "the multipart job ran like the JSON one: %s, %d motions, removed %.3f mm3 (JSON %.3f)" %
+                  (up["state"], up_rep.get("motions", -1), up["removed_volume_mm3"],
+                   status["removed_volume_mm3"]))
             code, body = curl_json("-X", "DELETE", d.url + "/v1/jobs/" + body["id"])
             check(code == 200, "DELETE the uploaded job: 200")
         finally:
