@@ -13,13 +13,24 @@
  *    no excess region at the default tolerance (half a voxel, 0.05 mm). The
  *    largest deviation the program leaves by design is the scallop between
  *    the zigzag's row ends on the pocket's walls (6 mm cutter, rows 1 mm
- *    apart): h = 3 - sqrt(9 - 0.5^2) = 0.042 mm, under the tolerance. */
+ *    apart): h = 3 - sqrt(9 - 0.5^2) = 0.042 mm, under the tolerance.
+ * 3. The same job cutting 1 mm too deep (G92 Z1 after the program's G54, so
+ *    every programmed Z lands 1 mm lower) on a 0.2 mm grid: a comparison that
+ *    found nothing would pass case 2, so here it must find the floors 1 mm
+ *    under the design. By hand: the deepest gouge is 1 mm (the floors; the
+ *    V groove's 45 degree faces move 1/sqrt(2) mm, the drill points' 59
+ *    degree cones sin(31 deg) mm), within half a voxel; the gouged volume
+ *    holds at least the floors moved down: the rectangular pocket
+ *    50 x 40 less its four 3 mm corner roundings (4 * 9 (1 - pi / 4)), the
+ *    circular pocket pi 12^2 and the front ledge 100 x 11, each 1 mm thick,
+ *    3544 mm^3, less a voxel layer of slack on their outlines. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
+#include "core/core.h"
 #include "job.h"
 #include "test.h"
 
@@ -34,14 +45,14 @@ static int write_file(const char *path, const char *text)
 }
 
 static int run(const char *program, const char *tools, const char *stock, const char *design,
-               fm_job_result *r)
+               double voxel, fm_job_result *r)
 {
     fm_job_spec spec;
     fm_job_spec_default(&spec);
     spec.program_path = program;
     spec.tools_path = tools;
     spec.stock_spec = stock;
-    spec.stock.voxel_mm = 0.1;
+    spec.stock.voxel_mm = voxel;
     spec.design_path = design;
     fm_error err;
     fm_error_clear(&err);
@@ -83,7 +94,7 @@ static void test_box_ties(void)
                      "  box = -(sqrt(max(b1, 0)^2 + max(b2, 0)^2 + max(b3, 0)^2)"
                      " + min(max(b1, max(b2, b3)), 0));\n}\n"));
     fm_job_result r;
-    if (!run(program, tools, "box:0,0,-10,20,20,0", design, &r)) {
+    if (!run(program, tools, "box:0,0,-10,20,20,0", design, 0.1, &r)) {
         CHECK(0);
         return;
     }
@@ -101,7 +112,7 @@ static void test_demo(void)
 {
     fm_job_result r;
     if (!run("../deploy/demo/pocket.ngc", "../deploy/demo/tools.json", "box:0,0,-30,100,60,0",
-             "../deploy/demo/part.hf", &r)) {
+             "../deploy/demo/part.hf", 0.1, &r)) {
         CHECK(0);
         return;
     }
@@ -116,6 +127,54 @@ static void test_demo(void)
     fm_job_result_release(&r);
 }
 
+static void test_demo_too_deep(void)
+{
+    char *text = NULL;
+    size_t size = 0;
+    fm_error err;
+    fm_error_clear(&err);
+    if (fm_file_read("../deploy/demo/pocket.ngc", "program", 1 << 20, &text, &size, &err) != FM_OK) {
+        fprintf(stderr, "%s\n", err.message);
+        CHECK(0);
+        return;
+    }
+    const char *g54 = strstr(text, "G54\n");
+    CHECK(g54 != NULL);
+    char program[300];
+    snprintf(program, sizeof program, "%s/too_deep.ngc", dir);
+    FILE *f = fopen(program, "w");
+    CHECK(f != NULL);
+    if (!g54 || !f) {
+        if (f) fclose(f);
+        free(text);
+        return;
+    }
+    const size_t head = (size_t)(g54 + 4 - text);
+    CHECK(fwrite(text, 1, head, f) == head);
+    CHECK(fputs("G92 Z1\n", f) >= 0);
+    CHECK(fwrite(text + head, 1, size - head, f) == size - head);
+    CHECK(fclose(f) == 0);
+    free(text);
+
+    const double h = 0.2;
+    fm_job_result r;
+    if (!run(program, "../deploy/demo/tools.json", "box:0,0,-30,100,60,0", "../deploy/demo/part.hf",
+             h, &r)) {
+        CHECK(0);
+        return;
+    }
+    CHECK(r.has_deviation);
+    print_deviation("demo 1 mm too deep against deploy/demo/part.hf", &r);
+    const double floors = 50.0 * 40.0 - 4 * 9 * (1 - FM_PI / 4) + FM_PI * 144 + 100.0 * 11;
+    /* the floors' outlines, one voxel wide, 1 mm thick */
+    const double slack = (2 * (50 + 40) + 2 * FM_PI * 12 + 2 * 100 + 2 * 11) * h;
+    CHECK(fabs(r.deviation.max_gouge_mm - 1.0) <= h / 2);
+    CHECK(r.deviation.gouge_total >= 1);
+    CHECK(r.deviation.gouge_volume_mm3 >= floors - slack);
+    CHECK(r.deviation.gouge_count >= 1 && r.gouge_blame[0].line > 0);
+    fm_job_result_release(&r);
+}
+
 int main(int argc, char **argv)
 {
     /* --box: the first case alone */
@@ -123,7 +182,10 @@ int main(int argc, char **argv)
     snprintf(dir, sizeof dir, "/tmp/fm-demo-design-XXXXXX");
     if (!mkdtemp(dir)) return 1;
     test_box_ties();
-    if (!only_box) test_demo();
+    if (!only_box) {
+        test_demo();
+        test_demo_too_deep();
+    }
     char cmd[300];
     snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
     if (system(cmd) != 0) perror("rm");
