@@ -132,13 +132,28 @@ def main():
                 time.sleep(0.1)
             check(status["state"] == "done", "live mode off ends the live job")
             # With live mode off a position only stages registers: nothing
-            # is cut.
-            regs = client(port, "1,2,3,1", "read")
+            # is cut. The position lies in the stock beside the slot (it
+            # would cut if it reached a job), and the check lasts 2 s, twenty
+            # publish intervals, far longer than the live job took to cut
+            # and publish each of its moves above: a delayed cut would show.
+            regs = client(port, "30,10,-2,1", "read")
             words = list(map(int, regs[1].split()[1:]))
-            code, after = curl_json(d.url + "/v1/jobs/" + job_id)
-            check(after["motions_done"] == len(MOVES) - 1 and
-                  after["removed_volume_mm3"] == removed,
-                  "a position written with live mode off cuts nothing")
+            floats = list(map(float, regs[2].split()[1:]))
+            check(all(abs(floats[i] - MOVES[-1][i]) < 1e-4 for i in range(3)),
+                  "registers 9-14 still show the last live position, not the staged one")
+            cut_later = []
+            deadline = time.time() + 2.0
+            while time.time() < deadline:
+                code, after = curl_json(d.url + "/v1/jobs/" + job_id)
+                code, listing = curl_json(d.url + "/v1/jobs")
+                if (after["motions_done"] != len(MOVES) - 1 or after["removed_volume_mm3"] != removed
+                        or len(listing["jobs"]) != 1):
+                    cut_later.append((after["motions_done"], after["removed_volume_mm3"],
+                                      len(listing["jobs"])))
+                time.sleep(0.1)
+            check(not cut_later and after["state"] == "done",
+                  "a position in the stock written with live mode off cuts nothing within 2 s, "
+                  "and starts no job (%s)" % cut_later[:3])
         finally:
             rc = d.stop()
             if rc != 0:
