@@ -74,7 +74,7 @@ def work_done(st):
     return (st["motions_done"], st["program_time_s"], st["removed_volume_mm3"])
 
 
-def work_settled(d, job_id, still_s=1.5, timeout=60):
+def work_settled(d, job_id, still_s=3.0 if INSTRUMENTED else 1.5, timeout=60):
     """work_done once it has not changed for still_s (a paused worker
     publishes once more when it reaches its next progress report)."""
     last = work_done(status(d, job_id))
