@@ -10,9 +10,11 @@
  * so a client sending a header line every few seconds would hold its slot
  * forever. Every connection is tracked (MHD_OPTION_NOTIFY_CONNECTION) with
  * the time its current request started; the request callbacks check it
- * while a body arrives (408 in JSON), and the sweeper shuts the socket down
- * for connections still receiving headers past the deadline, which makes
- * libmicrohttpd's connection thread see end-of-stream and close it. */
+ * while a body arrives, and the sweeper acts on connections that send
+ * nothing more: past the deadline a body still arriving is answered 408 (in
+ * JSON, written to the socket: answer_timeout_locked says why) and the
+ * socket shut down; one still receiving headers is only shut down. Either
+ * way libmicrohttpd's connection thread sees end-of-stream and closes it. */
 #include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -47,6 +49,8 @@ typedef struct conn_track {
     char ip[INET6_ADDRSTRLEN];
     double request_start; /* monotonic s when the current request began */
     int receiving;        /* 1 until the request is complete */
+    int in_body;          /* 1: its headers are in, its body is arriving */
+    int timed_out;        /* 1: answered 408 on the socket and shut down */
     int over_limit;       /* 1: answer with a connection-limit error */
 } conn_track;
 
@@ -71,7 +75,8 @@ struct fm_http_server {
 typedef struct request {
     char *body;
     size_t size, cap;
-    int rejected; /* a response was queued before the body ended */
+    int rejected;          /* a response was queued before the body ended */
+    fm_http_error refused; /* status 0, or the answer once the body has ended */
 } request;
 
 static void logf_(fm_http_server *s, int level, const char *fmt, ...)
@@ -856,6 +861,46 @@ static conn_track *track_of(struct MHD_Connection *con)
     return info ? info->socket_context : NULL;
 }
 
+/* Answer 408 on a connection whose body is still arriving, then shut it
+ * down. libmicrohttpd takes a response only before the body or after its
+ * end (MHD_queue_response refuses one in between), and a client that
+ * trickles its body never reaches the end; so the answer is written to the
+ * socket directly. That is safe here: while a body arrives libmicrohttpd
+ * has nothing to write on this connection (at most a "100 Continue" it
+ * sent before), and the caller holds conn_lock, which on_request takes
+ * before it routes a completed request, so no answer of its own can start
+ * meanwhile; timed_out makes it route nothing afterwards. */
+static void answer_timeout_locked(fm_http_server *s, conn_track *t)
+{
+    fm_http_error err;
+    memset(&err, 0, sizeof err);
+    err.status = 408;
+    snprintf(err.code, sizeof err.code, "request_timeout");
+    snprintf(err.message, sizeof err.message,
+             "the request took over %d ms to arrive (request_deadline_ms)",
+             s->cfg.request_deadline_ms);
+    json_t *body = error_json(&err);
+    char *text = body ? json_dumps(body, JSON_COMPACT) : NULL;
+    json_decref(body);
+    char head[256];
+    size_t n = text ? strlen(text) : 0;
+    int h = snprintf(head, sizeof head,
+                     "HTTP/1.1 408 Request Timeout\r\nContent-Type: application/json\r\n"
+                     "Cache-Control: no-store\r\nConnection: close\r\nContent-Length: %zu\r\n\r\n",
+                     n + 1);
+    /* Best effort: a few hundred bytes fit in any socket buffer, and a peer
+     * that cannot take them loses only the explanation. */
+    if (text && t->fd >= 0 && h > 0 && (size_t)h < sizeof head &&
+        send(t->fd, head, (size_t)h, MSG_NOSIGNAL | MSG_DONTWAIT) == h &&
+        send(t->fd, text, n, MSG_NOSIGNAL | MSG_DONTWAIT) == (ssize_t)n)
+        (void)send(t->fd, "\n", 1, MSG_NOSIGNAL | MSG_DONTWAIT);
+    free(text);
+    if (t->fd >= 0) shutdown(t->fd, SHUT_RDWR);
+    t->timed_out = 1;
+    t->receiving = 0;
+    t->in_body = 0;
+}
+
 static enum MHD_Result on_request(void *cls, struct MHD_Connection *con, const char *url,
                                   const char *method, const char *version,
                                   const char *upload_data, size_t *upload_data_size,
@@ -888,27 +933,40 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *con, const c
                             s->cfg.max_request_bytes);
             }
         }
+        if (track) {
+            pthread_mutex_lock(&s->conn_lock);
+            track->in_body = 1;
+            pthread_mutex_unlock(&s->conn_lock);
+        }
         return MHD_YES;
     }
     if (*upload_data_size) {
         size_t n = *upload_data_size;
         *upload_data_size = 0;
-        if (req->rejected) return MHD_YES; /* a response is queued; drop the rest */
         double deadline = s->cfg.request_deadline_ms / 1000.0;
-        pthread_mutex_lock(&s->conn_lock);
-        int late = track && fm_clock_monotonic_s() - track->request_start > deadline;
-        pthread_mutex_unlock(&s->conn_lock);
-        if (late) {
-            req->rejected = 1;
-            return fail(con, 408, "request_timeout",
-                        "the request took over %d ms to arrive (request_deadline_ms)",
-                        s->cfg.request_deadline_ms);
+        int gone = 0;
+        if (track) {
+            pthread_mutex_lock(&s->conn_lock);
+            if (!track->timed_out && fm_clock_monotonic_s() - track->request_start > deadline)
+                answer_timeout_locked(s, track);
+            gone = track->timed_out;
+            pthread_mutex_unlock(&s->conn_lock);
         }
+        if (gone) return MHD_NO;
+        /* A response is queued, or will be once the body ends: drop the rest. */
+        if (req->rejected || req->refused.status) return MHD_YES;
         if (req->size + n > s->cfg.max_request_bytes) {
-            req->rejected = 1;
-            return fail(con, 413, "request_too_large",
-                        "the request body is over %zu bytes (max_request_mb)",
-                        s->cfg.max_request_bytes);
+            /* Mid-body, libmicrohttpd takes no response (a body without a
+             * Content-Length, chunked): answer once it has ended. */
+            req->refused.status = 413;
+            snprintf(req->refused.code, sizeof req->refused.code, "request_too_large");
+            snprintf(req->refused.message, sizeof req->refused.message,
+                     "the request body is over %zu bytes (max_request_mb)",
+                     s->cfg.max_request_bytes);
+            free(req->body);
+            req->body = NULL;
+            req->size = req->cap = 0;
+            return MHD_YES;
         }
         if (req->size + n + 1 > req->cap) {
             size_t cap = req->cap ? req->cap : 16384;
@@ -929,8 +987,15 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *con, const c
     if (req->rejected) return MHD_YES;
     if (track) {
         pthread_mutex_lock(&s->conn_lock);
+        int gone = track->timed_out;
         track->receiving = 0;
+        track->in_body = 0;
         pthread_mutex_unlock(&s->conn_lock);
+        if (gone) return MHD_NO;
+    }
+    if (req->refused.status) {
+        req->rejected = 1;
+        return respond_error(con, &req->refused, 1);
     }
     return route(s, con, url, method, req);
 }
@@ -952,6 +1017,7 @@ static void on_completed(void *cls, struct MHD_Connection *con, void **con_cls,
         pthread_mutex_lock(&s->conn_lock);
         track->request_start = fm_clock_monotonic_s();
         track->receiving = 1;
+        track->in_body = 0;
         pthread_mutex_unlock(&s->conn_lock);
     }
 }
@@ -1032,7 +1098,10 @@ static void *sweeper_main(void *arg)
             socklen_t len = sizeof peer;
             if (t->peer_len && getpeername(t->fd, (struct sockaddr *)&peer, &len) == 0 &&
                 len == t->peer_len && !memcmp(&peer, &t->peer, len)) {
-                shutdown(t->fd, SHUT_RDWR);
+                /* A body that trickles gets its 408; headers that trickle,
+                 * or an idle kept-alive connection, are only closed. */
+                if (t->in_body) answer_timeout_locked(s, t);
+                else shutdown(t->fd, SHUT_RDWR);
                 logf_(s, FM_HTTP_LOG_WARN,
                       "http: closed a connection from %s: its request took over %d ms",
                       t->ip, s->cfg.request_deadline_ms);

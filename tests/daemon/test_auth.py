@@ -12,13 +12,21 @@
   a new one is accepted;
 - max_request_mb: a body over it is 413 request_too_large (by its
   Content-Length);
-- a multipart upload of more than 16 parts is 413 too_many_parts.
+- a multipart upload of more than 16 parts is 413 too_many_parts;
+- a chunked body (no Content-Length) over max_request_mb is 413
+  request_too_large once it has ended, in JSON, and the daemon serves the
+  next request;
+- a body that trickles past request_deadline_ms is answered 408
+  request_timeout (JSON) and the connection closed, within the sweeper's
+  period of the deadline; headers that trickle are only closed.
 Usage: test_auth.py FREPMILLD FREPMILL"""
 import json
 import os
+import socket
 import subprocess
 import sys
 import tempfile
+import time
 
 from daemon_util import Daemon, check, curl_json
 
@@ -47,6 +55,41 @@ def post(url, path, body, token=None, auth=None):
 
 def error_code(body):
     return body["error"]["code"] if body and "error" in body else None
+
+
+def raw_exchange(url, head, pieces, pause=0.0, timeout=20.0):
+    """Send head then each of pieces (pause s apart) on a raw socket; return
+    (status, headers text, body bytes, seconds from the first byte to the
+    answer). A closed connection without an answer is status None."""
+    host, port = url.split("//")[1].split(":")
+    sock = socket.create_connection((host, int(port)), timeout=timeout)
+    t0 = time.time()
+    got = b""
+    try:
+        sock.sendall(head)
+        for p in pieces:
+            try:
+                sock.sendall(p)
+            except OSError:
+                break  # the server answered and shut the connection down
+            if pause:
+                time.sleep(pause)
+        while True:
+            try:
+                b = sock.recv(65536)
+            except ConnectionResetError:
+                break
+            if not b:
+                break
+            got += b
+    finally:
+        sock.close()
+    elapsed = time.time() - t0
+    if b"\r\n\r\n" not in got:
+        return None, "", got, elapsed
+    headers, body = got.split(b"\r\n\r\n", 1)
+    status = int(headers.split(b" ")[1])
+    return status, headers.decode(errors="replace"), body, elapsed
 
 
 def main():
@@ -157,6 +200,56 @@ def main():
         finally:
             rc = d.stop()
         check(rc == 0, "the non-loopback daemon stops with status 0")
+
+        # 7. Answers mid-body (libmicrohttpd takes a response only before a
+        # body or after it: http_server.c answers these another way).
+        deadline_ms = 1500
+        d = Daemon(frepmilld, os.path.join(tmp, "limits"), "--workers", "1",
+                   "--max-request-mb", "0.01", "--request-deadline-ms", str(deadline_ms))
+        try:
+            big = tiny_job()
+            big["program"]["gcode"] += "(" + "x" * 20000 + ")\n"
+            data = json.dumps(big).encode()
+            chunks = b""
+            for i in range(0, len(data), 4096):
+                part = data[i:i + 4096]
+                chunks += b"%x\r\n" % len(part) + part + b"\r\n"
+            chunks += b"0\r\n\r\n"
+            head = (b"POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                    b"Transfer-Encoding: chunked\r\n\r\n")
+            status, headers, body, _ = raw_exchange(d.url, head, [chunks])
+            parsed = json.loads(body) if body.strip() else None
+            check(status == 413 and error_code(parsed) == "request_too_large",
+                  "a 20 kB chunked body over max_request_mb 0.01: 413 request_too_large (%s %r)"
+                  % (status, body[:200]))
+            small = json.dumps(tiny_job()).encode()
+            status, _, body, _ = raw_exchange(
+                d.url, head, [b"%x\r\n" % len(small) + small + b"\r\n0\r\n\r\n"])
+            check(status == 202, "a small chunked body: 202 (%s %r)" % (status, body[:200]))
+
+            # A body of 200 bytes sent a byte every 50 ms takes 10 s: past the
+            # 1.5 s deadline it is answered 408 and closed.
+            head = (b"POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                    b"Content-Length: 200\r\n\r\n")
+            status, headers, body, took = raw_exchange(d.url, head, [b" "] * 200, pause=0.05)
+            parsed = json.loads(body) if body.strip() else None
+            check(status == 408 and error_code(parsed) == "request_timeout",
+                  "a body trickling past request_deadline_ms: 408 request_timeout (%s %r)"
+                  % (status, body[:200]))
+            check("connection: close" in headers.lower(), "the 408 closes the connection")
+            check(deadline_ms / 1000.0 <= took <= deadline_ms / 1000.0 + 2.0,
+                  "answered %.2f s after the request began (deadline %.1f s, the sweeper's "
+                  "period 0.25 s, 2 s of slack for a loaded machine)" % (took, deadline_ms / 1000.0))
+            # Headers that trickle get no answer, but are closed.
+            status, _, body, took = raw_exchange(d.url, b"GET /v1/jobs HTTP/1.1\r\n",
+                                                 [b"X-Slow: 1\r\n"] * 100, pause=0.05)
+            check(status is None and took < deadline_ms / 1000.0 + 2.5,
+                  "headers trickling past the deadline: closed after %.2f s (%s)" % (took, status))
+            code, body = curl_json(d.url + "/v1/jobs")
+            check(code == 200, "the daemon still serves requests (%d)" % code)
+        finally:
+            rc = d.stop()
+        check(rc == 0, "the limits daemon stops with status 0")
     return 0
 
 
