@@ -115,7 +115,10 @@ void foot_point(const Setup &s, CAcc &sa, const Coord &c, double phi, double q[3
 /* A leaf-sized cell after classification: which voxels are members of a
  * gouge or an excess region, and for each member (in the order of the
  * member bits) its share of the voxel and the deviation at its foot point
- * (NaN for a member beyond the stock's band, whose surface is elsewhere). */
+ * (NaN for a member beyond the stock's band, whose surface is elsewhere),
+ * and how far it lies from the design's surface (into it for a gouge, out
+ * of it for an excess: a lower bound of the region's depth; the design's
+ * value at the voxel, clamped to the design's band). */
 struct Cell {
     Coord origin;
     uint64_t member[8] = {};
@@ -123,6 +126,7 @@ struct Cell {
     uint32_t prefix[8] = {};
     std::vector<float> share;
     std::vector<float> depth;
+    std::vector<float> apart;
     std::vector<uint8_t> clamped;
 
     bool is_member(int i) const { return (member[i >> 6] >> (i & 63)) & 1; }
@@ -295,7 +299,7 @@ void classify(const Setup &s, Worker &w, const Coord &o, double sums[2])
     w.sb.ready = w.db.ready = false;
     Cell cell;
     cell.origin = o;
-    float share[LEAF_SIZE], depth[LEAF_SIZE];
+    float share[LEAF_SIZE], depth[LEAF_SIZE], apart[LEAF_SIZE];
     uint8_t clamped[LEAF_SIZE];
     /* voxels whose foot point is read: their index, foot point and sample */
     int foot_of[LEAF_SIZE];
@@ -313,6 +317,7 @@ void classify(const Setup &s, Worker &w, const Coord &o, double sums[2])
         if (!(fg > MIN_SHARE || fe > MIN_SHARE)) continue;
         const bool gouge = fg > MIN_SHARE;
         share[i] = float(gouge ? fg : fe);
+        apart[i] = float(gouge ? -b : b);
         depth[i] = std::numeric_limits<float>::quiet_NaN();
         clamped[i] = 0;
         if (gouge) gouge_bits[i >> 6] |= uint64_t(1) << (i & 63);
@@ -360,11 +365,13 @@ void classify(const Setup &s, Worker &w, const Coord &o, double sums[2])
     if (n == 0) return;
     cell.share.reserve(n);
     cell.depth.reserve(n);
+    cell.apart.reserve(n);
     cell.clamped.reserve(n);
     for (int i = 0; i < LEAF_SIZE; i++) {
         if (!cell.is_member(i)) continue;
         cell.share.push_back(share[i]);
         cell.depth.push_back(depth[i]);
+        cell.apart.push_back(apart[i]);
         cell.clamped.push_back(clamped[i]);
     }
     w.cells.push_back(std::move(cell));
@@ -755,6 +762,7 @@ struct Region {
     int64_t best = -1;   /* the member it belongs to */
     bool clamped = false;
     bool has_surface = false;
+    double apart = 0; /* the farthest of its members from the design's surface */
     std::vector<uint32_t> clamped_cells; /* cells with clamped members (refinement) */
 };
 
@@ -792,7 +800,7 @@ void fill_regions(const Setup &s, const Members &m, CAcc &sa, std::vector<Region
     const double least = s.tol / s.h;
     std::vector<const Region *> list;
     for (const Region &r : regions)
-        if (r.kind == kind && r.volume >= least) list.push_back(&r);
+        if (r.kind == kind && r.volume >= least && r.depth > s.tol) list.push_back(&r);
     std::sort(list.begin(), list.end(), [](const Region *a, const Region *b) {
         if (a->depth != b->depth) return a->depth > b->depth;
         if (a->volume != b->volume) return a->volume > b->volume;
@@ -949,6 +957,7 @@ fm_status compare(const fm_vdb *sv, const fm_vdb *dv, const fm_vdb_compare_optio
             grow(reg, c, c);
             reg.voxels++;
             reg.volume += cell.share[r];
+            reg.apart = std::max(reg.apart, double(cell.apart[r]));
             const float d = cell.depth[r];
             if (std::isnan(d)) continue;
             reg.has_surface = true;
@@ -970,13 +979,20 @@ fm_status compare(const fm_vdb *sv, const fm_vdb *dv, const fm_vdb_compare_optio
         const double vol = double(tc.size) * tc.size * tc.size;
         reg.voxels += size_t(vol);
         reg.volume += vol;
+        reg.apart = std::max(reg.apart, double(s.bgd)); /* a design tile: its band away */
     }
     for (Region &reg : regions)
         if (!reg.has_surface) {
-            /* no member near the stock's surface (design material where
-             * the stock never was): at least the design's band deep, at
-             * its first member */
-            reg.depth = s.bgd;
+            /* No member near the stock's surface: design material where
+             * the stock never was, or the inside of a deviation whose
+             * surface stays within the tolerance. Its members are as far
+             * from the design's surface as they lie (up to the design's
+             * band), so the deviation is at least that deep; where that is
+             * within the tolerance the region is not one (fill_regions).
+             * Taking the band here made phantom regions of the inside of a
+             * 1 mm excess at tolerances of 1 mm and more, and raised
+             * max_excess_mm to the band (cli_surface, stock_design). */
+            reg.depth = reg.apart;
         }
 
     /* 4. depths beyond the design's band, from its surface points. The
@@ -1096,7 +1112,7 @@ fm_status compare(const fm_vdb *sv, const fm_vdb *dv, const fm_vdb_compare_optio
 
     for (const Region &reg : regions) {
         double &mx = reg.kind == GOUGE ? out->max_gouge_mm : out->max_excess_mm;
-        mx = std::max(mx, reg.depth);
+        if (reg.has_surface || reg.depth > s.tol) mx = std::max(mx, reg.depth);
     }
     fill_regions(s, m, sa, regions, GOUGE, opt.max_regions, &out->gouges, &out->gouge_count,
                  &out->gouge_total);
