@@ -1,7 +1,7 @@
 /* check.c: the collision and safety relations of check.h, motion by
  * motion: which part of the tool is related to what (relate.c does one
  * relation), the flutes not yet cut from the grid, travel limits, the
- * start position, and the findings, grouped over consecutive motions with
+ * start position, feeds with no tool, and the findings, grouped over consecutive motions with
  * the same kind and part. */
 #include "check/check.h"
 #include "check/check_internal.h"

@@ -2,8 +2,9 @@
  * stock, fixtures and the machine (issues 8 and 14): rapids into the stock,
  * shank and holder contact, fixture contact, plunges with a tool that cannot
  * cut at its centre, cutting with the spindle stopped, travel limits, a
- * start position inside the stock, and the places where a search could not
- * decide (uncertain).
+ * start position inside the stock, feeds into the stock with no tool in
+ * the spindle (issue 34), and the places where a search could not decide
+ * (uncertain).
  *
  * The check runs in the same pass as the cut (ARCHITECTURE.md, "Checking in the
  * same pass"): the caller feeds every motion in program order with the
