@@ -28,7 +28,7 @@ static void usage(FILE *out)
             "                      [--voxel MM] [--tolerance MM] [--rapid-clearance MM]\n"
             "                      [--max-ramp DEG] [--rapid-rate MM_PER_MIN]\n"
             "                      [--dialect linuxcnc|fanuc] [--subroutine-path DIRS]\n"
-            "                      [--calculator-input]\n"
+            "                      [--calculator-input] [--initial-tool N]\n"
             "\n"
             "PROGRAM      G-code, or a parametric trajectory (.json)\n"
             "SPEC         box:X0,Y0,Z0,X1,Y1,Z1 | cylinder:X,Y,Z0,Z1,R | FILE.hf | FILE.stl | FILE.vdb\n"
@@ -37,8 +37,11 @@ static void usage(FILE *out)
             "--tools-from-program  no table: the tools the program's comments name, as CAM\n"
             "             posts write them ((T1 D=6. CR=0. - FLAT END MILL)); guesses are warned\n"
             "--fixture    clamp, vise or table: HyperFun model (.hf) or closed STL mesh (.stl)\n"
-            "--machine    travel limits, rapid rate, start position, rotary axes, head and\n"
-            "             components (docs/check.md)\n"
+            "--machine    travel limits, rapid rate, start position and tool, rotary axes,\n"
+            "             head and components (docs/check.md)\n"
+            "--initial-tool  the tool in the spindle before the first M6 (default: the\n"
+            "             machine's initial_tool, else none; a one-tool table's tool cuts);\n"
+            "             a feed into the stock with no tool is a no_tool finding\n"
             "--clearance  shank, holder and head near misses closer than this are warnings\n"
             "             (default: shank 0, holder and the machine's head 1 mm)\n"
             "--rapid-clearance  the same for the flutes in rapids and at fixtures (default 0)\n"
@@ -57,7 +60,7 @@ typedef struct check_run {
     fm_check *check;
 } check_run;
 
-static void summary(const fm_check *check, const fm_job_result *res)
+static void summary(const fm_check *check, const fm_job_result *res, const char *program)
 {
     size_t n = fm_check_count(check);
     fprintf(stderr, "frepmill check: %ld motions, %.1f s of program time, checked in %.2f s: ",
@@ -76,6 +79,13 @@ static void summary(const fm_check *check, const fm_job_result *res)
                 fm_check_severity_name(f->severity), fm_check_kind_name(f->kind),
                 fm_check_part_name(f->part), f->penetration_mm, f->contact[0], f->contact[1],
                 f->contact[2], f->time_s);
+        if (f->kind == FM_CHECK_NO_TOOL)
+            fprintf(stderr,
+                    "  %s:%d: no tool in the spindle (T selects a tool, M6 loads it): the "
+                    "spindle's nose goes where the tip is programmed; give the tool in the spindle "
+                    "at the start with --initial-tool N (or the machine file's initial_tool) or load "
+                    "it with M6\n",
+                    program, f->line);
     }
 }
 
@@ -97,6 +107,7 @@ static const fm_job_flag CHECK_FLAGS[] = {
     {"--dialect", "options.dialect", FM_JOB_FLAG_TEXT},
     {"--subroutine-path", "options.subroutine_path", FM_JOB_FLAG_TEXT},
     {"--calculator-input", "options.calculator_input", FM_JOB_FLAG_SWITCH},
+    {"--initial-tool", "options.initial_tool", FM_JOB_FLAG_INTEGER},
     {NULL, NULL, 0}};
 
 int fm_cmd_check(int argc, char **argv)
@@ -156,7 +167,7 @@ int fm_cmd_check(int argc, char **argv)
         fm_job_doc_free(doc);
         return fm_job_flags_exit_status(st);
     }
-    summary(run.check, &result);
+    summary(run.check, &result, fm_job_flags_value(&flags, "PROGRAM"));
 
     status = fm_check_count(run.check) ? 1 : 0;
     json_t *report = fm_findings_json(run.check);

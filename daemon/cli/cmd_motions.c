@@ -19,7 +19,7 @@ static void usage(FILE *out)
             "                        [--rapid-rate MM_PER_MIN] [--skip N] [--inch]\n"
             "                        [--block-delete] [--subroutine-path DIRS] [--messages]\n"
             "                        [--dialect linuxcnc|fanuc] [--calculator-input]\n"
-            "                        [--machine FILE.json]\n\n"
+            "                        [--machine FILE.json] [--initial-tool N]\n\n"
             "Interpret a G-code program (LinuxCNC dialect, or Fanuc/Haas with --dialect\n"
             "fanuc; docs/gcode.md), or a parametric trajectory\n"
             "(PROGRAM.json, docs/trajectory.md), and print one motion per line:\n"
@@ -35,6 +35,10 @@ static void usage(FILE *out)
             "A B C words (degrees) give \"rotary\":[a,b,c] at the end of the motion; with\n"
             "--machine (docs/check.md) they turn its rotary axes and each motion also has\n"
             "\"tcp\" and \"tool_axis\" (workpiece frame, both ends).\n"
+            "With --machine the tool tip starts at its \"start\" (else the dialect's\n"
+            "power-on place: the origin, Fanuc the first reference point).\n"
+            "--initial-tool N: the tool in the spindle before the first M6 (default the\n"
+            "machine's \"initial_tool\", else none).\n"
             "--messages also prints (debug,...) and (msg,...) texts in order as\n"
             "  {\"kind\":\"message\",\"line\":12,\"text\":\"...\"}\n"
             "Exit status: 0 ok, 2 bad input, 3 limit exceeded, 4 I/O error.\n");
@@ -104,6 +108,7 @@ int fm_cmd_motions(int argc, char **argv)
     fm_job_spec_default(&spec);
     spec.rapid_rate = 0; /* the interpreters' own unless given */
     long skip = 0;
+    int initial_tool = 0;
     int start_inch = 0, block_delete = 0, messages = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -134,6 +139,15 @@ int fm_cmd_motions(int argc, char **argv)
             }
         } else if (!strcmp(a, "--machine") && i + 1 < argc) {
             machine_path = argv[++i];
+        } else if (!strcmp(a, "--initial-tool") && i + 1 < argc) {
+            char *end;
+            long t = strtol(argv[++i], &end, 10);
+            if (*end || t < 0 || t > 99999999) {
+                fprintf(stderr, "frepmill motions: --initial-tool '%s'; expected a tool number >= 0\n",
+                        argv[i]);
+                return 2;
+            }
+            initial_tool = (int)t;
         } else if (!strcmp(a, "--inch")) {
             start_inch = 1;
         } else if (!strcmp(a, "--block-delete")) {
@@ -186,6 +200,7 @@ int fm_cmd_motions(int argc, char **argv)
         memcpy(spec.reference_points, machine.reference_points, sizeof spec.reference_points);
         if (machine.rapid_rate > 0 && !(spec.rapid_rate > 0)) spec.rapid_rate = machine.rapid_rate;
     }
+    fm_job_spec_start_state(&spec, machine_path ? &machine : NULL, initial_tool);
     fm_gcode_options opt;
     fm_traj_options topt;
     fm_status st = fm_job_program_options(&spec, tools_path ? &table : NULL, &opt, &topt, &err);

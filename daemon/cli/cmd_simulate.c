@@ -38,7 +38,7 @@ static void usage(FILE *out)
             "                         [--color depth|tool|deviation|none]\n"
             "                         [--design PART [--tolerance MM]] [--stop-at LINE]\n"
             "                         [--dialect linuxcnc|fanuc] [--subroutine-path DIRS]\n"
-            "                         [--calculator-input]\n"
+            "                         [--calculator-input] [--initial-tool N]\n"
             "\n"
             "PROGRAM   G-code, or a parametric trajectory (.json)\n"
             "--job     the job as a job document (docs/api.md, POST /v1/jobs; model files\n"
@@ -73,9 +73,14 @@ static void usage(FILE *out)
             "--dialect the G-code's dialect (default linuxcnc; docs/gcode.md)\n"
             "--subroutine-path  ':'-separated folders of subroutine files (NAME.ngc, Fanuc O1234.nc)\n"
             "--calculator-input Fanuc: X5 is 5 mm, not 0.005 (DPI / Haas setting 162)\n"
+            "--initial-tool  the tool in the spindle before the first M6 (default: the\n"
+            "          machine's initial_tool, else none; a one-tool table's tool cuts)\n"
             "--sweep-evaluations  the swept volumes' search budget per point (default 20000);\n"
             "          a smaller one provokes the budget warning (for tests)\n"
 
+            "Warnings (feed motions into the stock with no tool in the spindle, the budget,\n"
+            "thin walls) are printed and in the report; they leave the exit status 0\n"
+            "(`frepmill check` is the gate: it exits 1 on findings).\n"
             "Exit status: 0 success, 2 bad input, 3 resource limit, 4 I/O error.\n",
             fm_output_formats());
 }
@@ -255,6 +260,7 @@ static const fm_job_flag SIMULATE_FLAGS[] = {
     {"--dialect", "options.dialect", FM_JOB_FLAG_TEXT},
     {"--subroutine-path", "options.subroutine_path", FM_JOB_FLAG_TEXT},
     {"--calculator-input", "options.calculator_input", FM_JOB_FLAG_SWITCH},
+    {"--initial-tool", "options.initial_tool", FM_JOB_FLAG_INTEGER},
     /* the one job flag that goes with --job too (a test's knob) */
     {"--sweep-evaluations", "options.sweep_evaluations", FM_JOB_FLAG_INTEGER},
     {NULL, NULL, 0}};
@@ -487,6 +493,18 @@ static int simulate(int argc, char **argv, job_file *jf)
                 "frepmill simulate: warning: %zu voxels may be under-cut by up to %.4f mm%s: the "
                 "swept volume's search ran out of its budget there\n",
                 result.voxels_uncertain, result.uncertain_max_mm, where);
+    }
+    if (result.no_tool_motions > 0) {
+        const char *name = spec.program_path ? spec.program_path
+                           : spec.program_name ? spec.program_name
+                                               : "program";
+        fprintf(stderr,
+                "frepmill simulate: warning: %s:%d: a feed motion with no tool in the spindle goes "
+                "into the stock (%ld such motions): nothing is cut there, where the machine would "
+                "drive its spindle's nose (T selects a tool, M6 loads it); give the tool in the "
+                "spindle at the start with --initial-tool N (the job's options.initial_tool, the "
+                "machine file's initial_tool) or load it with M6\n",
+                name, result.no_tool_line, result.no_tool_motions);
     }
     if (result.stopped_at_line)
         fprintf(stderr, "frepmill simulate: stopped after line %d\n", result.stopped_at_line);

@@ -19,7 +19,7 @@ static void usage(FILE *out)
 {
     fprintf(out,
             "usage: frepmill time PROGRAM [--machine FILE.json] [--dialect linuxcnc|fanuc]\n"
-            "                     [--tools TOOLS] [--blocks N] [--json]\n\n"
+            "                     [--tools TOOLS] [--blocks N] [--json] [--initial-tool N]\n\n"
             "Plan a G-code program (or a parametric trajectory, PROGRAM.json, whose\n"
             "segments keep their own timing) as the controller runs it and print its cycle time\n"
             "beside the feed-only time (each move's length over its feed): LinuxCNC's\n"
@@ -27,7 +27,9 @@ static void usage(FILE *out)
             "arcs at their normal-acceleration limit) with the machine file's\n"
             "\"dynamics\" (docs/plan.md). Without dynamics the time is feed-only and\n"
             "says so. Also per tool, and the N blocks (source lines) that take longest\n"
-            "(default 10). --json prints one object:\n"
+            "(default 10). The first move starts at the machine's \"start\" with the tool\n"
+            "it holds (--initial-tool, else its \"initial_tool\"; docs/simulate.md).\n"
+            "--json prints one object:\n"
             "  {\"cycle_time_s\":..,\"feed_only_s\":..,\"planned\":true,\"motions\":..,\n"
             "   \"segments\":..,\"blends\":..,\"stops\":..,\"tool_changes\":..,\n"
             "   \"tools\":[{\"tool\":1,\"time_s\":..,\"feed_only_s\":..}],\n"
@@ -121,7 +123,7 @@ static void print_json_string(const char *text)
 int fm_cmd_time(int argc, char **argv)
 {
     const char *tools_path = NULL, *machine_path = NULL;
-    int json = 0, nblocks = 10;
+    int json = 0, nblocks = 10, initial_tool = 0;
     /* the program as a job's (the runner's one dispatch: G-code or a
      * trajectory) */
     fm_job_spec spec;
@@ -138,6 +140,14 @@ int fm_cmd_time(int argc, char **argv)
             machine_path = argv[++i];
         } else if (!strcmp(a, "--json")) {
             json = 1;
+        } else if (!strcmp(a, "--initial-tool") && i + 1 < argc) {
+            char *end;
+            long t = strtol(argv[++i], &end, 10);
+            if (*end || t < 0 || t > 99999999) {
+                fprintf(stderr, "frepmill time: --initial-tool '%s'; expected a tool number >= 0\n", argv[i]);
+                return 2;
+            }
+            initial_tool = (int)t;
         } else if (!strcmp(a, "--blocks") && i + 1 < argc) {
             char *end;
             long n = strtol(argv[++i], &end, 10);
@@ -191,6 +201,8 @@ int fm_cmd_time(int argc, char **argv)
             return (int)err.code;
         }
     }
+    /* the first move from where the machine stands, with the tool it holds */
+    fm_job_spec_start_state(&spec, machine_path ? &machine : NULL, initial_tool);
     /* feed-only rapids at the rate the motions were timed with */
     if (spec.rapid_rate > 0) dyn.rapid_rate = spec.rapid_rate;
     timing tm = {0};

@@ -110,6 +110,17 @@ typedef struct fm_job_spec {
     /* The machine's rotary axes (docs/check.md "Machine file"); NULL: 3-axis.
      * The G-code front end turns A B C words into joint values with it. */
     const fm_machine *machine;
+    /* The machine's state at the start (docs/check.md "Machine file";
+     * fm_job_spec_start_state decides it for every entrance). has_start 1:
+     * the tool tip stands at start (machine mm) before the first block, for
+     * the interpreter and the check alike (the check's own start is set to
+     * it); 0: the interpreter's dialect default and the check's own start.
+     * initial_tool: the tool in the spindle before the first M6 (0: none;
+     * a motion with no tool cuts with the table's only tool when it has
+     * exactly one, and not at all otherwise). */
+    int has_start;
+    double start[3];
+    int initial_tool;
     /* The machine's dynamics (docs/plan.md; the machine file's "dynamics"):
      * the survey plans the program's cycle time as the controller runs it.
      * NULL or not given: the cycle time is the feed-only figure. */
@@ -275,6 +286,13 @@ typedef struct fm_job_result {
     /* How many times the program was interpreted (1: the survey's motions
      * were replayed for the cut and the blame). */
     int interpretations;
+    /* The no-tool warning: feed motions with no tool in the spindle (none
+     * given at the start, none loaded by M6, and a table of more than one
+     * tool) whose tool tip goes into the stock (fm_check_tip_in_stock):
+     * they cut nothing, where the machine would drive its spindle's nose.
+     * Their count (0: none) and the first one's source line. */
+    int no_tool_line;
+    long no_tool_motions;
 } fm_job_result;
 
 /* The motions of a job's program, kept (job_motions.c). */
@@ -329,6 +347,15 @@ struct fm_tooltable_options;
 fm_status fm_job_tools_from_program(const fm_job_spec *spec,
                                     const struct fm_tooltable_options *opt, fm_tool_table *out,
                                     fm_error *err);
+
+/* The machine's state at the start, decided once for every entrance (the
+ * job document, `frepmill motions`): the tool tip at the machine's "start"
+ * when it gives one, else at the dialect's power-on place (LinuxCNC the
+ * origin, Fanuc the first reference point: spec->dialect and
+ * spec->reference_points); the tool in the spindle: initial_tool when above
+ * 0 (--initial-tool, options.initial_tool), else the machine's
+ * "initial_tool", else none. machine may be NULL. */
+void fm_job_spec_start_state(fm_job_spec *spec, const fm_check_machine *machine, int initial_tool);
 
 /* Parse and create the stock of a spec string (also used by `frepmill
  * check`). */

@@ -30,7 +30,11 @@ fm_status job_check_setup(job_cutter *c, const job_survey *sv, fm_error *err)
                             "the check's clearances need a band of %d voxels of %g mm (at most "
                             "32): use a larger check voxel or smaller clearances",
                             band, voxel);
-    c->check = fm_check_new(&jc->options, err);
+    /* where the interpreter starts, the check starts (the one start) */
+    fm_check_options options = jc->options;
+    if (c->spec->has_start)
+        memcpy(options.machine.start, c->spec->start, sizeof options.machine.start);
+    c->check = fm_check_new(&options, err);
     if (!c->check) return err ? err->code : FM_ERR_INPUT;
     double lo[3], hi[3];
     if (box_of_spec(c->spec->stock_spec, lo, hi)) fm_check_set_initial_box(c->check, lo, hi);

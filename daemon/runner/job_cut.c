@@ -224,6 +224,23 @@ static fm_status check_skipped(job_cutter *c, const fm_motion *m)
     return st;
 }
 
+/* A feed motion with no tool in the spindle cuts nothing; where its tip
+ * goes into the stock (as cut so far: the pending batch first) the job
+ * warns (fm_job_result.no_tool_line), at the check's depth threshold. */
+static fm_status no_tool_feed(job_cutter *c, const fm_motion *m)
+{
+    fm_status st = job_flush_batch(c);
+    if (st != FM_OK || c->stopped) return st;
+    fm_check_options defaults;
+    fm_check_options_default(&defaults);
+    double tol = c->spec->check ? c->spec->check->options.tolerance_mm : defaults.tolerance_mm;
+    double u, depth;
+    if (!fm_check_tip_in_stock(m, c->stock, 0.5 * tol, &u, &depth)) return FM_OK;
+    if (!c->no_tool_motions) c->no_tool_line = m->line;
+    c->no_tool_motions++;
+    return FM_OK;
+}
+
 int job_cut_sink(void *user, const fm_motion *m)
 {
     job_cutter *c = user;
@@ -243,6 +260,10 @@ int job_cut_sink(void *user, const fm_motion *m)
     const fm_tool *tool = job_tool_for(c->tools, m->tool);
     if (m->kind == FM_MOTION_DWELL || !tool) {
         /* nothing cuts; the check still sees where the machine goes */
+        if (!tool && m->kind != FM_MOTION_DWELL && m->kind != FM_MOTION_RAPID) {
+            if ((c->status = no_tool_feed(c, m)) != FM_OK) return 1;
+            if (c->stopped) return 1;
+        }
         if (c->check && (c->status = check_motion(c, m, tool)) != FM_OK) return 1;
         return 0;
     }

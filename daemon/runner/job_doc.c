@@ -550,7 +550,7 @@ static fm_status parse_options(fm_job_doc *doc, json_t *options, const fm_job_do
                                        "check",   "color",   "dialect",
                                        "subroutine_path", "calculator_input",
                                        "tolerance", "stop_at", "sweep_evaluations",
-                                       "tools_from_program", NULL};
+                                       "tools_from_program", "initial_tool", NULL};
     st = only_keys(options, keys, "options", err);
     if (st != FM_OK) return st;
     json_t *v;
@@ -595,6 +595,12 @@ static fm_status parse_options(fm_job_doc *doc, json_t *options, const fm_job_do
     if ((v = json_object_get(options, "stop_at")) &&
         (st = integer_in(v, "options.stop_at", 1, 1e9, &spec->stop_at_line, err)))
         return st;
+    /* the tool in the spindle before the first M6 (frepmill simulate and
+     * check --initial-tool; 0: none): in the table, checked once the
+     * tools are known */
+    if ((v = json_object_get(options, "initial_tool")) &&
+        (st = integer_in(v, "options.initial_tool", 0, 99999999, &spec->initial_tool, err)))
+        return st;
     if ((v = json_object_get(options, "sweep_evaluations"))) {
         /* the swept volumes' search budget per point (frepmill simulate
          * --sweep-evaluations): a small one shows the budget warning */
@@ -603,6 +609,25 @@ static fm_status parse_options(fm_job_doc *doc, json_t *options, const fm_job_do
         spec->sweep_evaluations = (size_t)n;
     }
     return parse_check(doc, json_object_get(options, "check"), rules, err);
+}
+
+/* The initial tool (options.initial_tool, else the machine's) is one of
+ * the table's: a refusal names the key and the table's numbers. */
+static fm_status initial_tool_in_table(const fm_job_doc *doc, int from_options, fm_error *err)
+{
+    int n = doc->spec.initial_tool;
+    if (n <= 0 || fm_tool_table_find(&doc->tools, n)) return FM_OK;
+    char list[160] = "";
+    for (size_t i = 0; i < doc->tools.count; i++) {
+        size_t used = strlen(list);
+        if (used > sizeof list - 16) {
+            snprintf(list + used, sizeof list - used, ", ...");
+            break;
+        }
+        snprintf(list + used, sizeof list - used, "%s%d", i ? ", " : "", doc->tools.tools[i].number);
+    }
+    return refuse(err, "bad_value", "%s %d: tool %d is not in the tool table (its tools: %s)",
+                  from_options ? "options.initial_tool" : "machine.initial_tool", n, n, list);
 }
 
 /* {"file": PATH, "name": TEXT}: a fixture file (the CLI's --fixture). */
@@ -733,11 +758,20 @@ fm_status fm_job_doc_from_json(json_t *job, const fm_job_doc_rules *rules_in, fm
         if (doc->dynamics.given) doc->spec.dynamics = &doc->dynamics;
     }
 
+    /* The machine's state at the start: one decision for the interpreter
+     * and the check (docs/check.md "Machine file"). */
+    fm_job_spec_start_state(&doc->spec, doc->has_machine ? &doc->check.options.machine : NULL,
+                            doc->spec.initial_tool);
+    memcpy(doc->check.options.machine.start, doc->spec.start, sizeof doc->spec.start);
+
     /* An explicit table always wins over the program's comments. */
     if (tools && doc->tools_from_program)
         doc_warning(doc, "options.tools_from_program: a tool table is given, it wins; the "
                          "program's comments are not read");
     if (!tools && (st = tools_from_program(doc, err))) goto fail;
+
+    if ((st = initial_tool_in_table(doc, json_object_get(options, "initial_tool") != NULL, err)))
+        goto fail;
 
     /* The run spec's pointers into the document. */
     doc->spec.tools = &doc->tools;

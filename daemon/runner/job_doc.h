@@ -24,7 +24,8 @@
  *     "fixtures": [{"hyperfun": TEXT | "stl_base64": BASE64 | "file": FILE, "name": TEXT}, ...]
  *                                                    (at most 64; files .hf or .stl: CLI only)
  *     "machine": {"limits": {"x": [LO, HI], ...}, "rapid_rate": MM_PER_MIN,
- *                 "start": [X, Y, Z], "reference_points": [[X, Y, Z], ...]}
+ *                 "start": [X, Y, Z], "initial_tool": N,
+ *                 "reference_points": [[X, Y, Z], ...]}
  *                | "FILE.json"                       (the machine file: CLI only)
  *                                                    (docs/check.md's machine file)
  *     "design":  {"hyperfun": TEXT} | {"stl_base64": BASE64}         (the intended part:
@@ -41,6 +42,10 @@
  *       "tolerance": MM                              (design: deviations up to it count as on
  *                                                     the design; 0..100, default half a voxel)
  *       "stop_at": LINE                              (stop after this source line's motions)
+ *       "initial_tool": N                            (the tool in the spindle before the first
+ *                                                     M6; 0..99999999, a tool of the table;
+ *                                                     default the machine's initial_tool, else
+ *                                                     none: a one-tool table's tool cuts)
  *       "check": false | {"clearance", "rapid_clearance", "tolerance", "max_ramp", "voxel",
  *                         "machine": {...}  (the same as the top-level "machine")}
  *     }
@@ -52,6 +57,12 @@
  * program and machine give one set of findings.
  *
  * The machine's reference_points are the run's (Fanuc G28/G30).
+ *
+ * The machine's state at the start (fm_job_spec_start_state): the tool tip
+ * stands at the machine's start, else at the dialect's power-on place
+ * (LinuxCNC the origin, Fanuc the first reference point), for the
+ * interpreter and the check alike; the spindle holds options.initial_tool,
+ * else the machine's initial_tool, else nothing.
  *
  * "design", "options.tolerance" and "options.stop_at" are `frepmill simulate
  * --design/--tolerance/--stop-at` (fm_job_spec.design_path, tolerance_mm,

@@ -137,6 +137,9 @@ typedef struct job_cutter {
     int check_twin;
     size_t findings_seen;
     double check_time;
+    /* the no-tool warning (fm_job_result.no_tool_line) */
+    int no_tool_line;
+    long no_tool_motions;
 } job_cutter;
 
 /* The motion sink of the cutting pass (user: the cutter) and its G38

@@ -1,6 +1,7 @@
 /* job_program.c: the one program dispatch: a job's program (G-code of
  * either dialect, or a parametric trajectory) interpreted into motions
- * with the spec's options; and the stop-at rule. */
+ * with the spec's options; the machine's state at the start; and the
+ * stop-at rule. */
 #include <ctype.h>
 #include <string.h>
 
@@ -39,7 +40,24 @@ fm_status fm_job_program_options(const fm_job_spec *spec, const fm_tool_table *t
     memcpy(gcode->reference_points, spec->reference_points, sizeof gcode->reference_points);
     gcode->calculator_input = spec->calculator_input;
     gcode->machine = spec->machine;
+    gcode->has_start = spec->has_start;
+    memcpy(gcode->start, spec->start, sizeof gcode->start);
+    gcode->initial_tool = spec->initial_tool;
     return FM_OK;
+}
+
+void fm_job_spec_start_state(fm_job_spec *spec, const fm_check_machine *machine, int initial_tool)
+{
+    fm_gcode_dialect dialect = FM_GCODE_LINUXCNC;
+    if (spec->dialect) fm_gcode_dialect_parse(spec->dialect, &dialect);
+    spec->has_start = 1;
+    if (machine && machine->has_start)
+        memcpy(spec->start, machine->start, sizeof spec->start);
+    else if (dialect == FM_GCODE_FANUC) /* after power-on the machine returns to it */
+        memcpy(spec->start, spec->reference_points[0], sizeof spec->start);
+    else
+        memset(spec->start, 0, sizeof spec->start);
+    spec->initial_tool = initial_tool > 0 ? initial_tool : machine ? machine->initial_tool : 0;
 }
 
 fm_status fm_job_program_run(const fm_job_spec *spec, const fm_gcode_options *gcode,

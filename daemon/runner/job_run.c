@@ -154,6 +154,8 @@ static void fill_result(const job_cutter *c, const job_survey *sv, fm_job_result
     result->uncertain_max_mm = c->stats.uncertain_max_mm;
     result->uncertain_line = c->progress.uncertain_line;
     result->stopped_at_line = c->stopped_at_line ? c->spec->stop_at_line : 0;
+    result->no_tool_line = c->no_tool_line;
+    result->no_tool_motions = c->no_tool_motions;
     result->design_wall_s =
         result->design_build_wall_s + result->design_compare_wall_s + result->design_blame_wall_s;
     result->design_cpu_s =

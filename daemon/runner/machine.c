@@ -1,5 +1,6 @@
 /* machine.c: the machine file reader (docs/check.md "Machine file"): travel
- * limits, rapid rate and start position for the check, and the kinematic
+ * limits, rapid rate, the state at the start (where the tool tip is, which
+ * tool the spindle holds), and the kinematic
  * chain (rotary axes, TCP) that the G-code front end and the sweep use.
  * Every member is optional; a wrong one is an input error naming the file
  * and the member. */
@@ -308,6 +309,18 @@ fm_status fm_check_machine_from_json(json_t *root, const char *path, fm_check_ma
                 st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0, "start: expected [x, y, z] in mm");
                 goto done;
             }
+            m->has_start = 1;
+        } else if (!strcmp(key, "initial_tool")) {
+            /* the tool in the spindle before the first M6; the job checks
+             * it against its tool table */
+            double t;
+            if (!json_is_integer(val) || !number(val, &t) || t < 0 || t > 99999999) {
+                st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                 "initial_tool: expected the number of the tool in the spindle at "
+                                 "the start (0: none)");
+                goto done;
+            }
+            m->initial_tool = (int)t;
         } else if (!strcmp(key, "reference_points")) {
             size_t n = json_is_array(val) ? json_array_size(val) : 0;
             int ok = n >= 1 && n <= 4;
@@ -339,8 +352,9 @@ fm_status fm_check_machine_from_json(json_t *root, const char *path, fm_check_ma
             /* read after the loop: the chain decides which link is the workpiece's */
         } else if (strcmp(key, "units") && strcmp(key, "name") && strcmp(key, "comment")) {
             st = fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
-                             "unknown member \"%s\" (limits, rapid_rate, start, reference_points, tcp, rotary, "
-                             "head, components, dynamics, units, name, comment)",
+                             "unknown member \"%s\" (limits, rapid_rate, start, initial_tool, "
+                             "reference_points, tcp, rotary, head, components, dynamics, units, name, "
+                             "comment)",
                              key);
             goto done;
         }

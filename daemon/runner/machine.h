@@ -11,6 +11,7 @@
 #include "check/check.h"
 
 /* {"limits": {"x": [lo, hi], ...}, "rapid_rate": mm/min, "start": [x, y, z],
+ * "initial_tool": N (the tool in the spindle before the first M6),
  * "reference_points": [[x, y, z], ...] (Fanuc G28/G30), "tcp": bool, "rotary": [{"axis": "a", "around": [x, y, z], "through":
  * [x, y, z], "carries": "table" | "head", "pivot_length": mm, "limits":
  * [lo, hi] degrees, "wrapped": bool}, ...]}; every member is optional.

@@ -123,5 +123,18 @@ json_t *fm_job_report_json(const fm_job_result *r)
     if (out && r->stopped_at_line)
         json_object_set_new(out, "stopped_at_line", json_integer(r->stopped_at_line));
     if (out && r->has_deviation) json_object_set_new(out, "design", design_json(r));
+    /* the no-tool warning (docs/simulate.md): always there, null when no
+     * feed motion went into the stock with an empty spindle */
+    if (out)
+        json_object_set_new(
+            out, "no_tool",
+            r->no_tool_motions
+                ? json_pack("{s:i, s:I, s:s}", "line", r->no_tool_line, "motions",
+                            (json_int_t)r->no_tool_motions, "message",
+                            "feed motions with no tool in the spindle go into the stock and cut "
+                            "nothing; give the tool in the spindle at the start "
+                            "(--initial-tool N, options.initial_tool or the machine's "
+                            "initial_tool) or load it with M6")
+                : json_null());
     return out;
 }

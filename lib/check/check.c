@@ -1,7 +1,7 @@
 /* check.c: the collision and safety relations of check.h, motion by
  * motion: which part of the tool is related to what (relate.c does one
  * relation), the flutes not yet cut from the grid, travel limits, the
- * start position, and the findings, grouped over consecutive motions with
+ * start position, feeds with no tool, and the findings, grouped over consecutive motions with
  * the same kind and part. */
 #include "check/check.h"
 #include "check/check_internal.h"
@@ -40,7 +40,7 @@ const char *fm_check_kind_name(fm_check_kind kind)
     static const char *const names[FM_CHECK_KIND_COUNT] = {
         "rapid_into_stock",  "shank_contact",   "holder_contact", "fixture_contact",
         "non_center_plunge", "spindle_off_cut", "travel_limit",   "start_in_stock",
-        "uncertain",         "machine_contact"};
+        "uncertain",         "machine_contact", "no_tool"};
     return (unsigned)kind < FM_CHECK_KIND_COUNT ? names[kind] : "unknown";
 }
 
@@ -234,7 +234,8 @@ static fm_status record(fm_check *c, fm_check_kind kind, fm_check_part part, int
     fm_check_finding *f = &c->findings[c->finding_count];
     *f = *hit;
     /* a machine component, or the machine's head, meeting anything */
-    f->kind = (kind == FM_CHECK_FIXTURE_CONTACT && c->fixtures[fixture].machine) || part == FM_CHECK_PART_HEAD
+    f->kind = (kind == FM_CHECK_FIXTURE_CONTACT && c->fixtures[fixture].machine) ||
+                      (part == FM_CHECK_PART_HEAD && kind != FM_CHECK_NO_TOOL)
                   ? FM_CHECK_MACHINE_CONTACT
                   : kind;
     f->part = part;
@@ -440,6 +441,76 @@ static fm_status check_start(fm_check *c, const fm_motion *first, const fm_tool 
     return FM_OK;
 }
 
+/* The stock's value at p (positive inside): the grid less the flutes not
+ * yet cut when c is given. */
+static double stock_value(const fm_check *c, const fm_stock *stock, const double p[3])
+{
+    double g = fm_stock_sample(stock, p);
+    for (size_t j = 0; c && g > 0 && j < c->pending_count; j++)
+        g = fmin(g, -fm_sweep_eval(c->pending[j].sweep, c->pending[j].worker, p));
+    return g;
+}
+
+#define TIP_MAX_SAMPLES (1L << 20)
+
+static int tip_in_stock(const fm_check *c, const fm_motion *m, const fm_stock *stock,
+                        double min_depth, double *u_first, double *depth)
+{
+    /* the tip's path length, from a polyline fine enough for arcs and
+     * rotary motions, gives the samples' count */
+    int pieces = fm_motion_pieces(m, 0.05, 64, 4096);
+    double len = 0, prev[3], tip[3], axis[3];
+    fm_motion_pose_at(m, 0, prev, axis);
+    for (int i = 1; i <= pieces; i++) {
+        fm_motion_pose_at(m, (double)i / pieces, tip, axis);
+        len += sqrt((tip[0] - prev[0]) * (tip[0] - prev[0]) + (tip[1] - prev[1]) * (tip[1] - prev[1]) +
+                    (tip[2] - prev[2]) * (tip[2] - prev[2]));
+        memcpy(prev, tip, sizeof prev);
+    }
+    double step = 0.5 * fm_stock_voxel_size(stock);
+    double want = step > 0 && isfinite(len) ? ceil(len / step) : (double)pieces;
+    long n = want < pieces ? pieces : want > TIP_MAX_SAMPLES ? TIP_MAX_SAMPLES : (long)want;
+    int found = 0;
+    double deepest = -INFINITY;
+    for (long i = 0; i <= n; i++) {
+        double u = (double)i / (double)n;
+        fm_motion_pose_at(m, u, tip, axis);
+        double v = stock_value(c, stock, tip);
+        if (v > min_depth && !found) {
+            found = 1;
+            *u_first = u;
+        }
+        if (v > deepest) deepest = v;
+    }
+    *depth = deepest;
+    return found;
+}
+
+int fm_check_tip_in_stock(const fm_motion *m, const fm_stock *stock, double min_depth, double *u,
+                          double *depth)
+{
+    return tip_in_stock(NULL, m, stock, min_depth, u, depth);
+}
+
+/* A feed motion with no tool in the spindle: the spindle's nose goes where
+ * the tip is programmed; into the stock it is a no_tool finding (its
+ * penetration the tip's depth, within the grid's band). */
+static fm_status check_no_tool(fm_check *c, const fm_motion *m, const fm_stock *stock, fm_error *err)
+{
+    double u = 0, depth = 0, axis[3];
+    if (!stock || !tip_in_stock(c, m, stock, 0.5 * c->opt.tolerance_mm, &u, &depth)) return FM_OK;
+    fm_check_finding f;
+    memset(&f, 0, sizeof f);
+    f.penetration_mm = depth;
+    f.severity = depth > c->opt.tolerance_mm ? FM_CHECK_ERROR : FM_CHECK_WARNING;
+    f.line = m->line;
+    f.block = m->block;
+    f.time_s = m->t0 + u * (m->t1 - m->t0);
+    fm_motion_pose_at(m, u, f.position, axis);
+    memcpy(f.contact, f.position, sizeof f.contact);
+    return record(c, FM_CHECK_NO_TOOL, FM_CHECK_PART_HEAD, -1, &f, err);
+}
+
 /* A travel_limit finding of motion m at point p, overrun by `over` (mm or
  * degrees). */
 static fm_status record_travel_limit(fm_check *c, const fm_motion *m, const double p[3],
@@ -593,8 +664,10 @@ fm_status fm_check_motion(fm_check *c, const fm_motion *m, const fm_tool *tool,
     st = check_travel(c, m, err);
     if (st != FM_OK) return st;
     if (!tool || m->kind == FM_MOTION_DWELL) {
+        if (!tool && m->kind != FM_MOTION_DWELL && m->kind != FM_MOTION_RAPID)
+            st = check_no_tool(c, m, stock, err);
         close_unhit(c);
-        return FM_OK;
+        return st;
     }
 
     int rapid = m->kind == FM_MOTION_RAPID;

@@ -2,8 +2,9 @@
  * stock, fixtures and the machine (issues 8 and 14): rapids into the stock,
  * shank and holder contact, fixture contact, plunges with a tool that cannot
  * cut at its centre, cutting with the spindle stopped, travel limits, a
- * start position inside the stock, and the places where a search could not
- * decide (uncertain).
+ * start position inside the stock, feeds into the stock with no tool in
+ * the spindle (issue 34), and the places where a search could not decide
+ * (uncertain).
  *
  * The check runs in the same pass as the cut (ARCHITECTURE.md, "Checking in the
  * same pass"): the caller feeds every motion in program order with the
@@ -40,6 +41,8 @@ typedef enum fm_check_kind {
     FM_CHECK_UNCERTAIN,            /* a search stopped at its budget where it mattered */
     FM_CHECK_MACHINE_CONTACT,      /* any part meets a machine component (a table, a rotary table),
                                       or the head meets anything */
+    FM_CHECK_NO_TOOL,              /* a feed motion with no tool in the spindle drives the tool tip's
+                                      programmed point (the spindle's nose) into the stock */
     FM_CHECK_KIND_COUNT
 } fm_check_kind;
 
@@ -54,7 +57,8 @@ typedef enum fm_check_part {
 } fm_check_part;
 
 /* A machine: travel limits of the programmed point in machine coordinates,
- * and where the tool tip is before the first motion. */
+ * and where the tool tip is before the first motion (and which tool the
+ * spindle holds then, for the caller's job spec). */
 #define FM_CHECK_MAX_COMPONENTS 8
 #define FM_CHECK_COMPONENT_PATH 512
 
@@ -62,6 +66,10 @@ typedef struct fm_check_machine {
     int has_limit[3];        /* 0: that axis is not limited */
     double limit_lo[3], limit_hi[3];
     double start[3];         /* default: the machine origin */
+    int has_start;           /* start was given (the machine file's "start"): the caller starts
+                                its interpreter there too */
+    int initial_tool;        /* the tool in the spindle before the first M6 (the machine file's
+                                "initial_tool"), for the caller's job spec; 0: not given */
     double rapid_rate;       /* mm/min; 0: not given (for the caller's job spec) */
     /* Fanuc G28/G30's 1st-4th reference points (mm; not given: the origin),
      * for the caller's job spec; the check itself does not use them. */
@@ -170,7 +178,8 @@ fm_status fm_check_add_component(fm_check *check, int i, double voxel_mm, fm_err
  * (daemon/runner/probe.c) stops at fixtures with it. */
 double fm_check_fixture_distance(const fm_check *check, const double p[3]);
 
-/* Check one motion (tool NULL: nothing in the spindle). stock is the grid
+/* Check one motion (tool NULL: nothing in the spindle; a feed motion then
+ * is related as FM_CHECK_NO_TOOL). stock is the grid
  * with every motion before this one cut, except those fed since the last
  * fm_check_stock_cut (at most FM_CHECK_MAX_PENDING). The motion's flutes
  * then count as not yet cut until the next fm_check_stock_cut. A PARAM
@@ -178,6 +187,16 @@ double fm_check_fixture_distance(const fm_check *check, const double p[3]);
 #define FM_CHECK_MAX_PENDING 1024
 fm_status fm_check_motion(fm_check *check, const fm_motion *motion, const fm_tool *tool,
                           const fm_stock *stock, fm_error *err);
+/* Where the tool tip's programmed point first goes deeper than min_depth
+ * into stock (its distance, positive inside, trilinear, clamped to the
+ * band) along motion m (fm_motion_pose_at: every kind, rotary axes
+ * included), sampled at least every half voxel: 1 with *u (0..1) the first
+ * such sample and *depth the deepest sample, else 0. With no tool in the
+ * spindle the spindle's nose goes there (FM_CHECK_NO_TOOL; the job runner's
+ * warning for `frepmill simulate`). */
+int fm_check_tip_in_stock(const fm_motion *m, const fm_stock *stock, double min_depth, double *u,
+                          double *depth);
+
 /* The motions fed so far are now cut from the stock grid. */
 void fm_check_stock_cut(fm_check *check);
 /* Close the findings still open (call after the last motion). */

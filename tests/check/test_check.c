@@ -859,6 +859,68 @@ static int wanted(int argc, char **argv, const char *name)
     return 0;
 }
 
+/* No tool in the spindle (issue 34): a table of two tools and no M6, so no
+ * tool cuts. Line 5 plunges from Z5 to Z-2 at (10, 20), line 6 goes on at
+ * Z-2, line 7 climbs out: one no_tool error over lines 5-7, 3 motions,
+ * whose tip enters the top at (10, 20, 0) (the first sample inside lies
+ * within the samples' spacing, a quarter of the 0.5 mm voxel, below it),
+ * read as the band's depth (1.5 mm: the tip goes 2 mm deep, beyond the
+ * band of 3 voxels); the job's no-tool warning: line 5, 3 motions. Line 8
+ * feeds in the air: nothing. With tool 1 in the spindle at the start (the
+ * spec's initial_tool) the same program is clean. */
+static void test_no_tool(void)
+{
+    fm_tool_spec two[2] = {flat_tool(20, 40, 1), flat_tool(20, 40, 1)};
+    two[1].number = 2;
+    fm_tool_table table = {2, two};
+    const char *prog =
+        "G21 G90\nM3 S1000\nG0 Z5\nG0 X10 Y20\nG1 Z-2 F300\nG1 X30\nG1 Z5\nG1 X40\n";
+    fm_job_check check;
+    fm_job_check_default(&check);
+    for (int with_tool = 0; with_tool < 2; with_tool++) {
+        fm_job_spec spec;
+        fm_job_spec_default(&spec);
+        spec.program_text = prog;
+        spec.program_length = strlen(prog);
+        spec.program_name = "no_tool.ngc";
+        spec.stock_spec = "box:0,0,-20,50,50,0";
+        spec.tools = &table;
+        spec.stock.voxel_mm = 0.5;
+        spec.stock.band_voxels = fm_check_band_voxels(&check.options, 0.5);
+        spec.check = &check;
+        spec.initial_tool = with_tool;
+        fm_job_result res;
+        fm_error err;
+        fm_status st = fm_job_run(&spec, NULL, &res, &err);
+        CHECK(st == FM_OK);
+        if (st != FM_OK) continue;
+        dump(res.check);
+        if (with_tool) {
+            CHECK(fm_check_count(res.check) == 0);
+            CHECK(res.no_tool_motions == 0);
+            CHECK(res.removed_volume_mm3 > 0);
+        } else {
+            CHECK(fm_check_count(res.check) == 1);
+            const fm_check_finding *f = fm_check_get(res.check, 0);
+            if (f) {
+                CHECK(f->kind == FM_CHECK_NO_TOOL);
+                CHECK(!strcmp(fm_check_kind_name(f->kind), "no_tool"));
+                CHECK(f->severity == FM_CHECK_ERROR);
+                CHECK(f->part == FM_CHECK_PART_HEAD);
+                CHECK(f->line == 5 && f->last_line == 7 && f->motions == 3);
+                CHECK_NEAR(f->position[0], 10, 1e-9);
+                CHECK_NEAR(f->position[1], 20, 1e-9);
+                CHECK(f->position[2] <= 0 && f->position[2] >= -0.25);
+                CHECK_NEAR(f->penetration_mm, 1.5, 1e-6);
+            }
+            CHECK(res.no_tool_line == 5 && res.no_tool_motions == 3);
+            CHECK(res.removed_volume_mm3 == 0);
+        }
+        fm_stock_free(res.stock);
+        fm_check_free(res.check);
+    }
+}
+
 int main(int argc, char **argv)
 {
     if (wanted(argc, argv, "rapid_through")) test_rapid_through();
@@ -877,6 +939,7 @@ int main(int argc, char **argv)
     if (wanted(argc, argv, "machine_head")) test_machine_head();
     if (wanted(argc, argv, "uncertain")) test_uncertain();
     if (wanted(argc, argv, "probe_fixture")) test_probe_fixture();
+    if (wanted(argc, argv, "no_tool")) test_no_tool();
     fprintf(stderr, "%d checks, %d failures\n", fm_test_checks, fm_test_failures);
     return fm_test_failures != 0;
 }

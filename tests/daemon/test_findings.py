@@ -69,12 +69,13 @@ def main():
         check(("travel_limit", 4) in kinds and ("rapid_into_stock", 6) in kinds,
               "frepmill check finds the travel limit at line 4 and the rapid into the stock at "
               "line 6 (%s)" % kinds)
-        # Line 6 starts at (-10, 25, -5) after rapids from the program's
-        # origin: Z10 (10 mm), X-10 Y25 (sqrt(10^2 + 25^2)), Z-5 (15 mm);
-        # the 6 mm tool's side meets the block (x = 0) after 10 - 3 mm more.
-        # At 1200 mm/min (the default 5000 would give 0.2385 s less than a
-        # quarter of it):
-        path = 10 + math.hypot(10, 25) + 15 + (10 - 3)
+        # Line 6 starts at (-10, 25, -5) after rapids from the machine's
+        # start (0, 0, 30), where the interpreter starts too (issue 34; it
+        # used to time the first rapid from the origin): Z10 (20 mm), X-10
+        # Y25 (sqrt(10^2 + 25^2)), Z-5 (15 mm); the 6 mm tool's side meets
+        # the block (x = 0) after 10 - 3 mm more. At 1200 mm/min (the default
+        # 5000 would give less than a quarter of it):
+        path = 20 + math.hypot(10, 25) + 15 + (10 - 3)
         expect = path / RAPID * 60.0
         rapid = [f for f in ref if f["kind"] == "rapid_into_stock"][0]
         check(abs(rapid["time_s"] - expect) <= 0.5 / RAPID * 60.0,
@@ -90,8 +91,9 @@ def main():
             sim = json.load(f)
         check(same(sim["findings"], ref, "simulate"),
               "frepmill simulate --check --machine gives frepmill check's findings")
-        # All rapids: 10 + sqrt(10^2 + 25^2) + 15 + 70 + 15 mm.
-        total = (10 + math.hypot(10, 25) + 15 + 70 + 15) / RAPID * 60.0
+        # All rapids, from the machine's start: 20 + sqrt(10^2 + 25^2) + 15 +
+        # 70 + 15 mm.
+        total = (20 + math.hypot(10, 25) + 15 + 70 + 15) / RAPID * 60.0
         check(abs(sim["program_time_s"] - total) < 1e-6,
               "the simulation is timed at the machine's rapid rate too (%.4f s, by hand %.4f s)" %
               (sim["program_time_s"], total))

@@ -709,6 +709,69 @@ static void test_tools_from_program(void)
     fm_job_doc_free(doc);
 }
 
+/* The machine's state at the start (issue 34): options.initial_tool, else
+ * the machine's initial_tool, else none; a tool the table lacks is
+ * bad_value naming the key. The start: the machine's, else the dialect's
+ * power-on place (LinuxCNC the origin, Fanuc the first reference point),
+ * the check's start the same. */
+static void test_start_state(void)
+{
+    static const char *two = "{\"units\": \"mm\", \"tools\": [{\"number\": 1, \"shape\": "
+                             "\"flat\", \"diameter\": 6, \"flute_length\": 20, \"length\": 40}, "
+                             "{\"number\": 4, \"shape\": \"ball\", \"diameter\": 4, "
+                             "\"flute_length\": 20, \"length\": 40}]}";
+    const char *head = "{\"stock\": \"box:0,0,0,1,1,1\", \"tools\": %s, \"program\": {\"gcode\": \"G0\"}";
+    char fmt[512], text[1024];
+    fm_error err;
+    struct {
+        const char *tail;
+        int tool, has_start;
+        double start[3];
+    } ok[] = {
+        {"}", 0, 1, {0, 0, 0}},
+        {", \"options\": {\"initial_tool\": 4}}", 4, 1, {0, 0, 0}},
+        {", \"machine\": {\"initial_tool\": 1, \"start\": [1, 2, 30]}}", 1, 1, {1, 2, 30}},
+        {", \"machine\": {\"initial_tool\": 1}, \"options\": {\"initial_tool\": 4}}", 4, 1, {0, 0, 0}},
+        {", \"machine\": {\"reference_points\": [[5, 6, 7]]}, \"options\": {\"dialect\": \"fanuc\"}}",
+         0, 1, {5, 6, 7}},
+        {", \"machine\": {\"reference_points\": [[5, 6, 7]], \"start\": [0, 0, 9]}, "
+         "\"options\": {\"dialect\": \"fanuc\"}}",
+         0, 1, {0, 0, 9}},
+    };
+    for (size_t i = 0; i < sizeof ok / sizeof ok[0]; i++) {
+        snprintf(fmt, sizeof fmt, "%s%s", head, ok[i].tail);
+        snprintf(text, sizeof text, fmt, two);
+        fm_job_doc *doc = parse(text, &err);
+        CHECK(doc != NULL);
+        if (!doc) {
+            fprintf(stderr, "  %s: %s\n", text, err.message);
+            continue;
+        }
+        CHECK(doc->spec.initial_tool == ok[i].tool);
+        CHECK(doc->spec.has_start == ok[i].has_start);
+        for (int k = 0; k < 3; k++) {
+            CHECK_NEAR(doc->spec.start[k], ok[i].start[k], 0);
+            CHECK_NEAR(doc->check.options.machine.start[k], ok[i].start[k], 0);
+        }
+        fm_job_doc_free(doc);
+    }
+    snprintf(fmt, sizeof fmt, "%s, \"options\": {\"initial_tool\": 2}}", head);
+    snprintf(text, sizeof text, fmt, two);
+    expect_error(text, 400, "bad_value");
+    fm_job_doc *doc = parse(text, &err);
+    CHECK_STR_CONTAINS(err.message, "options.initial_tool 2: tool 2 is not in the tool table (its tools: 1, 4)");
+    fm_job_doc_free(doc);
+    snprintf(fmt, sizeof fmt, "%s, \"machine\": {\"initial_tool\": 3}}", head);
+    snprintf(text, sizeof text, fmt, two);
+    expect_error(text, 400, "bad_value");
+    snprintf(fmt, sizeof fmt, "%s, \"options\": {\"initial_tool\": -1}}", head);
+    snprintf(text, sizeof text, fmt, two);
+    expect_error(text, 400, "bad_value");
+    snprintf(fmt, sizeof fmt, "%s, \"options\": {\"initial_tool\": 1.5}}", head);
+    snprintf(text, sizeof text, fmt, two);
+    expect_error(text, 400, "bad_type");
+}
+
 int main(void)
 {
     test_job_ok();
@@ -723,5 +786,6 @@ int main(void)
     test_materialize();
     test_file_forms();
     test_tools_from_program();
+    test_start_state();
     return test_summary("job_doc");
 }

@@ -172,6 +172,59 @@ static void test_tool_tip(void)
     CHECK_NEAR(got[0].tip_offset[2], 0, 0);
 }
 
+/* The state at the start: the tip at start (5, 6, 50) with tool 1 (length
+ * 10) in the spindle, so the spindle's point at Z60; T2 alone only selects,
+ * M6 loads it (tip offset 0 from then on). In both dialects the start wins
+ * over the power-on place (Fanuc's first reference point). */
+static void test_start_state(void)
+{
+    fm_tool_spec tools[2];
+    memset(tools, 0, sizeof tools);
+    tools[0].number = 1;
+    tools[0].length_offset = 10;
+    tools[1].number = 2;
+    fm_tool_table table = {2, tools};
+    fm_gcode_options o;
+    fm_gcode_options_default(&o);
+    o.tools = &table;
+    o.initial_tool = 1;
+    o.has_start = 1;
+    o.start[0] = 5;
+    o.start[1] = 6;
+    o.start[2] = 50;
+    fm_error err;
+    const char *prog = "T2\nG0 X10.\nG1 Z-1. F100.\nM6\nG0 Z60.\nG91 G0 X1.\n";
+    for (int d = 0; d < 2; d++) {
+        o.dialect = d ? FM_GCODE_FANUC : FM_GCODE_LINUXCNC;
+        o.reference_points[0][0] = 100; /* Fanuc's power-on place, which the start overrides */
+        CHECK(run_opt(prog, &o, &err) == FM_OK);
+        CHECK(ngot == 4);
+        if (ngot != 4) continue;
+        CHECK(got[0].tool == 1 && got[1].tool == 1 && got[2].tool == 2 && got[3].tool == 2);
+        CHECK_NEAR(got[0].start[0], 5, 1e-12);
+        CHECK_NEAR(got[0].start[1], 6, 1e-12);
+        CHECK_NEAR(got[0].start[2], 60, 1e-12);
+        CHECK_NEAR(got[0].start[2] + got[0].tip_offset[2], 50, 1e-12);
+        CHECK_NEAR(got[0].end[0], 10, 1e-12);
+        CHECK_NEAR(got[0].end[1], 6, 1e-12); /* an axis left out keeps the start's value */
+        CHECK_NEAR(got[0].end[2], 60, 1e-12);
+        CHECK_NEAR(got[1].end[2] + got[1].tip_offset[2], -11, 1e-12);
+        CHECK_NEAR(got[2].tip_offset[2], 0, 1e-12);
+        CHECK_NEAR(got[3].end[0], 11, 1e-12);
+    }
+    o.dialect = FM_GCODE_LINUXCNC;
+    /* no start: the origin; no tool given: none (tool 0) */
+    fm_gcode_options none = o;
+    none.has_start = 0;
+    none.initial_tool = 0;
+    CHECK(run_opt("T1\nG0 X1\n", &none, &err) == FM_OK);
+    CHECK(ngot == 1 && got[0].tool == 0);
+    CHECK_NEAR(got[0].start[2], 0, 0);
+    o.initial_tool = 7;
+    CHECK(run_opt("G0 X1\n", &o, &err) == FM_ERR_INPUT);
+    CHECK_STR_CONTAINS(err.message, "the initial tool 7 is not in the tool table");
+}
+
 static void test_skip_and_stop(void)
 {
     fm_gcode_options o;
@@ -410,6 +463,7 @@ int main(void)
     test_times();
     test_units_offsets();
     test_tool_tip();
+    test_start_state();
     test_skip_and_stop();
     test_words();
     test_errors();

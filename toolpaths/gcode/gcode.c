@@ -63,6 +63,7 @@ static fm_status run_text(const char *text, size_t len, const char *name, int is
     fm_gcode_dialect d = g->opt.dialect;
     g->front = front_ends[(size_t)d < FRONT_ENDS ? d : FM_GCODE_LINUXCNC];
     if (!st) st = g->front->init(g);
+    if (!st) st = gc_machine_start(g);
     if (!st) st = g->front->run(g);
     if (summary) {
         summary->motions = g->motion_index;

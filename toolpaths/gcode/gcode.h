@@ -76,6 +76,18 @@ typedef struct fm_gcode_options {
      * turn them and motions carry their joint values. NULL: the words are
      * followed (as rs274 prints them) but move nothing. Must outlive the run. */
     const fm_machine *machine;
+    /* The machine's state before the first block (docs/check.md "Machine
+     * file"). has_start 1: the tool tip stands at start (machine mm): the
+     * machine's position is start less the tip offset of the tool in the
+     * spindle (no length offset is active yet: its length above the tip);
+     * 0: the dialect's power-on place (LinuxCNC the origin, Fanuc the first
+     * reference point). initial_tool: the tool in the spindle before the
+     * first M6 (0: none), as if M6 had loaded it (T only selects, M6 loads:
+     * a program with T1 and no M6 runs with this tool); it must be in the
+     * tool table when there is one. */
+    int has_start;
+    double start[3];
+    int initial_tool;
 } fm_gcode_options;
 
 /* Fill *opt with the defaults above. */

@@ -46,6 +46,30 @@ fm_status gc_machine_init(gc_interp *g, const char *text, size_t len, const char
     return FM_OK;
 }
 
+fm_status gc_machine_start(gc_interp *g)
+{
+    int tool = g->opt.initial_tool;
+    if (tool < 0 || (tool > 0 && g->opt.tools && !fm_tool_table_find(g->opt.tools, tool)))
+        return fm_error_at(g->err, FM_ERR_INPUT, g->name, 0, 0,
+                           "the initial tool %d is not in the tool table; expected one of its "
+                           "numbers (--initial-tool, options.initial_tool, the machine's "
+                           "initial_tool)",
+                           tool);
+    if (tool > 0) {
+        g->tool = g->selected_tool = tool;
+        gc_refresh_tool_params(g);
+    }
+    if (g->opt.has_start) {
+        /* the tip at start: the spindle's point is the tool's length above */
+        for (int i = 0; i < 3; i++) g->mpos[i] = g->opt.start[i];
+        g->mpos[2] += gc_tool_length_mm(g, g->tool);
+        memcpy(g->canon, g->mpos, sizeof g->canon);
+        gc_from_machine(g, g->mpos, g->pos);
+        gc_frame_reprogram(g);
+    }
+    return FM_OK;
+}
+
 void gc_machine_free(gc_interp *g)
 {
     free(g->line_start);

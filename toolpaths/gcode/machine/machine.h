@@ -403,6 +403,10 @@ typedef struct gc_front_end {
 fm_status gc_machine_init(gc_interp *g, const char *text, size_t len, const char *name,
                           const fm_gcode_options *opt, fm_motion_sink sink, void *user,
                           fm_error *err);
+/* After the front end's init: the options' state at the start (the tool in
+ * the spindle, where the tool tip stands), over the dialect's power-on
+ * state. */
+fm_status gc_machine_start(gc_interp *g);
 void gc_machine_free(gc_interp *g);
 
 /* ---- a block: the words of one line (line.c) ---- */
