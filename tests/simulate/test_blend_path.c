@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "job.h"
+#include "runner/dynamics.h"
 #include "test.h"
 #include "toolpaths/tooltable/tooltable.h"
 
@@ -138,9 +139,23 @@ int main(void)
     CHECK(arc->turns == 1); /* a left turn: counter-clockwise (G3) */
     CHECK(arc->line == 6);  /* the motion before the corner's */
 
-    /* The programmed corner: with follow_blends off, and without dynamics */
-    fm_plan_machine off = dyn;
-    off.programmed_path = 1;
+    /* The programmed corner: with follow_blends off (read from the
+     * dynamics' JSON as a machine file gives it), and without dynamics */
+    fm_plan_machine off;
+    fm_error jerr;
+    json_t *doc = json_loads("{\"follow_blends\": false, \"axes\": {"
+                             "\"x\": {\"max_velocity\": 100, \"max_acceleration\": 50},"
+                             "\"y\": {\"max_velocity\": 100, \"max_acceleration\": 50},"
+                             "\"z\": {\"max_velocity\": 100, \"max_acceleration\": 50}}}",
+                             0, NULL);
+    CHECK(doc && fm_plan_machine_from_json(doc, "m.json", &off, &jerr) == FM_OK);
+    CHECK(off.given && off.programmed_path == 1);
+    json_decref(doc);
+    fm_plan_machine bad;
+    doc = json_loads("{\"follow_blends\": 1}", 0, NULL);
+    CHECK(fm_plan_machine_from_json(doc, "m.json", &bad, &jerr) == FM_ERR_INPUT);
+    CHECK(strstr(jerr.message, "follow_blends") != NULL);
+    json_decref(doc);
     arcs_seen none = {0};
     run_out s = run(&off, &none);
     CHECK(none.count == 0);
