@@ -40,7 +40,22 @@ typedef struct arcs_seen {
     int count;
     fm_motion arc;
     int in_stock_corner;
+    /* the progress reports: where the tool was, where a resume would start */
+    int reports;
+    double where[16][3];
+    long resume_from[16];
 } arcs_seen;
+
+static int record_progress(void *user, const fm_job_progress *p)
+{
+    arcs_seen *a = user;
+    if (a->reports < 16) {
+        memcpy(a->where[a->reports], p->position, sizeof a->where[0]);
+        a->resume_from[a->reports] = p->resume_from;
+    }
+    a->reports++;
+    return 0;
+}
 
 static void record_arc(void *user, const fm_motion *m)
 {
@@ -59,7 +74,7 @@ typedef struct run_out {
     double outer, inner; /* the stock's signed distance at the probes (> 0: material) */
 } run_out;
 
-static run_out run(const fm_plan_machine *dyn, arcs_seen *arcs)
+static run_out run(const fm_plan_machine *dyn, arcs_seen *arcs, double batch_diameters)
 {
     static fm_tool_table tools;
     static int loaded;
@@ -77,7 +92,8 @@ static run_out run(const fm_plan_machine *dyn, arcs_seen *arcs)
     spec.tools = &tools;
     spec.stock.voxel_mm = 0.1;
     spec.dynamics = dyn;
-    fm_job_hooks hooks = {.user = arcs, .on_motion = record_arc};
+    spec.batch_diameters = batch_diameters;
+    fm_job_hooks hooks = {.user = arcs, .on_motion = record_arc, .progress = record_progress};
     fm_job_result result;
     run_out out = {NAN, NAN, NAN};
     if (fm_job_run(&spec, &hooks, &result, &err) != FM_OK) {
@@ -120,7 +136,7 @@ int main(void)
     CHECK_NEAR(R, 4.828427, 1e-6);
 
     arcs_seen blended = {0};
-    run_out b = run(&dyn, &blended);
+    run_out b = run(&dyn, &blended, 1.0);
     CHECK(blended.in_stock_corner == 1);
     CHECK(blended.count == 2); /* the corner's, and the plunge's in the air (XZ) */
     const fm_motion *arc = &blended.arc;
@@ -157,10 +173,10 @@ int main(void)
     CHECK(strstr(jerr.message, "follow_blends") != NULL);
     json_decref(doc);
     arcs_seen none = {0};
-    run_out s = run(&off, &none);
+    run_out s = run(&off, &none, 1.0);
     CHECK(none.count == 0);
     arcs_seen none2 = {0};
-    run_out f = run(NULL, &none2);
+    run_out f = run(NULL, &none2, 1.0);
     CHECK(none2.count == 0);
     CHECK_NEAR(s.removed, f.removed, 1e-9);
 
@@ -177,6 +193,26 @@ int main(void)
     CHECK(expected > 20.0);
     /* each run within the README's 0.022% of its volume at 0.1 mm voxels */
     CHECK_NEAR(s.removed - b.removed, expected, 0.00022 * (s.removed + b.removed));
+
+    /* Cut piece by piece (each its own batch): the report after the line
+     * into the corner says a resume starts with that motion again (its arc
+     * is not cut yet), the one after the arc with the next motion. */
+    arcs_seen each = {0};
+    run_out e = run(&dyn, &each, -1.0);
+    CHECK_NEAR(e.removed, b.removed, 1e-6 * b.removed);
+    int before_arc = 0, after_arc = 0;
+    for (int i = 0; i < each.reports && i < 16; i++) {
+        const double *w = each.where[i];
+        if (fabs(w[0] + d) < 1e-9 && fabs(w[1]) < 1e-9 && fabs(w[2] + 2.0) < 1e-9) {
+            before_arc++;
+            CHECK(each.resume_from[i] == arc->index);
+        }
+        if (fabs(w[0]) < 1e-9 && fabs(w[1] - d) < 1e-9 && fabs(w[2] + 2.0) < 1e-9) {
+            after_arc++;
+            CHECK(each.resume_from[i] == arc->index + 1);
+        }
+    }
+    CHECK(before_arc == 1 && after_arc == 1);
 
     /* The stock at the probes */
     printf("outer probe: sharp %.3f, blended %.3f; inner probe: sharp %.3f, blended %.3f\n", s.outer,
