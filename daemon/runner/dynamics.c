@@ -73,6 +73,11 @@ fm_status fm_plan_machine_from_json(json_t *dyn, const char *path, fm_plan_machi
                 return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
                                    "dynamics.lookahead: expected a whole number of segments, 2 to 10000");
             m->lookahead = (int)json_integer_value(v);
+        } else if (!strcmp(key, "follow_blends")) {
+            if (!json_is_boolean(v))
+                return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
+                                   "dynamics.follow_blends: expected true or false");
+            m->programmed_path = !json_is_true(v);
         } else {
             double *slot = !strcmp(key, "max_velocity")        ? &m->traj_max_velocity
                            : !strcmp(key, "max_acceleration")  ? &m->traj_max_acceleration
@@ -84,7 +89,7 @@ fm_status fm_plan_machine_from_json(json_t *dyn, const char *path, fm_plan_machi
                 return fm_error_at(err, FM_ERR_INPUT, path, 0, 0,
                                    "dynamics: unknown member \"%s\" (axes, max_velocity, "
                                    "max_acceleration, tool_change_s, servo_period_s, "
-                                   "max_feed_override, lookahead)",
+                                   "max_feed_override, lookahead, follow_blends)",
                                    key);
             if (!json_is_number(v) || !(json_number_value(v) > 0) ||
                 (slot == &m->tool_change_s && !(json_number_value(v) >= 0)))

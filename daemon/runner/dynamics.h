@@ -12,7 +12,8 @@
 /* {"axes": {"x": {"max_velocity": mm/s, "max_acceleration": mm/s^2,
  * "rapid_velocity": mm/s}, ..., "a": {deg/s, deg/s^2}}, "max_velocity":
  * mm/s, "max_acceleration": mm/s^2, "tool_change_s": s, "servo_period_s": s,
- * "max_feed_override": ratio, "lookahead": segments}: every member is
+ * "max_feed_override": ratio, "lookahead": segments, "follow_blends":
+ * true/false (m->programmed_path is its negation)}: every member is
  * optional; *m gets the defaults and given = 1. FM_ERR_INPUT names path and
  * the member when it is wrong. */
 fm_status fm_plan_machine_from_json(json_t *dynamics, const char *path, fm_plan_machine *m,

@@ -183,7 +183,8 @@ void job_report(job_cutter *c, const fm_motion *last)
     p->tool = last->tool;
     for (int a = 0; a < 3; a++) p->position[a] = last->end[a] + last->tip_offset[a];
     p->removed_mm3 = fm_stock_removed_volume(c->stock);
-    p->resume_from = last->index + 1;
+    /* a motion whose blend arc is not cut yet is cut again on resume */
+    p->resume_from = last->index + (c->batch_last_continues ? 0 : 1);
     p->elapsed_s = fm_clock_monotonic_s() - c->started;
     p->stock = c->stock;
     if (c->hooks && c->hooks->progress && c->hooks->progress(c->hooks->user, p)) c->stopped = 1;
@@ -250,7 +251,7 @@ int job_cut_sink(void *user, const fm_motion *m)
         c->stopped_at_line = 1;
         return 1;
     }
-    c->progress.motions_done++;
+    if (!c->piece_blend) c->progress.motions_done++;
     if (c->hooks && c->hooks->on_motion) c->hooks->on_motion(c->hooks->user, m);
     if (m->index < c->spec->skip_motions) {
         /* cut before the snapshot we resume from */
@@ -277,6 +278,7 @@ int job_cut_sink(void *user, const fm_motion *m)
      * batch's earlier motions are still pending in it. */
     if (c->check && (c->status = check_motion(c, m, tool)) != FM_OK) return 1;
     c->batch[c->batch_count++] = *m;
+    c->batch_last_continues = c->piece_continues;
     c->batch_tool = tool;
     c->batch_length += length;
     /* A PARAM motion's path is valid only while the front end runs this

@@ -7,6 +7,7 @@
  *   job_check.c    the collision check's set-up beside the cut
  *   job_live.c     live jobs: motions from a controller through the same cut
  *   job_motions.c  the program's motions kept: interpreted once per job
+ *   job_follow.c   the cut along the planner's blend arcs (machine dynamics)
  *   job_design.c   the design comparison's design and the blame of gouges
  *   job_resources.c  clocks and the process's memory and CPU time */
 #ifndef FM_JOB_INTERNAL_H
@@ -140,6 +141,12 @@ typedef struct job_cutter {
     /* the no-tool warning (fm_job_result.no_tool_line) */
     int no_tool_line;
     long no_tool_motions;
+
+    /* cutting along the blend arcs (job_follow.c): the piece being cut is
+     * a blend arc (not a motion of its own), or its motion's arc is still
+     * to come (continues); the batch's last piece's continues */
+    int piece_blend, piece_continues;
+    int batch_last_continues;
 } job_cutter;
 
 /* The motion sink of the cutting pass (user: the cutter) and its G38
@@ -152,6 +159,16 @@ fm_status job_flush_batch(job_cutter *c);
 /* Tell the progress hook where the job is after motion last (nothing is
  * pending in the batch). */
 void job_report(job_cutter *c, const fm_motion *last);
+
+/* --------------------------------------------------------- follow -- */
+
+/* Does the cut follow the blend arcs: the machine's dynamics given (and
+ * not "follow_blends": false), the program planned, its motions kept and
+ * no probe reading the stock. */
+int job_follow_wanted(const fm_job_spec *spec, const job_survey *sv);
+/* The kept motions through the planner and its blended path into the cut
+ * sink. */
+fm_status job_follow_replay(job_cutter *c, fm_job_motions *log, fm_error *err);
 
 /* ---------------------------------------------------------- check -- */
 

@@ -89,6 +89,7 @@ static fm_status cut(job_cutter *c, const job_survey *sv, fm_job_result *result,
 {
     const fm_job_spec *spec = c->spec;
     if (spec->program_kind == FM_PROGRAM_LIVE) return job_run_live(c);
+    if (job_follow_wanted(spec, sv)) return job_follow_replay(c, sv->log, err);
     if (job_motions_usable(sv->log) && !sv->probing)
         return fm_job_motions_replay(sv->log, spec->machine, job_cut_sink, c, err);
     result->interpretations++;

@@ -201,6 +201,140 @@ static void test_blend_corner(void)
     CHECK_NEAR(plan(&m, col, 2, &c), rest_to_rest(50.0, 20.0, 500.0), 1e-9);
 }
 
+typedef struct pieces {
+    fm_motion m[64];
+    int blend[64], continues[64];
+    int n;
+} pieces;
+
+static int collect_piece(void *user, const fm_motion *m, int blend, int continues)
+{
+    pieces *c = user;
+    if (c->n < 64) {
+        c->m[c->n] = *m;
+        c->blend[c->n] = blend;
+        c->continues[c->n] = continues;
+    }
+    c->n++;
+    return 0;
+}
+
+/* The planner's motions through the path follower. */
+static void plan_path(const fm_plan_machine *m, const fm_motion *mo, int n, int planned_times,
+                      pieces *out)
+{
+    collected c = {0};
+    plan(m, mo, n, &c);
+    fm_plan_path_options opt;
+    fm_plan_path_options_default(&opt);
+    opt.planned_times = planned_times;
+    fm_error err = {0};
+    fm_plan_path *path = fm_plan_path_new(&opt, collect_piece, out, &err);
+    CHECK(path != NULL);
+    for (int i = 0; i < c.n && i < 64; i++) CHECK(fm_plan_path_push(path, &c.m[i]) == 0);
+    CHECK(fm_plan_path_finish(path) == 0);
+    fm_plan_path_free(path);
+}
+
+static void test_blend_path(void)
+{
+    /* test_blend_corner's corner (d = R = 0.24142 mm): the path is the
+     * first line to (50 - d, 0), a counter-clockwise XY arc about
+     * (50 - R, R) to (50, d), the second line from there. */
+    fm_plan_machine m = machine(100.0, 500.0);
+    fm_motion mo[2] = {line(0, 0, 50, 0, 1200), line(50, 0, 50, 50, 1200)};
+    mo[0].path_tolerance = mo[1].path_tolerance = 0.1;
+    double th = PLAN_PI / 4.0, T = 0.1;
+    double d = cos(th) * T / (1.0 - sin(th)), R = tan(th) * d;
+    pieces pc = {0};
+    plan_path(&m, mo, 2, 0, &pc);
+    CHECK(pc.n == 3);
+    CHECK(!pc.blend[0] && pc.continues[0] && pc.blend[1] && !pc.continues[1] && !pc.blend[2]);
+    CHECK(pc.m[0].kind == FM_MOTION_LINE && pc.m[1].kind == FM_MOTION_ARC && pc.m[2].kind == FM_MOTION_LINE);
+    CHECK_NEAR(pc.m[0].start[0], 0.0, 1e-12);
+    CHECK_NEAR(pc.m[0].end[0], 50.0 - d, 1e-9);
+    CHECK_NEAR(pc.m[0].end[1], 0.0, 1e-12);
+    const fm_motion *a = &pc.m[1];
+    CHECK(a->plane_axis == 2 && a->turns == 1 && a->index == 0);
+    CHECK_NEAR(a->center[0], 50.0 - R, 1e-9);
+    CHECK_NEAR(a->center[1], R, 1e-9);
+    CHECK_NEAR(hypot(a->start[0] - a->center[0], a->start[1] - a->center[1]), R, 1e-9);
+    CHECK_NEAR(hypot(a->end[0] - a->center[0], a->end[1] - a->center[1]), R, 1e-9);
+    CHECK_NEAR(a->end[0], 50.0, 1e-9);
+    CHECK_NEAR(a->end[1], d, 1e-9);
+    CHECK_NEAR(pc.m[2].start[1], d, 1e-9);
+    CHECK_NEAR(pc.m[2].end[1], 50.0, 1e-12);
+    CHECK(pc.m[2].index == 1);
+    /* feed-only times (20 mm/s): each piece its share of its motion's */
+    CHECK_NEAR(pc.m[0].t1, (50.0 - d) / 20.0, 1e-9);
+    CHECK_NEAR(a->t0, (50.0 - d) / 20.0, 1e-9);
+    CHECK_NEAR(a->t1, (50.0 + d) / 20.0, 1e-9);
+    CHECK_NEAR(pc.m[2].t1, 5.0, 1e-9);
+    /* planned times: test_blend_corner's line and arc times */
+    double vb = sqrt(sqrt(3.0) / 2.0 * 500.0 * R), acc = 500.0, v = 20.0, L = 50.0 - d;
+    double s_up = v * v / (2 * acc), s_down = (v * v - vb * vb) / (2 * acc);
+    double t_line = v / acc + (v - vb) / acc + (L - s_up - s_down) / v;
+    double t_arc = R * PLAN_PI / 2.0 / vb;
+    pieces pt = {0};
+    plan_path(&m, mo, 2, 1, &pt);
+    CHECK(pt.n == 3);
+    CHECK_NEAR(pt.m[0].t0, 0.0, 1e-12);
+    CHECK_NEAR(pt.m[0].t1, t_line, 1e-9);
+    CHECK_NEAR(pt.m[1].t0, t_line, 1e-9);
+    CHECK_NEAR(pt.m[1].t1, t_line + t_arc, 1e-9);
+    CHECK_NEAR(pt.m[2].t1, 2.0 * t_line + t_arc, 1e-9);
+
+    /* A corner out of the axis planes: X, then up Y and Z at 45 degrees
+     * (the angle between the directions is 90 degrees again, so d and R
+     * are as above at P0.1). Chords within 1 um of the arc: their ends on
+     * the circle about the corner's bisector at R / sin(45) from it, each
+     * chord's middle within the tolerance of the circle. */
+    fm_motion sk[2] = {line(0, 0, 20, 0, 1200), line(20, 0, 20, 10, 1200)};
+    sk[1].end[2] = 10.0;
+    sk[0].path_tolerance = sk[1].path_tolerance = 0.1;
+    pieces ps = {0};
+    plan_path(&m, sk, 2, 0, &ps);
+    CHECK(ps.n >= 4 && ps.n < 64);
+    double s2 = sqrt(0.5), cen[3] = {20.0 - R, R * s2, R * s2}; /* corner + (u2 - u1)/|u2 - u1| R / sin(45) */
+    CHECK_NEAR(ps.m[0].end[0], 20.0 - d, 1e-9);
+    double chord0 = -1.0;
+    for (int i = 1; i < ps.n - 1; i++) {
+        const fm_motion *c = &ps.m[i];
+        CHECK(ps.blend[i] && c->kind == FM_MOTION_LINE && c->index == 0);
+        CHECK(ps.continues[i] == (i < ps.n - 2));
+        double e[3], mid[3];
+        for (int k = 0; k < 3; k++) {
+            e[k] = c->end[k] - cen[k];
+            mid[k] = 0.5 * (c->start[k] + c->end[k]) - cen[k];
+        }
+        CHECK_NEAR(sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]), R, 1e-9);
+        double rm = sqrt(mid[0] * mid[0] + mid[1] * mid[1] + mid[2] * mid[2]);
+        CHECK(R - rm <= 0.001 + 1e-12);
+        double len = hypot(hypot(c->end[0] - c->start[0], c->end[1] - c->start[1]), c->end[2] - c->start[2]);
+        if (chord0 < 0.0) chord0 = len;
+        CHECK_NEAR(len, chord0, 1e-9); /* equal chords: the short way round */
+    }
+    CHECK_NEAR(ps.m[ps.n - 1].start[0], 20.0, 1e-9);
+    CHECK_NEAR(ps.m[ps.n - 1].start[1], d * s2, 1e-9);
+    CHECK_NEAR(ps.m[ps.n - 1].start[2], d * s2, 1e-9);
+
+    /* A corner between a line and an arc keeps the programmed corner */
+    fm_motion la[2] = {line(0, 0, 20, 0, 1200), line(20, 0, 10, 10, 1200)};
+    la[1].kind = FM_MOTION_ARC; /* starting up +Y: a 90 degree corner, blended */
+    la[1].plane_axis = 2;
+    la[1].turns = 1;
+    la[1].center[0] = 10.0;
+    la[0].path_tolerance = la[1].path_tolerance = 0.1;
+    pieces pa = {0};
+    collected ca = {0};
+    plan(&m, la, 2, &ca);
+    CHECK(ca.m[0].has_blend);
+    plan_path(&m, la, 2, 0, &pa);
+    CHECK(pa.n == 2);
+    CHECK_NEAR(pa.m[0].end[0], 20.0, 1e-12);
+    CHECK(pa.m[1].kind == FM_MOTION_ARC && !pa.blend[1]);
+}
+
 static void test_dwell_and_feed_only(void)
 {
     fm_plan_machine m = machine(100.0, 500.0);
@@ -309,17 +443,81 @@ static int check_order(void *user, const fm_plan_motion *pm)
     return 0;
 }
 
+/* The path after the planner (fm_plan_path) over the same random programs:
+ * continuous, every motion once and in order, times never backwards, and
+ * every blend arc within its corner's tolerance and reach. */
+typedef struct path_check {
+    long next;               /* the planner's next index (check_order) */
+    fm_plan_path *path;
+    int have_end;
+    double end[3];           /* the last piece's end */
+    long next_piece;         /* the next programmed motion's index */
+    double t;                /* the last piece's end time */
+    fm_motion programmed[1000];
+    double reach;            /* the current blend's start from its corner */
+    int in_blend;
+    long arcs, chords;
+} path_check;
+
+static int path_piece(void *user, const fm_motion *m, int blend, int continues)
+{
+    path_check *pc = user;
+    (void)continues;
+    if (pc->have_end) CHECK(hypot(hypot(m->start[0] - pc->end[0], m->start[1] - pc->end[1]),
+                                  m->start[2] - pc->end[2]) < 1e-9);
+    CHECK(m->t0 >= pc->t - 1e-9 && m->t1 >= m->t0 - 1e-12);
+    if (!blend) {
+        CHECK(m->index == pc->next_piece);
+        pc->next_piece++;
+        pc->in_blend = 0;
+    } else {
+        CHECK(m->index == pc->next_piece - 1);
+        const fm_motion *mo = &pc->programmed[m->index];
+        const double *corner = mo->end;
+        if (!pc->in_blend) {
+            pc->reach = hypot(hypot(m->start[0] - corner[0], m->start[1] - corner[1]), m->start[2] - corner[2]);
+            pc->in_blend = 1;
+        }
+        double far = hypot(hypot(m->end[0] - corner[0], m->end[1] - corner[1]), m->end[2] - corner[2]);
+        CHECK(far <= pc->reach + 1e-9);
+        if (m->kind == FM_MOTION_ARC) {
+            pc->arcs++;
+            double R = hypot(m->start[0] - m->center[0], m->start[1] - m->center[1]);
+            double gap = hypot(corner[0] - m->center[0], corner[1] - m->center[1]) - R;
+            if (mo->path_tolerance > 0.0) CHECK(gap <= mo->path_tolerance + 1e-9);
+        } else {
+            pc->chords++;
+            CHECK(m->kind == mo->kind);
+        }
+    }
+    memcpy(pc->end, m->end, sizeof pc->end);
+    pc->have_end = 1;
+    pc->t = m->t1;
+    return 0;
+}
+
+static int check_order_then_path(void *user, const fm_plan_motion *pm)
+{
+    path_check *pc = user;
+    check_order(&pc->next, pm);
+    return fm_plan_path_push(pc->path, pm);
+}
+
 static void test_random_programs(void)
 {
+    long arcs = 0, chords = 0, followed = 0;
     fm_plan_machine m = machine(60.0, 800.0);
     m.linear[2].max_velocity = 20.0;
     m.linear[2].max_acceleration = 300.0;
     m.max_feed_override = 1.2;
     m.tool_change_s = 1.0;
     for (int prog = 0; prog < 40; prog++) {
-        long next = 0;
+        static path_check pc;
+        memset(&pc, 0, sizeof pc);
         fm_error err = {0};
-        fm_planner *p = fm_planner_new(&m, check_order, &next, &err);
+        pc.path = fm_plan_path_new(NULL, path_piece, &pc, &err);
+        CHECK(pc.path != NULL);
+        fm_planner *p = fm_planner_new(&m, check_order_then_path, &pc, &err);
         double pos[3] = {0, 0, 0}, t = 0.0;
         int n = 200 + (int)(test_rand01() * 800);
         for (int i = 0; i < n; i++) {
@@ -351,7 +549,8 @@ static void test_random_programs(void)
             } else if (mo.kind != FM_MOTION_DWELL) {
                 double step = test_rand01() < 0.3 ? test_uniform(0.01, 0.5) : test_uniform(0.5, 50.0);
                 if (test_rand01() < 0.05) step = 0.0;
-                for (int k = 0; k < 3; k++) mo.end[k] = pos[k] + step * test_uniform(-1, 1) * (k == 2 ? 0.3 : 1.0);
+                double zs = test_rand01() < 0.5 ? 0.0 : 0.3; /* half of them in the XY plane */
+                for (int k = 0; k < 3; k++) mo.end[k] = pos[k] + step * test_uniform(-1, 1) * (k == 2 ? zs : 1.0);
                 len = sqrt((mo.end[0] - pos[0]) * (mo.end[0] - pos[0]) + (mo.end[1] - pos[1]) * (mo.end[1] - pos[1]) +
                            (mo.end[2] - pos[2]) * (mo.end[2] - pos[2]));
             } else {
@@ -362,15 +561,26 @@ static void test_random_programs(void)
             t += mo.kind == FM_MOTION_DWELL ? test_uniform(0, 1) : len / (mo.feed > 0 ? mo.feed / 60.0 : 100.0);
             mo.t1 = t;
             memcpy(pos, mo.end, sizeof pos);
+            pc.programmed[i] = mo;
             CHECK(fm_planner_push(p, &mo, &err) == FM_OK);
         }
         fm_plan_totals tot;
         CHECK(fm_planner_finish(p, &tot, &err) == FM_OK);
         fm_planner_free(p);
-        CHECK(next == n);
+        CHECK(pc.next == n);
+        CHECK(fm_plan_path_finish(pc.path) == 0);
+        CHECK(pc.next_piece == n);
+        CHECK(fm_plan_path_blends(pc.path) <= tot.blends);
+        followed += fm_plan_path_blends(pc.path);
+        arcs += pc.arcs;
+        chords += pc.chords;
+        fm_plan_path_free(pc.path);
         CHECK(isfinite(tot.cycle_time_s) && tot.cycle_time_s > 0.0);
         CHECK_NEAR(tot.feed_only_s, t, 1e-9);
     }
+    /* the programs exercise the path: arcs in the XY plane, chords out of it */
+    printf("random programs: %ld blends followed, %ld as arcs, %ld chords\n", followed, arcs, chords);
+    CHECK(followed > 100 && arcs > 10 && chords > 100);
 }
 
 int main(void)
@@ -379,6 +589,7 @@ int main(void)
     test_rapid_per_axis();
     test_circle_at_normal_limit();
     test_blend_corner();
+    test_blend_path();
     test_dwell_and_feed_only();
     test_streaming();
     test_fanuc_modes();

@@ -43,6 +43,10 @@ typedef struct fm_plan_machine {
     int blend_gap_cycles;         /* [TRAJ] ARC_BLEND_GAP_CYCLES (default 4) */
     double kink_ratio;            /* [TRAJ] ARC_BLEND_TANGENT_KINK_RATIO (default 0.1) */
     double rapid_rate;            /* mm/min, rapids when !given (default 5000) */
+    /* Not the planner's: 1 makes the job runner cut along the programmed
+     * corners rather than the blend arcs (the machine file's dynamics
+     * "follow_blends": false; docs/plan.md "Where the tool goes"). */
+    int programmed_path;
 } fm_plan_machine;
 
 /* Defaults above; given = 0. */
@@ -101,5 +105,46 @@ void fm_planner_free(fm_planner *p);
  * fm_planner_error then says why. */
 int fm_planner_motion_sink(void *planner, const fm_motion *motion);
 const fm_error *fm_planner_error(const fm_planner *p);
+
+/* ---- where the tool really goes (docs/plan.md, "Where the tool goes") ----
+ * The planned motions (the planner's sink) -> the path the machine takes,
+ * as motions: a straight move ending in a blended corner is cut short at
+ * its blend arc's start, the arc follows (FM_MOTION_ARC when the corner
+ * lies in the XY, XZ or YZ plane; chords within chord_tolerance of it out
+ * of those planes, and for rapids, which stay rapids), and the next move
+ * starts at the arc's end. Corners next to arcs, in a naive-CAM chain or
+ * between moves that change tool, tool axis or kind keep the programmed
+ * corner. */
+typedef struct fm_plan_path_options {
+    double chord_tolerance; /* mm, the chords' largest distance from the arc (default 0.001) */
+    /* 1: the pieces carry the planned times (a piece of a motion its share,
+     * an arc its blend_out.t0..t1); 0: the motions' own times as pushed
+     * (feed_t0..feed_t1, split by length; an arc from its start on the
+     * motion before to its end on the motion after). */
+    int planned_times;
+} fm_plan_path_options;
+
+void fm_plan_path_options_default(fm_plan_path_options *o);
+
+/* Receives the path in order: motion is a programmed motion (or the piece
+ * of it the blends leave) when blend is 0, a blend arc (or one of its
+ * chords) when 1; a blend arc keeps the fields of the motion before the
+ * corner (index, line, tool, feed). continues: the next piece belongs to
+ * the same motion (its blend arc follows). Non-zero stops. */
+typedef int (*fm_plan_path_sink)(void *user, const fm_motion *motion, int blend, int continues);
+
+typedef struct fm_plan_path fm_plan_path;
+
+/* opt NULL: the defaults. NULL on error. */
+fm_plan_path *fm_plan_path_new(const fm_plan_path_options *opt, fm_plan_path_sink sink, void *user,
+                               fm_error *err);
+/* An fm_plan_sink (user = the fm_plan_path): each planned motion in program
+ * order. Returns non-zero when the path's sink stopped. */
+int fm_plan_path_push(void *path, const fm_plan_motion *motion);
+/* The program ended: the last motion goes out. Non-zero: the sink stopped. */
+int fm_plan_path_finish(fm_plan_path *p);
+/* Blend arcs followed so far. */
+long fm_plan_path_blends(const fm_plan_path *p);
+void fm_plan_path_free(fm_plan_path *p);
 
 #endif
