@@ -33,7 +33,8 @@ from cli_util import ROOT, check, summary
 
 EX = os.path.join(ROOT, "examples")
 PROGRAM = os.path.join(EX, "trunnion_5axis.ngc")
-ARGS = ["--tools", os.path.join(EX, "rotary_tools.json"), "--machine", os.path.join(EX, "trunnion_machine.json")]
+MACHINE = os.path.join(EX, "trunnion_machine.json")
+ARGS = ["--tools", os.path.join(EX, "rotary_tools.json"), "--machine", MACHINE]
 STOCK = "box:-30,-30,-20,30,30,0"
 
 
@@ -51,8 +52,8 @@ def closed_form_volume():
 def main():
     frepmill = sys.argv[1]
     # The program, move by move, as written: (kind, X, Y, Z, A, C, F). The
-    # interpreter starts at the origin (the machine file's "start" is the
-    # check's, docs/check.md).
+    # interpreter starts where the machine file's "start" puts the tool, as
+    # the check does (docs/simulate.md, "The machine's state at the start").
     moves = [("rapid", 0, 0, 60, 0, 0, 0), ("rapid", 0, 0, 60, 45, 0, 0),
              ("rapid", -45, 28, 40, 45, 0, 0), ("rapid", -45, 28, -2, 45, 0, 0),
              ("line", 28, 28, -2, 45, 0, 600), ("line", 28, 28, -2, 45, 90, 1800),
@@ -65,7 +66,8 @@ def main():
     check(out.returncode == 0, "frepmill motions: exit 0 (%s)" % out.stderr.decode().strip()[-200:])
     motions = [json.loads(line) for line in out.stdout.decode().splitlines() if line.strip()]
     check(len(motions) == len(moves), "%d motions, one per move of the program (%d)" % (len(motions), len(moves)))
-    prev = (0, 0, 0, 0, 0)
+    with open(MACHINE) as f:
+        prev = tuple(json.load(f).get("start", (0, 0, 0))) + (0, 0)
     for m, (kind, x, y, z, a, c, f) in zip(motions, moves):
         i = m["index"]
         ok = m["kind"] == kind and near(m["start"], prev[:3]) and near(m["end"], (x, y, z))
