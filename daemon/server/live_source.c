@@ -277,6 +277,8 @@ static void observe(fm_live_source *s, const char *name, const char *id, const c
         char *end;
         double v = strtod(value, &end);
         if (end == value || !isfinite(v)) continue;
+        /* a tool or line number out of an int's range is not one */
+        if ((k == FM_LIVE_MAP_TOOL || k == FM_LIVE_MAP_LINE) && !(fabs(v) < 1e9)) continue;
         /* A new instant: the position of the one before is complete. */
         if (s->pending && !(time == s->pending_time || (isnan(time) && isnan(s->pending_time)))) flush(s);
         if (k < 6) {
