@@ -27,7 +27,8 @@ import time
 import xml.etree.ElementTree as ET
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "daemon"))
-from daemon_util import INSTRUMENTED, ROOT, Daemon, check, curl, curl_json, skip  # noqa: E402
+from daemon_util import INSTRUMENTED, ROOT, Daemon, check, curl, skip  # noqa: E402
+from test_live_shdr import Replay, live_status  # noqa: E402
 
 NS = {"s": "urn:mtconnect.org:MTConnectStreams:2.7"}
 BOX = (-5.0, -15.0, -10.0, 5.0, -5.0, 0.0)
@@ -65,6 +66,7 @@ class Adapter:
         self.sock.listen(4)
         self.port = self.sock.getsockname()[1]
         self.connections = 0
+        self.pings = 0
         threading.Thread(target=self.serve, daemon=True).start()
 
     def serve(self):
@@ -78,35 +80,7 @@ class Adapter:
                 conn.sendall(self.data)
             threading.Thread(target=self.answer, args=(conn,), daemon=True).start()
 
-    def answer(self, conn):
-        buf = b""
-        while True:
-            try:
-                got = conn.recv(4096)
-            except OSError:
-                return
-            if not got:
-                return
-            buf += got
-            while b"\n" in buf:
-                line, _, buf = buf.partition(b"\n")
-                if line.strip() == b"* PING":
-                    try:
-                        conn.sendall(b"* PONG 1000\n")
-                    except OSError:
-                        return
-
-
-def live_status(url):
-    code, jobs = curl_json(url + "/v1/jobs")
-    if code != 200:
-        return None
-    live = [j for j in (jobs.get("jobs", jobs) if isinstance(jobs, dict) else jobs)
-            if j.get("name") == "live"]
-    if not live:
-        return None
-    code, status = curl_json(url + "/v1/jobs/" + live[-1]["id"])
-    return status if code == 200 else None
+    answer = Replay.answer  # the pings answered with "* PONG 1000"
 
 
 def main():
