@@ -9,8 +9,9 @@
  * Observations of one timestamp make one position (an adapter writes X
  * and Z of one instant on one line or several); a position is the mapped
  * X/Y/Z times the scale, the mapped A/B/C in degrees (the joints of the
- * live job's machine), the tool, the program line and the spindle speed. When the live job's queue is full (the cut falls
- * behind, "busy") the newest position waits and replaces the one before it:
+ * live job's machine), the tool, the program line and the spindle speed.
+ * When the live job's queue is full (the cut falls behind, "busy") the
+ * newest position waits and replaces the one before it:
  * positions are coalesced, never queued without bound. A lost connection
  * is tried again after 1, 2, 4... s up to reconnect_max_s, which the live
  * job's status says (live_source). */
@@ -801,7 +802,8 @@ fm_status fm_live_source_start(const fm_live_source_config *cfg, fm_jobs *jobs, 
             free(s);
             return err->code;
         }
-        for (int i = 0; i < machine.chain.rotary_count; i++) rotary_letters |= 1 << machine.chain.rotary[i].letter;
+        for (int i = 0; i < machine.chain.rotary_count; i++)
+            rotary_letters |= 1 << machine.chain.rotary[i].letter;
     }
     if (fm_live_map_check_rotary(&s->map, rotary_letters, cfg->machine, msg, sizeof msg) != 0) {
         free(s);
