@@ -10,10 +10,13 @@ turns the table right-handed about +Z, so machine (10, 0) is the workpiece
 point turned back by 90 degrees: (0, -10). The block box:-5,-15,-10,5,-5,0
 holds that point and not (10, 0) nor (0, 10) (the table not turned, or
 turned the wrong way): the hole is pi * 3^2 * 5 mm^3 only if the joints
-move the tool. Then, with the tool at Z20, the table turns to A-20 C45
-(well clear of the block) on line 14.
+move the tool. Then, with the tool at Z20, X goes to 310, beyond the
+machine file's travel (a travel_limit finding, an error: its line is the
+stream's), and back while the table turns to A-20 C45 (well clear of the
+block) on line 15.
 The live job's status and the agent's current document (validated with
-xmllint) show the stream's last line, angles and speed.
+xmllint) show the stream's last line, angles and speed, and the finding as
+a FAULT with the stream's line as its native code.
 Usage: test_live_mapped.py FREPMILLD MTCONNECT_DATA"""
 import json
 import math
@@ -41,8 +44,9 @@ STREAM = [
     (10, 0, 20, 0, 90, 3, 10, 8000),
     (10, 0, -DEPTH, 0, 90, 3, 11, 8000),
     (10, 0, 20, 0, 90, 3, 12, 8000),
-    (10, 0, 20, 0, 45, 3, 13, 8000),
-    (10, 0, 20, -20, 45, 3, 14, 9500),
+    (310, 0, 20, 0, 90, 3, 13, 8000),
+    (10, 0, 20, 0, 45, 3, 14, 8000),
+    (10, 0, 20, -20, 45, 3, 15, 9500),
 ]
 MAP = "X=Xm,Y=Ym,Z=Zm,A=Am,C=Cm,tool=Tn,line=Ln,S=Sp"
 
@@ -104,6 +108,9 @@ def main():
     expect = math.pi * RADIUS ** 2 * DEPTH
     last = STREAM[-1]
     machine = os.path.join(ROOT, "tests", "check", "corpus_machine", "trunnion.json")
+    with open(machine) as f:
+        x_travel = json.load(f)["limits"]["x"]
+    beyond = [p[6] for p in STREAM if not x_travel[0] <= p[0] <= x_travel[1]]
     adapter = Adapter(shdr_lines())
     with tempfile.TemporaryDirectory(prefix="fm-live-mapped-") as tmp:
         tools = os.path.join(tmp, "tools.json")
@@ -133,6 +140,9 @@ def main():
             check(status.get("rotary") == {"A": float(last[3]), "C": float(last[4])},
                   "the live job's joints are the stream's last (%s)" % status.get("rotary"))
             check(status.get("tool") == last[5], "the live job's tool is the stream's (%s)" % status.get("tool"))
+            travel = sorted({f["line"] for f in status["findings"] if f["kind"] == "travel_limit"})
+            check(beyond and travel == beyond,
+                  "the travel_limit finding is on the stream's line %s beyond X %s (%s)" % (beyond, x_travel, travel))
 
             code, body = curl(d.url + "/mtconnect/current")
             check(code == 200, "current answers 200")
@@ -153,6 +163,10 @@ def main():
             want = {"line": "%d" % last[6], "A": "%.4f" % last[3], "C": "%.4f" % last[4], "S": "%.1f" % last[7],
                     "tool": "%d" % last[5], "X": "%.4f" % last[0], "Z": "%.4f" % last[2]}
             check(got == want, "the agent shows the stream's last line, angles, speed, tool and position (%s)" % got)
+            faults = sorted({int(f.get("nativeCode")) for f in cur.findall(".//s:Fault", NS)
+                             if f.get("type") == "MOTION_PROGRAM"})
+            check(faults == beyond, "the agent's MOTION_PROGRAM faults are at the stream's line %s (%s)" %
+                  (beyond, faults))
             check("skipped" not in d.read_log(), "no line of the stream was skipped")
         finally:
             d.stop()
