@@ -161,6 +161,11 @@ typedef struct fm_job_progress {
     long block;                /* N number of that line, -1 if none */
     int tool;
     double position[3];        /* tool tip at the end of the last motion */
+    /* The rotary joints A, B, C at its end (degrees; NAN for an axis the
+     * motion's machine does not have) and its spindle speed (rev/min; NAN
+     * for a live job, whose moves carry none). */
+    double rotary[3];
+    double spindle_rpm;
     double removed_mm3;
     double elapsed_s;          /* wall time since the cutting started */
     /* Every motion with an index below this one is in the stock now (the

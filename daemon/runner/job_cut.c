@@ -182,6 +182,17 @@ void job_report(job_cutter *c, const fm_motion *last)
     p->block = last->block;
     p->tool = last->tool;
     for (int a = 0; a < 3; a++) p->position[a] = last->end[a] + last->tip_offset[a];
+    /* The joints of the machine's rotary axes where the motion ends. */
+    double joints[3];
+    fm_motion_joints_at(last, last->t1, joints);
+    for (int a = 0; a < 3; a++) p->rotary[a] = NAN;
+    for (int i = 0; last->machine && i < last->machine->rotary_count; i++) {
+        int letter = last->machine->rotary[i].letter;
+        if (letter >= 0 && letter < 3) p->rotary[letter] = joints[letter];
+    }
+    /* A live move's speed is a nominal one (the cut takes it as cutting). */
+    p->spindle_rpm = c->spec->program_kind == FM_PROGRAM_LIVE ? NAN
+                     : last->spindle_rpm * (last->spindle_dir ? 1 : 0);
     p->removed_mm3 = fm_stock_removed_volume(c->stock);
     /* a motion whose blend arc is not cut yet is cut again on resume */
     p->resume_from = last->index + (c->batch_last_continues ? 0 : 1);

@@ -134,6 +134,7 @@ static const key_def keys[] = {
     REAL("demo_voxel", demo_voxel, 0.01, 10),
     TEXT("live_stock", live_stock),
     TEXT("live_tools", live_tools),
+    TEXT("live_machine", live_machine),
     REAL("live_voxel", live_voxel, 0.01, 10),
     REAL("live_feed", live_feed, 0.001, 1e7),
     {"dialect", K_DIALECT, offsetof(fm_daemon_config, dialect), sizeof(((fm_daemon_config *)0)->dialect), 0, 0},

@@ -36,6 +36,7 @@ typedef struct fm_daemon_config {
      * file and voxel; without stock or tools, the selected job's are used. */
     char live_stock[1024];
     char live_tools[1024];
+    char live_machine[1024];   /* a machine file: the live job's rotary axes (A/B/C of live_map) */
     double live_voxel;
     double live_feed;          /* mm/min: the program time given to each live move */
     /* G-code: the dialect of jobs (docs/gcode.md: linuxcnc or fanuc) and

@@ -214,6 +214,7 @@ int main(int argc, char **argv)
                            .job_memory_bytes = (size_t)(cfg.job_memory_mb * 1048576.0),
                            .live_stock = cfg.live_stock,
                            .live_tools = cfg.live_tools,
+                           .live_machine = cfg.live_machine,
                            .live_voxel = cfg.live_voxel,
                            .live_feed = cfg.live_feed,
                            .dialect = cfg.dialect,
@@ -348,6 +349,7 @@ int main(int argc, char **argv)
         }
         fm_live_source_config lcfg = {.source = cfg.live_source,
                                       .map = cfg.live_map,
+                                      .machine = cfg.live_machine,
                                       .scale = strcmp(cfg.live_units, "inch") ? 1.0 : 25.4,
                                       .reconnect_max_s = cfg.live_reconnect_max_s};
         if (fm_live_source_start(&lcfg, jobs, &live_source, &err) != FM_OK) {

@@ -4,6 +4,7 @@
 #ifndef FM_DAEMON_JOB_VIEW_H
 #define FM_DAEMON_JOB_VIEW_H
 
+#include <math.h>
 #include <stddef.h>
 
 typedef enum fm_job_state {
@@ -27,6 +28,14 @@ typedef struct fm_job_view {
     long block;
     int tool;
     double position[3];
+    /* The rotary joints A, B, C of the motion last cut (degrees), those
+     * whose bit (1 << letter) is in rotary_known (the axes of the job's
+     * machine), and its spindle speed (rev/min) when has_spindle (not for a
+     * live job). Zero: nothing known, as for a job not started. */
+    double rotary[3];
+    int rotary_known;
+    double spindle_rpm;
+    int has_spindle;
     double program_time_s;
     double removed_mm3;
     double stock_mm3;
@@ -40,5 +49,31 @@ typedef struct fm_job_view {
     size_t voxels_uncertain;
     int uncertain_line;
 } fm_job_view;
+
+/* A live machine's position (live mode, daemon/server/live.c): the tool
+ * tip's X, Y, Z (mm) or, with a machine's rotary axes, its linear joints;
+ * the rotary joints A, B, C (degrees; NAN: not given, taken as 0); the tool;
+ * the program line (0: not given, the move's number stands for it); the
+ * spindle speed (rev/min; NAN: not given; published only, the cut takes
+ * a live move as cutting). */
+typedef struct fm_live_pose {
+    double xyz[3];
+    double abc[3];
+    int tool;
+    int line;
+    double spindle_rpm;
+} fm_live_pose;
+
+/* A pose with nothing given but X/Y/Z and the tool. */
+static inline void fm_live_pose_init(fm_live_pose *p, const double xyz[3], int tool)
+{
+    for (int a = 0; a < 3; a++) {
+        p->xyz[a] = xyz[a];
+        p->abc[a] = NAN;
+    }
+    p->tool = tool;
+    p->line = 0;
+    p->spindle_rpm = NAN;
+}
 
 #endif

@@ -499,6 +499,7 @@ fm_status fm_jobs_live_start(fm_jobs *jobs, int from_slot, fm_error *err)
     pthread_mutex_unlock(&jobs->lock);
     const fm_live_config lcfg = {.stock = jobs->cfg.live_stock,
                                  .tools = jobs->cfg.live_tools,
+                                 .machine = jobs->cfg.live_machine,
                                  .voxel = jobs->cfg.live_voxel,
                                  .feed = jobs->cfg.live_feed};
     const fm_job_doc_rules own = fm_jobs_doc_rules(jobs, 1);
@@ -519,9 +520,9 @@ fm_status fm_jobs_live_start(fm_jobs *jobs, int from_slot, fm_error *err)
     return FM_OK;
 }
 
-fm_status fm_jobs_live_position(fm_jobs *jobs, const double xyz[3], int tool, fm_error *err)
+fm_status fm_jobs_live_position(fm_jobs *jobs, const fm_live_pose *pose, fm_error *err)
 {
-    return fm_live_position(&jobs->live, xyz, tool, err);
+    return fm_live_position(&jobs->live, pose, err);
 }
 
 fm_status fm_jobs_live_stop(fm_jobs *jobs, fm_error *err)
@@ -541,9 +542,9 @@ void fm_jobs_live_note(fm_jobs *jobs, const char *note)
     fm_live_note(&jobs->live, note);
 }
 
-int fm_jobs_live_machine(fm_jobs *jobs, double xyz[3], int *tool)
+int fm_jobs_live_machine(fm_jobs *jobs, fm_live_pose *out)
 {
-    return fm_live_machine(&jobs->live, xyz, tool);
+    return fm_live_machine(&jobs->live, out);
 }
 
 void fm_jobs_live_on_position(fm_jobs *jobs, void (*fn)(void *user), void *user)

@@ -31,6 +31,7 @@ typedef struct fm_jobs_config {
      * selected job's), voxel (mm) and the feed that times each move. */
     const char *live_stock;
     const char *live_tools;
+    const char *live_machine; /* a machine file: the live job's rotary axes, limits */
     double live_voxel;
     double live_feed;
     /* G-code: the dialect of every job ("linuxcnc" or "fanuc"; NULL: the
@@ -127,15 +128,15 @@ void fm_jobs_pause_all(fm_jobs *jobs);
  * cuts. Refusals: FM_ERR_INPUT (live mode off, no stock or tools, the job
  * ended), reason "busy" (the queue of positions is full, no thread). */
 fm_status fm_jobs_live_start(fm_jobs *jobs, int from_slot, fm_error *err);
-fm_status fm_jobs_live_position(fm_jobs *jobs, const double xyz[3], int tool, fm_error *err);
+fm_status fm_jobs_live_position(fm_jobs *jobs, const fm_live_pose *pose, fm_error *err);
 fm_status fm_jobs_live_stop(fm_jobs *jobs, fm_error *err);
 int fm_jobs_live_active(fm_jobs *jobs);
 /* What live mode's source says of its connection (live_source.c), shown
  * as "live_source" in the live job's status. */
 void fm_jobs_live_note(fm_jobs *jobs, const char *note);
-/* The live machine's latest position and tool (1), or 0 (live.h's
- * fm_live_machine); who is told of each position (fm_live_on_position). */
-int fm_jobs_live_machine(fm_jobs *jobs, double xyz[3], int *tool);
+/* The live machine's latest position (1), or 0 (live.h's fm_live_machine);
+ * who is told of each position (fm_live_on_position). */
+int fm_jobs_live_machine(fm_jobs *jobs, fm_live_pose *out);
 void fm_jobs_live_on_position(fm_jobs *jobs, void (*fn)(void *user), void *user);
 
 #endif

@@ -8,7 +8,10 @@
  * (the first position only places the tool). A restarted daemon replays
  * the journal (the runner skips what its stock snapshot already holds) and
  * the live job continues where the machine is. One live job at a time: there
- * is one set of live registers. */
+ * is one set of live registers. A position may carry more than Modbus
+ * writes (live mode from MTConnect, live_source.c): the program line, which
+ * the move then carries, and the rotary joints, which move the tool through
+ * the live job's machine (live_machine) as a program's A/B/C words do. */
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -20,22 +23,22 @@
 #include "live.h"
 #include "log.h"
 #include "store.h"
+#include "sweep/sweep.h"
 #include "toolpaths/tooltable/tooltable.h"
 
 /* Positions waiting to be cut. A controller polled every few ms fills it
  * only if cutting falls far behind; then writes are refused (busy) rather
  * than silently dropped. */
 #define LIVE_QUEUE 4096
-/* The journal: one line per position written, "X Y Z TOOL". A line cut
- * short by a crash in the middle of a write is ignored. */
+/* The journal: one line per position written, "X Y Z TOOL LINE A B C"
+ * (nan for a joint not given; journals written before the line and the
+ * joints were kept have "X Y Z TOOL"). A line cut short by a crash in the
+ * middle of a write is ignored. */
 #define LIVE_JOURNAL "live.journal"
 #define LIVE_JOURNAL_MAX_BYTES ((size_t)256 << 20)
-#define LIVE_LINE_MAX 128
+#define LIVE_LINE_MAX 256
 
-typedef struct live_pos {
-    double xyz[3];
-    int tool;
-} live_pos;
+typedef fm_live_pose live_pos;
 
 struct job_live {
     /* Guarded by the job's lock; the job's cond wakes the source. */
@@ -50,6 +53,7 @@ struct job_live {
     /* The source's own state (the job's thread only). */
     int have_prev;
     double prev[3];
+    double prev_abc[3]; /* the joints, 0 for those not given */
     double program_time;
     long next_index;
     double feed;
@@ -77,8 +81,8 @@ static void journal_append(job *j, const live_pos *p)
     job_live *L = j->live;
     if (L->journal_fd < 0) return;
     char line[LIVE_LINE_MAX];
-    int n = snprintf(line, sizeof line, "%.17g %.17g %.17g %d\n", p->xyz[0], p->xyz[1], p->xyz[2],
-                     p->tool);
+    int n = snprintf(line, sizeof line, "%.17g %.17g %.17g %d %d %.17g %.17g %.17g\n", p->xyz[0],
+                     p->xyz[1], p->xyz[2], p->tool, p->line, p->abc[0], p->abc[1], p->abc[2]);
     /* One write of a short line with O_APPEND: a SIGKILL leaves it whole
      * or not at all in practice; a torn line is skipped when read back.
      * No fsync per position (the Modbus thread must not wait for the
@@ -114,11 +118,14 @@ static fm_status journal_load(job *j, fm_error *err)
     for (char *nl; (nl = memchr(line, '\n', size - (size_t)(line - text))); line = nl + 1) {
         *nl = '\0';
         live_pos p;
+        fm_live_pose_init(&p, (double[3]){0, 0, 0}, 0);
         char tail;
-        if (sscanf(line, "%lf %lf %lf %d %c", &p.xyz[0], &p.xyz[1], &p.xyz[2], &p.tool, &tail) ==
-                4 &&
-            isfinite(p.xyz[0]) && isfinite(p.xyz[1]) && isfinite(p.xyz[2]))
+        int n = sscanf(line, "%lf %lf %lf %d %d %lf %lf %lf %c", &p.xyz[0], &p.xyz[1], &p.xyz[2],
+                       &p.tool, &p.line, &p.abc[0], &p.abc[1], &p.abc[2], &tail);
+        if ((n == 4 || n == 8) && isfinite(p.xyz[0]) && isfinite(p.xyz[1]) && isfinite(p.xyz[2])) {
+            if (n == 4) p.line = 0;
             L->replay[L->replay_count++] = p;
+        }
     }
     free(text);
     return FM_OK;
@@ -166,9 +173,12 @@ static int live_next(void *user, fm_motion *out, int *more)
         *more = L->count > 0 || L->replay_next < L->replay_count;
         pthread_mutex_unlock(&j->lock);
 
+        double abc[3];
+        for (int a = 0; a < 3; a++) abc[a] = isfinite(p.abc[a]) ? p.abc[a] : 0.0;
         if (!L->have_prev) {
             /* The first position only places the tool. */
             memcpy(L->prev, p.xyz, sizeof L->prev);
+            memcpy(L->prev_abc, abc, sizeof L->prev_abc);
             L->have_prev = 1;
             continue;
         }
@@ -187,12 +197,34 @@ static int live_next(void *user, fm_motion *out, int *more)
         out->tool = p.tool;
         out->t0 = L->program_time;
         out->t1 = L->program_time + length / L->feed * 60.0;
-        /* the move's number stands for a source line */
-        out->line = (int)(L->next_index + 1);
+        /* The machine's rotary axes: the position's X/Y/Z and A/B/C are its
+         * joints, each moving linearly in time (no tool centre point
+         * control: a machine's axes, not a programmed tip). */
+        const fm_machine *machine = j->doc->spec.machine;
+        if (machine && machine->rotary_count > 0) {
+            out->machine = machine;
+            memcpy(out->rotary_start, L->prev_abc, sizeof out->rotary_start);
+            memcpy(out->rotary_end, abc, sizeof out->rotary_end);
+            out->tcp = 0;
+            const fm_tool_spec *t = fm_tool_table_find(&j->doc->tools, p.tool);
+            out->tool_length = t ? t->length_offset : 0.0;
+            double tip[3];
+            fm_motion_pose_at(out, 0, tip, out->axis_start);
+            fm_motion_pose_at(out, 1, tip, out->axis_end);
+            /* A turn of the joints alone is a move too: its time from the
+             * largest joint travel at the feed taken as degrees/min. */
+            double turn = 0;
+            for (int a = 0; a < 3; a++) turn = fmax(turn, fabs(abc[a] - L->prev_abc[a]));
+            if (turn > length) out->t1 = L->program_time + turn / L->feed * 60.0;
+        }
+        /* The machine's program line when the source gives it; else the
+         * move's number stands for one. */
+        out->line = p.line > 0 ? p.line : (int)(L->next_index + 1);
         out->block = -1;
         out->index = L->next_index++;
         L->program_time = out->t1;
         memcpy(L->prev, p.xyz, sizeof L->prev);
+        memcpy(L->prev_abc, abc, sizeof L->prev_abc);
         return 1;
     }
 }
@@ -237,14 +269,11 @@ void fm_live_session_init(fm_live_session *s)
     s->on_position_user = NULL;
 }
 
-int fm_live_machine(fm_live_session *s, double xyz[3], int *tool)
+int fm_live_machine(fm_live_session *s, fm_live_pose *out)
 {
     pthread_mutex_lock(&s->lock);
     int has = s->job && s->has_last;
-    if (has) {
-        memcpy(xyz, s->last_xyz, sizeof s->last_xyz);
-        *tool = s->last_tool;
-    }
+    if (has) *out = s->last;
     pthread_mutex_unlock(&s->lock);
     return has;
 }
@@ -353,12 +382,15 @@ fm_status fm_live_document(const fm_live_config *cfg, const job *src, const fm_j
                              "program", "live", "feed", cfg->feed > 0 ? cfg->feed : 1000,
                              "options", "name", "live");
     if (!spec) return fm_error_set(err, FM_ERR_LIMIT, "out of memory");
+    /* The machine's rotary axes move the tool by the joints a position
+     * carries; its limits and components are the check's. */
+    if (cfg->machine && cfg->machine[0]) json_object_set_new(spec, "machine", json_string(cfg->machine));
     fm_status st = fm_job_doc_from_json(spec, rules, out, err);
     json_decref(spec);
     return st;
 }
 
-fm_status fm_live_position(fm_live_session *s, const double xyz[3], int tool, fm_error *err)
+fm_status fm_live_position(fm_live_session *s, const fm_live_pose *pose, fm_error *err)
 {
     pthread_mutex_lock(&s->lock);
     job *j = s->job;
@@ -375,13 +407,11 @@ fm_status fm_live_position(fm_live_session *s, const double xyz[3], int tool, fm
                                      LIVE_QUEUE);
         } else {
             live_pos *p = &L->queue[(L->head + L->count) % LIVE_QUEUE];
-            memcpy(p->xyz, xyz, sizeof p->xyz);
-            p->tool = tool;
+            *p = *pose;
             L->count++;
             journal_append(j, p);
             pthread_cond_broadcast(&j->cond);
-            memcpy(s->last_xyz, xyz, sizeof s->last_xyz);
-            s->last_tool = tool;
+            s->last = *pose;
             s->has_last = 1;
         }
         pthread_mutex_unlock(&j->lock);

@@ -21,8 +21,7 @@ typedef struct fm_live_session {
      * of each (the MTConnect agent): the hook is called after the position
      * is queued, under hook_lock, never under lock. */
     int has_last;
-    double last_xyz[3];
-    int last_tool;
+    fm_live_pose last;
     pthread_mutex_t hook_lock;
     void (*on_position)(void *user);
     void *on_position_user;
@@ -36,13 +35,13 @@ void fm_live_detach(fm_live_session *s, job *j);
 int fm_live_active(fm_live_session *s);
 /* Queue a position for the live job and journal it; refusals: live mode
  * off or the job ended (FM_ERR_INPUT), reason "busy" (the queue is full). */
-fm_status fm_live_position(fm_live_session *s, const double xyz[3], int tool, fm_error *err);
+fm_status fm_live_position(fm_live_session *s, const fm_live_pose *pose, fm_error *err);
 /* Live mode off: the session lets its job go, which cuts what is queued
  * and ends on its own thread. */
 void fm_live_stop(fm_live_session *s);
-/* The live machine's latest position and tool: 1, or 0 when live mode is
- * off or no position came yet. */
-int fm_live_machine(fm_live_session *s, double xyz[3], int *tool);
+/* The live machine's latest position: 1, or 0 when live mode is off or no
+ * position came yet. */
+int fm_live_machine(fm_live_session *s, fm_live_pose *out);
 /* Call fn(user) after each position queued (NULL: nobody); returns once a
  * call in progress has ended. */
 void fm_live_on_position(fm_live_session *s, void (*fn)(void *user), void *user);
@@ -56,6 +55,7 @@ void fm_live_note(fm_live_session *s, const char *note);
 typedef struct fm_live_config {
     const char *stock;
     const char *tools;
+    const char *machine; /* a machine file (docs/check.md), or NULL / "": none */
     double voxel;
     double feed;
 } fm_live_config;

@@ -8,8 +8,10 @@
  *   is nothing new), parsed with libxml2.
  * Observations of one timestamp make one position (an adapter writes X
  * and Z of one instant on one line or several); a position is the mapped
- * X/Y/Z times the scale. When the live job's queue is full (the cut falls
- * behind, "busy") the newest position waits and replaces the one before it:
+ * X/Y/Z times the scale, the mapped A/B/C in degrees (the joints of the
+ * live job's machine), the tool, the program line and the spindle speed.
+ * When the live job's queue is full (the cut falls behind, "busy") the
+ * newest position waits and replaces the one before it:
  * positions are coalesced, never queued without bound. A lost connection
  * is tried again after 1, 2, 4... s up to reconnect_max_s, which the live
  * job's status says (live_source). */
@@ -19,6 +21,7 @@
 #include <fcntl.h>
 #include <libxml/parser.h>
 #include <libxml/tree.h>
+#include <limits.h>
 #include <math.h>
 #include <netdb.h>
 #include <poll.h>
@@ -35,6 +38,7 @@
 
 #include "log.h"
 #include "mtconnect/mtconnect.h"
+#include "runner/machine.h"
 
 #define HEARTBEAT_DEFAULT_MS 10000
 #define SILENCE_WITHOUT_HEARTBEAT_S 600.0
@@ -43,7 +47,7 @@
 #define CONNECT_TIMEOUT_MS 5000
 #define STREAM_HEARTBEAT_MS 1000
 
-static const char *const map_keys[8] = {"X", "Y", "Z", "A", "B", "C", "tool", "line"};
+static const char *const map_keys[FM_LIVE_MAP_KEYS] = {"X", "Y", "Z", "A", "B", "C", "tool", "line", "S"};
 
 struct fm_live_source {
     fm_live_source_config cfg;
@@ -59,6 +63,8 @@ struct fm_live_source {
     double value[6];
     int known[6];
     long tool;
+    long line;             /* 0 until the mapped line has a value */
+    double spindle_rpm;    /* NAN until the mapped speed has a value */
     int pending;           /* a mapped value changed since the last position given */
     double pending_time;   /* the timestamp of the observations pending */
     int started;           /* the live job was started */
@@ -92,14 +98,17 @@ int fm_live_map_parse(const char *text, fm_live_map *out, char *msg, size_t msg_
             return -1;
         }
         int key = -1;
-        for (int k = 0; k < 8; k++)
+        for (int k = 0; k < FM_LIVE_MAP_KEYS; k++)
             if ((size_t)(eq - p) == strlen(map_keys[k]) && !strncasecmp(p, map_keys[k], (size_t)(eq - p)))
                 key = k;
-        if (key < 0 || (key >= 3 && key <= 5) || key == FM_LIVE_MAP_LINE) {
+        if (key < 0) {
             snprintf(msg, msg_size,
-                     "live_map: %.*s cannot be mapped (live mode cuts along X, Y and Z with a tool: "
-                     "X, Y, Z, tool)",
+                     "live_map: %.*s cannot be mapped (the keys are X, Y, Z, A, B, C, tool, line, S)",
                      (int)(eq - p), p);
+            return -1;
+        }
+        if (out->name[key][0]) {
+            snprintf(msg, msg_size, "live_map: %s is mapped twice", map_keys[key]);
             return -1;
         }
         size_t n = (size_t)(end - eq - 1);
@@ -114,6 +123,24 @@ int fm_live_map_parse(const char *text, fm_live_map *out, char *msg, size_t msg_
     }
     if (!out->name[0][0] && !out->name[1][0] && !out->name[2][0]) {
         snprintf(msg, msg_size, "live_map must map at least one of X, Y, Z (e.g. X=Xact,Z=Zact)");
+        return -1;
+    }
+    return 0;
+}
+
+int fm_live_map_check_rotary(const fm_live_map *map, int rotary_letters, const char *machine, char *msg,
+                             size_t msg_size)
+{
+    for (int a = 0; a < 3; a++) {
+        if (!map->name[3 + a][0] || (rotary_letters & (1 << a))) continue;
+        if (machine && machine[0])
+            snprintf(msg, msg_size, "live_map maps %c, which the machine file %s has no rotary axis for",
+                     'A' + a, machine);
+        else
+            snprintf(msg, msg_size,
+                     "live_map maps %c: rotary axes need live_machine, a machine file with them "
+                     "(docs/check.md)",
+                     'A' + a);
         return -1;
     }
     return 0;
@@ -208,22 +235,27 @@ static void start_live_job(fm_live_source *s)
 static void flush(fm_live_source *s)
 {
     if (!s->pending) return;
-    double xyz[3];
-    for (int a = 0; a < 3; a++) {
+    fm_live_pose pose;
+    double xyz[3] = {0, 0, 0};
+    fm_live_pose_init(&pose, xyz, s->map.name[FM_LIVE_MAP_TOOL][0] ? (int)s->tool : 1);
+    for (int a = 0; a < 6; a++) {
         if (s->map.name[a][0] && !s->known[a]) return; /* not all axes seen yet */
-        xyz[a] = s->map.name[a][0] ? s->value[a] * s->cfg.scale : 0.0;
+        /* lengths in the source's units, angles in degrees */
+        if (a < 3) pose.xyz[a] = s->map.name[a][0] ? s->value[a] * s->cfg.scale : 0.0;
+        else if (s->map.name[a][0]) pose.abc[a - 3] = s->value[a];
     }
+    pose.line = s->line > 0 && s->line <= INT_MAX ? (int)s->line : 0;
+    pose.spindle_rpm = s->spindle_rpm;
     if (!s->started) start_live_job(s);
-    int tool = s->map.name[FM_LIVE_MAP_TOOL][0] ? (int)s->tool : 1;
     fm_error err;
     fm_error_clear(&err);
-    fm_status st = fm_jobs_live_position(s->jobs, xyz, tool, &err);
+    fm_status st = fm_jobs_live_position(s->jobs, &pose, &err);
     if (st != FM_OK && strcmp(err.reason, "busy") != 0) {
         /* The live job ended (cancelled, or switched off): a new one. */
         s->started = 0;
         start_live_job(s);
         fm_error_clear(&err);
-        st = fm_jobs_live_position(s->jobs, xyz, tool, &err);
+        st = fm_jobs_live_position(s->jobs, &pose, &err);
     }
     if (st == FM_OK) {
         s->pending = 0;
@@ -239,13 +271,15 @@ static void flush(fm_live_source *s)
 /* One observation by the data item's name (or id). */
 static void observe(fm_live_source *s, const char *name, const char *id, const char *value, double time)
 {
-    for (int k = 0; k < 8; k++) {
+    for (int k = 0; k < FM_LIVE_MAP_KEYS; k++) {
         const char *want = s->map.name[k];
         if (!want[0] || (strcmp(want, name ? name : "") && strcmp(want, id ? id : ""))) continue;
         if (!strcmp(value, "UNAVAILABLE")) continue;
         char *end;
         double v = strtod(value, &end);
         if (end == value || !isfinite(v)) continue;
+        /* a tool or line number out of an int's range is not one */
+        if ((k == FM_LIVE_MAP_TOOL || k == FM_LIVE_MAP_LINE) && !(fabs(v) < 1e9)) continue;
         /* A new instant: the position of the one before is complete. */
         if (s->pending && !(time == s->pending_time || (isnan(time) && isnan(s->pending_time)))) flush(s);
         if (k < 6) {
@@ -255,6 +289,12 @@ static void observe(fm_live_source *s, const char *name, const char *id, const c
         } else if (k == FM_LIVE_MAP_TOOL) {
             if (s->tool == (long)v) continue;
             s->tool = (long)v;
+        } else if (k == FM_LIVE_MAP_LINE) {
+            if (s->line == (long)v) continue;
+            s->line = (long)v;
+        } else {
+            if (s->spindle_rpm == v) continue;
+            s->spindle_rpm = v;
         }
         if (!s->pending) s->pending_time = time;
         s->pending = 1;
@@ -753,11 +793,28 @@ fm_status fm_live_source_start(const fm_live_source_config *cfg, fm_jobs *jobs, 
         free(s);
         return fm_error_set(err, FM_ERR_INPUT, "%s", msg);
     }
+    /* Rotary axes move the tool through the live job's machine: each one
+     * mapped must be one of its axes. */
+    int rotary_letters = 0;
+    if (cfg->machine && cfg->machine[0]) {
+        fm_check_machine machine;
+        if (fm_check_machine_load(cfg->machine, &machine, err) != FM_OK) {
+            free(s);
+            return err->code;
+        }
+        for (int i = 0; i < machine.chain.rotary_count; i++)
+            rotary_letters |= 1 << machine.chain.rotary[i].letter;
+    }
+    if (fm_live_map_check_rotary(&s->map, rotary_letters, cfg->machine, msg, sizeof msg) != 0) {
+        free(s);
+        return fm_error_set(err, FM_ERR_INPUT, "%s", msg);
+    }
     s->cfg = *cfg;
     if (!(s->cfg.scale > 0)) s->cfg.scale = 1.0;
     if (!(s->cfg.reconnect_max_s >= 1)) s->cfg.reconnect_max_s = 30;
     s->jobs = jobs;
     s->tool = 1;
+    s->spindle_rpm = NAN;
     if (pthread_create(&s->thread, NULL, source_main, s) != 0) {
         free(s);
         return fm_error_set(err, FM_ERR_INTERNAL, "cannot start the live source's thread");

@@ -78,7 +78,9 @@ static fm_status command(void *ctx, int cmd, uint32_t argument, fm_error *err)
 
 static fm_status live_position(void *ctx, const double xyz[3], int tool, fm_error *err)
 {
-    return fm_jobs_live_position(ctx, xyz, tool, err);
+    fm_live_pose pose;
+    fm_live_pose_init(&pose, xyz, tool);
+    return fm_jobs_live_position(ctx, &pose, err);
 }
 
 /* On: a live job from the config's live_stock/live_tools, or from the

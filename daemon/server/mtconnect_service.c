@@ -2,9 +2,9 @@
  * agent's service interface (protocols/mtconnect/mtconnect.h) over the job
  * manager, and the agent mounted on the HTTP server under /mtconnect. The
  * device follows the newest job (the one Modbus shows by default): its
- * published status (state, line, tool, position, volumes, progress,
- * findings, error) and its tool table; the rotary axes come from the
- * machine file of the mtconnect_machine setting. */
+ * published status (state, line, tool, position, rotary joints, spindle
+ * speed, volumes, progress, findings, error) and its tool table; the rotary
+ * axes come from the machine file of the mtconnect_machine setting. */
 #include "mtconnect_service.h"
 
 #include <math.h>
@@ -58,6 +58,15 @@ static void svc_snapshot(void *ctx, fm_mtc_snapshot *out)
     if (state && strcmp(state, "queued") != 0) {
         json_t *pos = json_object_get(st, "position");
         for (int a = 0; a < 3; a++) out->position[a] = json_number_value(json_array_get(pos, (size_t)a));
+        /* The joints of the job's machine's rotary axes ("rotary": {"A":
+         * DEG, ...}) and the spindle speed of the motion last cut. */
+        static const char *const rotary[3] = {"A", "B", "C"};
+        for (int a = 0; a < 3; a++) {
+            json_t *angle = json_object_get(json_object_get(st, "rotary"), rotary[a]);
+            if (json_is_number(angle)) out->rotary[a] = json_number_value(angle);
+        }
+        json_t *rpm = json_object_get(st, "spindle_rpm");
+        if (json_is_number(rpm)) out->spindle_rpm = json_number_value(rpm);
     }
     out->removed_mm3 = json_number_value(json_object_get(st, "removed_volume_mm3"));
     out->stock_mm3 = json_number_value(json_object_get(st, "stock_volume_mm3"));
@@ -65,11 +74,15 @@ static void svc_snapshot(void *ctx, fm_mtc_snapshot *out)
     out->uncertain_voxels = (double)json_integer_value(json_object_get(st, "voxels_uncertain"));
     /* A live job: where the machine is (its latest position), which the
      * cut reaches a little later; so a follower sees every position. */
-    double live_xyz[3];
-    int live_tool;
-    if (fm_jobs_live_machine(jobs, live_xyz, &live_tool)) {
-        memcpy(out->position, live_xyz, sizeof live_xyz);
-        out->tool = live_tool > 0 ? live_tool : out->tool;
+    fm_live_pose live;
+    if (fm_jobs_live_machine(jobs, &live)) {
+        memcpy(out->position, live.xyz, sizeof live.xyz);
+        out->tool = live.tool > 0 ? live.tool : out->tool;
+        /* what the source maps: joints, line, speed */
+        for (int a = 0; a < 3; a++)
+            if (isfinite(live.abc[a])) out->rotary[a] = live.abc[a];
+        if (live.line > 0) out->line = live.line;
+        if (isfinite(live.spindle_rpm)) out->spindle_rpm = live.spindle_rpm;
     }
     json_t *error = json_object_get(st, "error");
     if (json_is_object(error)) {

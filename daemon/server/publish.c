@@ -69,6 +69,9 @@ static json_t *tools_json(const job *j)
     return out;
 }
 
+/* The rotary joints' keys in a status ("rotary": {"A": DEG, ...}). */
+static const char *const rotary_names[3] = {"A", "B", "C"};
+
 json_t *fm_publish_status_json(job *j)
 {
     pthread_mutex_lock(&j->lock);
@@ -92,6 +95,12 @@ json_t *fm_publish_status_json(job *j)
         json_object_set_new(out, "design", json_boolean(j->doc->spec.design_path != NULL));
         json_object_set_new(out, "voxels_uncertain", json_integer((json_int_t)v->voxels_uncertain));
         if (j->live_note[0]) json_object_set_new(out, "live_source", json_string(j->live_note));
+        json_t *rotary = json_object();
+        for (int a = 0; a < 3; a++)
+            if (v->rotary_known & (1 << a))
+                json_object_set_new(rotary, rotary_names[a], json_real(v->rotary[a]));
+        json_object_set_new(out, "rotary", rotary);
+        json_object_set_new(out, "spindle_rpm", v->has_spindle ? json_real(v->spindle_rpm) : json_null());
         json_object_set_new(out, "uncertain_line", v->voxels_uncertain && v->uncertain_line > 0
                                                        ? json_integer(v->uncertain_line)
                                                        : json_null());
@@ -130,6 +139,18 @@ void fm_publish_view_from_status(job *j, json_t *status)
     v->tool = (int)json_integer_value(json_object_get(status, "tool"));
     json_t *pos = json_object_get(status, "position");
     for (int a = 0; a < 3; a++) v->position[a] = json_number_value(json_array_get(pos, (size_t)a));
+    json_t *rotary = json_object_get(status, "rotary");
+    v->rotary_known = 0;
+    for (int a = 0; a < 3; a++) {
+        json_t *angle = json_object_get(rotary, rotary_names[a]);
+        if (json_is_number(angle)) {
+            v->rotary[a] = json_number_value(angle);
+            v->rotary_known |= 1 << a;
+        }
+    }
+    json_t *rpm = json_object_get(status, "spindle_rpm");
+    v->has_spindle = json_is_number(rpm);
+    v->spindle_rpm = json_number_value(rpm);
     v->program_time_s = json_number_value(json_object_get(status, "program_time_s"));
     v->removed_mm3 = json_number_value(json_object_get(status, "removed_volume_mm3"));
     v->stock_mm3 = json_number_value(json_object_get(status, "stock_volume_mm3"));
@@ -165,6 +186,13 @@ void fm_publish_progress(job *j, const fm_job_progress *p, publish_pace *pace)
     v->block = p->block;
     v->tool = p->tool;
     memcpy(v->position, p->position, sizeof v->position);
+    v->rotary_known = 0;
+    for (int a = 0; a < 3; a++) {
+        v->rotary[a] = isfinite(p->rotary[a]) ? p->rotary[a] : 0.0;
+        if (isfinite(p->rotary[a])) v->rotary_known |= 1 << a;
+    }
+    v->has_spindle = isfinite(p->spindle_rpm);
+    v->spindle_rpm = v->has_spindle ? p->spindle_rpm : 0.0;
     v->program_time_s = p->program_time;
     v->removed_mm3 = p->removed_mm3;
     v->stock_mm3 = j->initial_mm3 - p->removed_mm3;

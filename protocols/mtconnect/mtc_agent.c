@@ -175,7 +175,7 @@ static void snapshot_blank(fm_mtc_snapshot *s)
     s->line = -1;
     s->tool = -1;
     for (int i = 0; i < 3; i++) s->position[i] = NAN;
-    for (int i = 0; i < FM_MTC_MAX_ROTARY; i++) s->rotary[i] = NAN;
+    for (int i = 0; i < 3; i++) s->rotary[i] = NAN;
     s->spindle_rpm = s->removed_mm3 = s->stock_mm3 = s->progress_percent = s->uncertain_voxels = NAN;
 }
 
@@ -206,7 +206,7 @@ void fm_mtc_agent_update(fm_mtc_agent *a)
     for (int i = 0; i < a->model.device.rotary_count; i++) {
         char id[8];
         snprintf(id, sizeof id, "%cpos", a->model.device.rotary[i]);
-        set_number(a, id, s.rotary[i], "%.4f", t);
+        set_number(a, id, s.rotary[a->model.device.rotary[i] - 'A'], "%.4f", t);
     }
     if (isfinite(s.position[0]) && isfinite(s.position[1]) && isfinite(s.position[2]))
         snprintf(text, sizeof text, "%.4f %.4f %.4f", s.position[0], s.position[1], s.position[2]);

@@ -76,8 +76,8 @@ typedef struct fm_mtc_snapshot {
     long line;                     /* the program line being cut */
     long tool;                     /* the tool number */
     double position[3];            /* X, Y, Z of the tool tip, mm */
-    double rotary[FM_MTC_MAX_ROTARY]; /* the rotary axes of fm_mtc_device, degrees */
-    double spindle_rpm;
+    double rotary[3];              /* the joints A, B, C, degrees: the device's rotary axes show theirs */
+    double spindle_rpm;            /* the spindle's speed, rev/min */
     double removed_mm3;            /* the stock's removed volume */
     double stock_mm3;              /* the stock's volume now */
     double progress_percent;       /* of the program's time */

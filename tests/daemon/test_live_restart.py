@@ -5,6 +5,9 @@ just before the kill, perhaps not yet cut); a restarted daemon resumes the
 same live job from its snapshot and journal, and the controller's next
 positions cut on into that stock. In the end the job has removed what
 `frepmill simulate` removes for all the moves written as G-code.
+The journal is read back as a daemon from before the line and the joints
+were journaled wrote it: its lines "X Y Z TOOL LINE A B C" are cut to
+"X Y Z TOOL" while the daemon is down.
 Usage: test_live_restart.py FREPMILLD FREPMILL"""
 import os
 import signal
@@ -70,6 +73,18 @@ def main():
         finally:
             if d.proc.poll() is None:
                 d.stop(sig=signal.SIGKILL)
+
+        journals = [os.path.join(top, "live.journal") for top, _, files in os.walk(state)
+                    if "live.journal" in files]
+        check(len(journals) == 1, "the live job has its journal (%s)" % journals)
+        with open(journals[0]) as f:
+            lines = f.read().splitlines()
+        written = [tuple(float(v) for v in line.split()[:3]) for line in lines]
+        check(written == [tuple(map(float, m)) for m in BEFORE] and
+              all(len(line.split()) == 8 and line.split()[4:] == ["0", "nan", "nan", "nan"] for line in lines),
+              "the journal holds the positions written, each with tool, no line and no joints (%s)" % lines)
+        with open(journals[0], "w") as f:
+            f.write("".join(" ".join(line.split()[:4]) + "\n" for line in lines))
 
         d = Daemon(frepmilld, state, *args)
         try:

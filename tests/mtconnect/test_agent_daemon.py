@@ -7,7 +7,9 @@ the tool's ends stay outside the block, so the cut is a 50 x 6 x 5 mm slot,
 Every document served (probe, current, sample, a streamed part, assets,
 errors) is validated with xmllint against the MTConnect 2.7 schemas; the
 values are compared with that closed form, the job's JSON status and report,
-and the tool table.
+and the tool table. A second job on the trunnion (its machine file in the
+job) turns the table to A-20 C135 with the spindle at S12000 and ends on
+line 7: the agent's angles, spindle speed and line are the program's.
 Usage: test_agent_daemon.py FREPMILLD MTCONNECT_DATA"""
 import json
 import os
@@ -26,6 +28,17 @@ NS = {"s": "urn:mtconnect.org:MTConnectStreams:2.7", "d": "urn:mtconnect.org:MTC
 SCHEMA = {"s": "MTConnectStreams_2.7_1.0.xsd", "d": "MTConnectDevices_2.7_1.0.xsd",
           "a": "MTConnectAssets_2.7_1.0.xsd", "e": "MTConnectError_2.7_1.0.xsd"}
 validated = 0
+# Turns the AC trunnion's table with the tool above the block (TCP: the tip
+# stays at X25 Y25 Z30 of the workpiece).
+TURN_PROGRAM = """(the trunnion's table turned above the block)
+G21 G90 G17
+T1 M6
+S12000 M3
+G0 X25 Y25 Z30
+G1 A-20 C135 F2000
+G1 X20 F500
+M2
+"""
 
 
 def validate(body, kind, data, tmp):
@@ -116,7 +129,9 @@ def main():
             x = float(cur.find(".//s:Position[@dataItemId='Xpos']", NS).text)
             check(abs(x - status["position"][0]) <= 1e-4, "X is the job's last position")
             check(cur.find(".//s:Angle[@dataItemId='Apos']", NS).text == "UNAVAILABLE",
-                  "the rotary axes are UNAVAILABLE (jobs publish no joint values)")
+                  "the rotary axes are UNAVAILABLE (the job's machine has none)")
+            check(float(cur.find(".//s:RotaryVelocity[@dataItemId='Srpm']", NS).text) == 0.0,
+                  "the spindle speed is 0 (the program turns no spindle on)")
 
             # sample: from the first sequence, in order, within the buffer.
             header = cur.find("s:Header", NS)
@@ -171,6 +186,33 @@ def main():
                 check(doc.find(".//e:" + element, NS) is not None, "%s: %s" % (url, element))
             code, _ = curl("-X", "POST", base + "/current")
             check(code == 405, "POST under /mtconnect is refused (%d)" % code)
+
+            # A job on the trunnion: the table turned above the block.
+            turn = TURN_PROGRAM.splitlines()
+            last_line = max(n for n, text in enumerate(turn, 1) if text.startswith(("G0", "G1")))
+            with open(machine) as f:
+                job = {"stock": "box:0,0,-10,50,50,0", "voxel": 0.5, "tools": tools,
+                       "machine": json.load(f), "program": {"gcode": TURN_PROGRAM},
+                       "options": {"name": "turn"}}
+            job_id = submit(d.url, job, tmp)
+            status = wait_state(d.url, job_id, ("done", "failed"), 300)
+            check(status["state"] == "done", "the trunnion's job is done (%s)" % status["state"])
+            check(status.get("rotary") == {"A": -20.0, "C": 135.0} and status.get("spindle_rpm") == 12000.0,
+                  "the job's status has the program's joints and speed (%s, %s)" %
+                  (status.get("rotary"), status.get("spindle_rpm")))
+            for _ in range(100):
+                cur = get(base + "/current", "s", data, tmp)
+                if cur.find(".//s:Program", NS).text == "turn" and \
+                        cur.find(".//s:Execution", NS).text == "PROGRAM_COMPLETED":
+                    break
+            angles = {i: cur.find(".//s:Angle[@dataItemId='%s']" % i, NS).text for i in ("Apos", "Cpos")}
+            check(angles == {"Apos": "-20.0000", "Cpos": "135.0000"},
+                  "the agent's A and C are the program's last A-20 C135 (%s)" % angles)
+            rpm = cur.find(".//s:RotaryVelocity[@dataItemId='Srpm']", NS).text
+            check(float(rpm) == 12000.0, "the agent's spindle speed is the program's S12000 (%s)" % rpm)
+            line = cur.find(".//s:LineNumber[@dataItemId='line']", NS).text
+            check(int(line) == last_line, "the agent's line is the program's last motion's, %d (%s)" %
+                  (last_line, line))
         finally:
             d.stop()
     print("daemon_mtconnect: %d documents validated" % validated)

@@ -15,10 +15,24 @@ int main(void)
     CHECK(!strcmp(m.name[FM_LIVE_MAP_TOOL], "p1CurrentTool"));
     CHECK(fm_live_map_parse("x=Xpos,y=Ypos,z=Zpos", &m, msg, sizeof msg) == 0);
     CHECK(!strcmp(m.name[1], "Ypos"));
-    /* Rotary axes and the line cannot be followed (live mode cuts X/Y/Z). */
-    CHECK(fm_live_map_parse("X=a,A=Apos", &m, msg, sizeof msg) != 0);
-    CHECK_STR_CONTAINS(msg, "A cannot be mapped");
-    CHECK(fm_live_map_parse("X=a,line=p1linenumber", &m, msg, sizeof msg) != 0);
+    /* The line, the spindle speed and the rotary axes map too; each key
+     * once. */
+    CHECK(fm_live_map_parse("X=a,line=p1linenumber,S=Srpm,C=Cpos,A=Apos", &m, msg, sizeof msg) == 0);
+    CHECK(!strcmp(m.name[FM_LIVE_MAP_LINE], "p1linenumber") && !strcmp(m.name[FM_LIVE_MAP_SPINDLE], "Srpm"));
+    CHECK(!strcmp(m.name[3], "Apos") && !m.name[4][0] && !strcmp(m.name[5], "Cpos"));
+    /* A rotary axis must be one of the live machine's (an AC trunnion: A
+     * and C, bits 1 << 0 and 1 << 2). */
+    CHECK(fm_live_map_check_rotary(&m, 1 | 4, "ac.json", msg, sizeof msg) == 0);
+    CHECK(fm_live_map_check_rotary(&m, 1, "a.json", msg, sizeof msg) != 0);
+    CHECK_STR_CONTAINS(msg, "maps C, which the machine file a.json has no rotary axis for");
+    CHECK(fm_live_map_check_rotary(&m, 0, NULL, msg, sizeof msg) != 0);
+    CHECK_STR_CONTAINS(msg, "rotary axes need live_machine");
+    CHECK(fm_live_map_parse("X=a,line=b", &m, msg, sizeof msg) == 0);
+    CHECK(fm_live_map_check_rotary(&m, 0, NULL, msg, sizeof msg) == 0);
+    CHECK(fm_live_map_parse("X=a,x=b", &m, msg, sizeof msg) != 0);
+    CHECK_STR_CONTAINS(msg, "X is mapped twice");
+    CHECK(fm_live_map_parse("X=a,U=u", &m, msg, sizeof msg) != 0);
+    CHECK_STR_CONTAINS(msg, "U cannot be mapped");
     CHECK(fm_live_map_parse("tool=T", &m, msg, sizeof msg) != 0);
     CHECK_STR_CONTAINS(msg, "at least one of X, Y, Z");
     CHECK(fm_live_map_parse("X", &m, msg, sizeof msg) != 0);

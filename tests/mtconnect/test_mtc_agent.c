@@ -113,7 +113,7 @@ static void blank(void)
     g_snap.line = -1;
     g_snap.tool = -1;
     for (int i = 0; i < 3; i++) g_snap.position[i] = NAN;
-    for (int i = 0; i < FM_MTC_MAX_ROTARY; i++) g_snap.rotary[i] = NAN;
+    for (int i = 0; i < 3; i++) g_snap.rotary[i] = NAN;
     g_snap.spindle_rpm = g_snap.removed_mm3 = g_snap.stock_mm3 = NAN;
     g_snap.progress_percent = g_snap.uncertain_voxels = NAN;
 }
