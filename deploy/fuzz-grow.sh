@@ -43,6 +43,7 @@ for t in json.load(sys.stdin)["tests"]:
 }
 
 targets=$(cut -f2 "$list" | xargs -n1 basename | tr '\n' ' ')
+# shellcheck disable=SC2086 # one word a target
 nice cmake --build "$build" -j "$(nproc 2>/dev/null || echo 2)" --target $targets
 
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:detect_stack_use_after_return=0
@@ -53,7 +54,7 @@ export ASAN_OPTIONS UBSAN_OPTIONS FM_FUZZ_GROW FM_FUZZ_SEED
 
 tab=$(printf '\t')
 while IFS="$tab" read -r script target _seconds artifacts corpus options; do
-    # shellcheck disable=SC2086 # the options are separate words
+    # shellcheck disable=SC2046 # the options are separate words
     nice sh "$script" "$target" "$seconds" "$artifacts" "$corpus" $(echo "$options" | tr '\t' ' ') </dev/null
 done <"$list"
 echo "fuzz-grow.sh: the corpora now (commit what was added):"
