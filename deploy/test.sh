@@ -9,7 +9,8 @@
 #             unit tests under the sanitizers, but for those labelled timing
 #             or heavy (minutes of CPU there; they ran in release);
 #   fuzz      (after sanitize) each fuzz target for FM_FUZZ_SECONDS (30) from
-#             its seed corpus, two at a time;
+#             its committed corpus, two at a time, with a seed that changes
+#             with the commit (printed; FM_FUZZ_SEED=N reruns it);
 #   asan      (on demand) a GCC build with AddressSanitizer + UBSan: the unit
 #             tests again (but those labelled timing).
 # Every test runs in some step of the default: a test labelled integration
@@ -113,6 +114,8 @@ for s in $steps; do
             exit 2
         }
         sanitize_env
+        echo "test.sh: fuzz seed $(sh tests/support/run_fuzz.sh --seed); a failing input is printed" \
+            "and kept in build/sanitize/fuzz-artifacts/"
         run_ctest build/sanitize -L fuzz -j 2
         step_done "fuzzing"
         ;;

@@ -64,7 +64,9 @@ static fm_status survey(const fm_job_spec *spec, const job_tools *tools, job_sur
     if (spec->program_kind == FM_PROGRAM_LIVE) return FM_OK;
     sv->log = spec->motion_log ? job_motions_open_log(spec->motion_log, err)
                                : job_motions_new(JOB_MOTIONS_MEMORY, NULL);
-    if (!sv->log) return err && err->code ? err->code : FM_ERR_LIMIT;
+    if (!sv->log && spec->motion_log) return err && err->code ? err->code : FM_ERR_LIMIT;
+    /* job_motions_new says nothing of its failure */
+    if (!sv->log) return fm_error_set(err, FM_ERR_LIMIT, "out of memory keeping the program's motions");
     result->interpretations++;
     if (spec->dynamics && spec->dynamics->given) {
         fm_error perr;

@@ -5,9 +5,15 @@
  * status and a message; or, if it tolerates the failure, the same result),
  * leave no block allocated, and the next call must work and give the same
  * result as the first. Cases: G-code, HyperFun (compiled and evaluated),
- * trajectories, JSON and .tbl tool tables, the job JSON, the daemon's
- * config file, the check's machine file, STL, and stocks from a box, a
- * cylinder, a HyperFun model and a snapshot. The harness and what it does
+ * trajectories, JSON and .tbl tool tables, the job JSON, a multipart
+ * upload into a job, the daemon's config file, STL, stocks from a box, a
+ * cylinder, a HyperFun model and a snapshot, and
+ * whole jobs: one cut with the collision check (sweep, cut, check), one
+ * compared with a design. Each case must have had allocations failed, and
+ * some of them must have ended in an error (else the injection did not
+ * happen, and the case tested nothing: so the check's machine file is not
+ * a case, since its reader allocates nothing but in jansson's file reader,
+ * which is not failed). The harness and what it does
  * not fail (third-party code that cannot survive a failure) are described
  * in tests/support/alloc_fail.c and tests/README.md. Usage: test_alloc_fail [CASE]
  * (run from tests/). */
@@ -17,8 +23,10 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "check/check.h"
 #include "frep/frep.h"
 #include "hf/hf.h"
+#include "protocols/http/http_server.h"
 #include "job.h"
 #include "runner/job_doc.h"
 #include "server/config.h"
@@ -38,6 +46,11 @@ typedef int (*case_fn)(double *summary, char *msg, size_t msg_size);
 typedef struct alloc_case {
     const char *name;
     case_fn run;
+    /* 0: every allocation fails in turn. Else at most about this many
+     * runs: every k-th allocation fails, k = the run's allocations / runs
+     * (a whole job makes tens of thousands, and each failed run costs a
+     * whole run). */
+    long max_runs;
 } alloc_case;
 
 static char *slurp(const char *path, size_t *len)
@@ -163,7 +176,7 @@ static int run_tools_tbl(double *summary, char *msg, size_t msg_size)
     return 0;
 }
 
-/* ---------------------------------------------- job JSON, config, machine -- */
+/* ----------------------------------------------------- job JSON, config -- */
 
 static char *job_text;
 
@@ -194,13 +207,33 @@ static int run_config(double *summary, char *msg, size_t msg_size)
     return 0;
 }
 
-static int run_machine(double *summary, char *msg, size_t msg_size)
+/* A multipart upload (the daemon's POST /v1/jobs with files) into the job
+ * document: the parts split, the job assembled from them, then validated. */
+static char *multipart_body;
+static size_t multipart_len;
+static const char multipart_type[] = "multipart/form-data; boundary=alloc-fail-boundary";
+
+static int run_multipart(double *summary, char *msg, size_t msg_size)
 {
-    fm_check_machine m;
+    fm_http_part parts[FM_HTTP_MAX_PARTS];
+    fm_http_error herr;
+    int n = fm_http_multipart_parse(multipart_type, multipart_body, multipart_len, parts, FM_HTTP_MAX_PARTS,
+                                    &herr);
+    json_t *job = n < 0 ? NULL : fm_http_job_from_multipart(parts, n, &herr);
+    if (!job) {
+        snprintf(msg, msg_size, "%d %s: %s", herr.status, herr.code, herr.message);
+        return 1;
+    }
     fm_error err;
-    if (fm_check_machine_load("check/machine.json", &m, &err)) return fail_with(&err, msg, msg_size);
-    *summary = m.rapid_rate;
-    for (int a = 0; a < 3; a++) *summary += m.limit_lo[a] + 3 * m.limit_hi[a] + 5 * m.start[a];
+    fm_job_doc *doc = NULL;
+    fm_status st = fm_job_doc_from_json(job, NULL, &doc, &err);
+    json_decref(job);
+    if (st != FM_OK) return fail_with(&err, msg, msg_size);
+    alloc_fail_pause();
+    *summary = (double)json_dumpb(doc->json, NULL, 0, JSON_COMPACT | JSON_SORT_KEYS) +
+               1000.0 * json_object_size(doc->json) + (double)doc->program_length + 1e6 * n;
+    alloc_fail_resume();
+    fm_job_doc_free(doc);
     return 0;
 }
 
@@ -268,6 +301,74 @@ static int run_vdb(double *summary, char *msg, size_t msg_size)
     return stock_result(fm_stock_load_vdb(vdb_path, &o, &err), &err, summary, msg, msg_size);
 }
 
+/* ------------------------------------------- jobs: check, cut, design -- */
+
+/* A 6 mm flat end mill, a holder above its 10 mm of shank. */
+static fm_tool_spec job_tool;
+static fm_tool_table job_tools = {1, &job_tool};
+static char fixture_path[256];
+
+/* A whole job through the runner, single-threaded: the program's motions
+ * swept and cut (lib/sweep, lib/stock), and with check the collision check
+ * in the same pass (lib/check: a HyperFun clamp in the tool's way), with
+ * design the comparison with the octahedron (building the design, the
+ * deviation regions, the blame of each gouge). */
+static int run_job(const char *program, const char *stock, int check, int design, double *summary, char *msg,
+                   size_t msg_size)
+{
+    fm_job_check chk;
+    fm_job_check_default(&chk);
+    chk.fixtures[0] = fixture_path;
+    chk.fixture_count = 1;
+    chk.voxel_mm = 0.5;
+    fm_job_spec spec;
+    fm_job_spec_default(&spec);
+    spec.program_text = program;
+    spec.program_length = strlen(program);
+    spec.program_name = "alloc.ngc";
+    spec.stock_spec = stock;
+    spec.tools = &job_tools;
+    spec.stock = stock_options();
+    if (check) {
+        spec.check = &chk;
+        spec.stock.band_voxels = fm_check_band_voxels(&chk.options, spec.stock.voxel_mm);
+    }
+    if (design) spec.design_path = stl_path;
+    fm_job_result res;
+    fm_error err;
+    if (fm_job_run(&spec, NULL, &res, &err) != FM_OK) return fail_with(&err, msg, msg_size);
+    *summary = res.removed_volume_mm3 + 3.0 * res.motions;
+    if (res.check) {
+        for (size_t i = 0; i < fm_check_count(res.check); i++) {
+            const fm_check_finding *f = fm_check_get(res.check, i);
+            *summary += 1000.0 * (1 + f->kind) + 10 * f->line + f->penetration_mm;
+        }
+    }
+    if (res.has_deviation) {
+        *summary += 1e5 + res.deviation.max_gouge_mm + 7 * res.deviation.max_excess_mm +
+                    res.deviation.gouge_volume_mm3 + 5.0 * res.deviation.gouge_total + 11.0 * res.deviation.excess_total;
+        for (size_t i = 0; i < res.deviation.gouge_count; i++) *summary += 13.0 * res.gouge_blame[i].line;
+    }
+    fm_job_result_release(&res);
+    return 0;
+}
+
+/* A slot through a 20 x 20 x 5 block past a 3 mm ball clamped on it. */
+static const char check_program[] = "G21 G90 G17\nT1 M6\nG0 X-5 Y10 Z2\nG1 Z-1 F600\nG1 X25\nG0 Z10\nM30\n";
+
+static int run_job_check(double *summary, char *msg, size_t msg_size)
+{
+    return run_job(check_program, "box:0,0,-5,20,20,0", 1, 0, summary, msg, msg_size);
+}
+
+/* A slot across the top of a block that holds the octahedron design. */
+static const char design_program[] = "G21 G90 G17\nT1 M6\nG0 X-9 Y0 Z4\nG1 Z1 F600\nG1 X9\nG0 Z10\nM30\n";
+
+static int run_job_design(double *summary, char *msg, size_t msg_size)
+{
+    return run_job(design_program, "box:-3.5,-3.5,-3.5,3.5,3.5,3.5", 0, 1, summary, msg, msg_size);
+}
+
 /* An octahedron |x| + |y| + |z| <= 3 as a binary STL (outward normals). */
 static void write_octahedron(const char *path)
 {
@@ -315,8 +416,15 @@ static void exercise(const alloc_case *c)
             return;
         }
     }
+    long stride = 1, total = 0;
+    if (c->max_runs) {
+        alloc_fail_arm(0);
+        c->run(&got, msg, sizeof msg);
+        total = alloc_fail_disarm();
+        stride = total / c->max_runs > 1 ? total / c->max_runs : 1;
+    }
     long n = 1, failed = 0, errors = 0, tolerated = 0, leaks = 0;
-    for (;; n++) {
+    for (;; n += stride) {
         long before = alloc_fail_live();
         msg[0] = 0;
         alloc_fail_arm(n);
@@ -326,10 +434,13 @@ static void exercise(const alloc_case *c)
         long after = alloc_fail_live();
         if (!hit) {
             /* This run needed fewer than n allocations: every one has
-             * failed in turn. */
+             * failed in turn. (A whole job's count on this thread varies
+             * a little from run to run, as its worker threads share the
+             * work out: it goes on to the count it had unarmed.) */
             CHECK(rc == 0 && got == want);
             CHECK(after == before);
-            break;
+            if (stride == 1 || n > total) break;
+            continue;
         }
         failed++;
         /* Allocations the harness does not fail were skipped: go on after
@@ -364,8 +475,15 @@ static void exercise(const alloc_case *c)
         CHECK(rc == 0 && got == want);
         CHECK(alloc_fail_live() == before);
     }
-    printf("%-12s %6ld allocations, %6ld failed in turn: %ld clean errors, %ld tolerated, %ld leaked\n",
-           c->name, n - 1, failed, errors, tolerated, leaks);
+    printf("%-12s %6ld allocations, %6ld failed %s: %ld clean errors, %ld tolerated, %ld leaked\n", c->name,
+           stride > 1 ? total : n - 1, failed, stride > 1 ? "(every k-th)" : "in turn", errors, tolerated, leaks);
+    /* A case in which no allocation failed tested nothing: the allocator
+     * was not replaced, or the code under test did not run. */
+    if (failed == 0) fprintf(stderr, "%s: no allocation was failed (none injected)\n", c->name);
+    CHECK(failed > 0);
+    /* and one in which every failure was tolerated never reached an error path */
+    if (errors == 0) fprintf(stderr, "%s: no injected failure gave an error\n", c->name);
+    CHECK(errors > 0);
 }
 
 int main(int argc, char **argv)
@@ -399,6 +517,42 @@ int main(int argc, char **argv)
         fputs("ball(x[3], a[1]) { ball = 3 - sqrt(x[1]^2 + x[2]^2 + x[3]^2); }\n", f);
         fclose(f);
     }
+    snprintf(fixture_path, sizeof fixture_path, "%s/clamp.hf", dir);
+    {
+        /* A ball of radius 3 at (12, 10, 1): in the slot's way. */
+        FILE *f = fopen(fixture_path, "w");
+        fputs("clamp(x[3], a[1]) { clamp = 9 - (x[1] - 12)^2 - (x[2] - 10)^2 - (x[3] - 1)^2; }\n", f);
+        fclose(f);
+    }
+    memset(&job_tool, 0, sizeof job_tool);
+    job_tool.number = 1;
+    job_tool.shape = FM_TOOL_FLAT;
+    job_tool.diameter = 6;
+    job_tool.shank_diameter = 6;
+    job_tool.flute_length = 15;
+    job_tool.length = 25;
+    job_tool.holder_count = 1;
+    job_tool.holder[0] = (fm_holder_segment){20, 20, 30};
+    {
+        /* The job, its G-code and its tool table as three parts. */
+        const char *job_part = "{\"stock\": \"box:0,0,-30,100,60,0\", \"voxel\": 0.25, \"options\": {\"check\": true}}";
+        size_t prog_len;
+        char *prog = slurp("gcode/programs/offsets.ngc", &prog_len);
+        size_t cap = json_tools_len + prog_len + 4096;
+        multipart_body = malloc(cap);
+        int len = snprintf(multipart_body, cap,
+                           "--alloc-fail-boundary\r\nContent-Disposition: form-data; name=\"job\"\r\n"
+                           "Content-Type: application/json\r\n\r\n%s\r\n"
+                           "--alloc-fail-boundary\r\nContent-Disposition: form-data; name=\"program\"; "
+                           "filename=\"offsets.ngc\"\r\n\r\n%.*s\r\n"
+                           "--alloc-fail-boundary\r\nContent-Disposition: form-data; name=\"tools\"; "
+                           "filename=\"tools.json\"\r\nContent-Type: application/json\r\n\r\n%.*s\r\n"
+                           "--alloc-fail-boundary--\r\n",
+                           job_part, (int)prog_len, prog, (int)json_tools_len, json_tools);
+        CHECK(len > 0 && (size_t)len < cap);
+        multipart_len = (size_t)len;
+        free(prog);
+    }
     {
         fm_stock_options o = stock_options();
         const double lo[3] = {0, 0, -4}, hi[3] = {6, 5, 0};
@@ -409,11 +563,21 @@ int main(int argc, char **argv)
     }
 
     static const alloc_case cases[] = {
-        {"gcode", run_gcode},         {"hyperfun", run_hf},       {"traj", run_traj},
-        {"tools.json", run_tools_json}, {"tools.tbl", run_tools_tbl}, {"job.json", run_job_json},
-        {"config", run_config},       {"machine", run_machine},   {"stl", run_stl},
-        {"box", run_box},             {"cylinder", run_cylinder}, {"hf-stock", run_hf_stock},
-        {"vdb", run_vdb},
+        {"gcode", run_gcode, 0},
+        {"hyperfun", run_hf, 0},
+        {"traj", run_traj, 0},
+        {"tools.json", run_tools_json, 0},
+        {"tools.tbl", run_tools_tbl, 0},
+        {"job.json", run_job_json, 0},
+        {"multipart", run_multipart, 0},
+        {"config", run_config, 0},
+        {"stl", run_stl, 0},
+        {"box", run_box, 0},
+        {"cylinder", run_cylinder, 0},
+        {"hf-stock", run_hf_stock, 0},
+        {"vdb", run_vdb, 0},
+        {"job-check", run_job_check, 150},
+        {"job-design", run_job_design, 0},
     };
     int ran = 0;
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -427,7 +591,9 @@ int main(int argc, char **argv)
     unlink(stl_path);
     unlink(vdb_path);
     unlink(hf_stock_path);
+    unlink(fixture_path);
     rmdir(dir);
+    free(multipart_body);
     for (size_t i = 0; i < GCODE_FILES; i++) free(gcode_text[i]);
     free(traj_text);
     free(hf_text);

@@ -3,11 +3,17 @@
  * byte 0x01 selects the Fanuc dialect (the program is the rest), 0x00 the
  * LinuxCNC dialect; any other first byte is the first character of a
  * LinuxCNC program, so that plain .ngc seeds keep their meaning. Both
- * dialects run with a machine too (the input's size picks none, an AC
- * trunnion with TCP, a BC head, or a wrapped A indexer), so that the rotary
- * words, TCP and G43.4 are fuzzed through the machine's kinematics. */
+ * dialects run with a machine too (bits 2-3 of the input's size pick none,
+ * an AC trunnion table or a BC head, both with TCP on from the start, or a
+ * wrapped A indexer without TCP), so that the rotary words, TCP, G43.4 and
+ * G49 are fuzzed through the machine's kinematics (the corpus's
+ * machine_*.ngc and fanuc_machine_*.nc are sized for each; bit 0 gives a
+ * tool table, bit 1 a probe).
+ * FUZZ_GCODE_VERBOSE=1 prints what each input did. */
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
 
 #include "toolpaths/gcode/gcode.h"
 
@@ -60,8 +66,9 @@ static const fm_machine *pick_machine(size_t size)
                                          .limit_lo = -10, .limit_hi = 110};
         t->rotary[1] = (fm_rotary_axis){.letter = 2, .carries = FM_ROTARY_TABLE,
                                          .around = {0, 0, 1}};
-        fm_machine *h = &machines[1]; /* BC head with a pivot, TCP off */
+        fm_machine *h = &machines[1]; /* BC head with a pivot, TCP on from the start */
         h->rotary_count = 2;
+        h->tcp = 1; /* else G43.4 is refused, and a head's TCP is never fuzzed */
         h->rotary[0] = (fm_rotary_axis){.letter = 2, .carries = FM_ROTARY_HEAD,
                                          .around = {0, 0, 1}, .pivot_length = 150};
         h->rotary[1] = (fm_rotary_axis){.letter = 1, .carries = FM_ROTARY_HEAD,
@@ -104,6 +111,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     opt.probe = (size & 2) ? half_probe : NULL;
     opt.subroutine_path = "tests/gcode/programs/subs";
     opt.machine = pick_machine(size);
+    const size_t whole = size;
     if (size > 0 && (data[0] == 0 || data[0] == 1)) {
         opt.dialect = data[0] ? FM_GCODE_FANUC : FM_GCODE_LINUXCNC;
         data++;
@@ -111,6 +119,15 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     long n = 0;
     fm_error err;
-    fm_gcode_run_string((const char *)data, size, "fuzz", &opt, count_sink, &n, NULL, &err);
+    fm_status st = fm_gcode_run_string((const char *)data, size, "fuzz", &opt, count_sink, &n, NULL, &err);
+    if (getenv("FUZZ_GCODE_VERBOSE")) {
+        /* What an input did (fuzz_gcode INPUT...): to check that a seed
+         * runs to its end on the machine its size picks. */
+        static const char *const machine_names[4] = {"no machine", "AC trunnion with TCP", "BC head with TCP",
+                                                     "wrapped A indexer"};
+        fprintf(stderr, "fuzz_gcode: %zu bytes, %s, %s, tools %s, probe %s: %ld motions, %s\n", whole,
+                opt.dialect == FM_GCODE_FANUC ? "Fanuc" : "LinuxCNC", machine_names[(whole >> 2) & 3],
+                opt.tools ? "yes" : "no", opt.probe ? "yes" : "no", n, st == FM_OK ? "ok" : err.message);
+    }
     return 0;
 }
