@@ -5,7 +5,7 @@
  *   (the connection is taken for dead after two heartbeats of silence);
  * - mtconnect://HOST:PORT/DEVICE, an agent: its current document, then its
  *   sample documents from nextSequence on (polled every 50 ms while there
- *   is nothing new), parsed with libxml2.
+ *   is nothing new), read by protocols/mtconnect's Streams reader.
  * Observations of one timestamp make one position (an adapter writes X
  * and Z of one instant on one line or several); a position is the mapped
  * X/Y/Z times the scale, the mapped A/B/C in degrees (the joints of the
@@ -19,8 +19,6 @@
 
 #include <errno.h>
 #include <fcntl.h>
-#include <libxml/parser.h>
-#include <libxml/tree.h>
 #include <limits.h>
 #include <math.h>
 #include <netdb.h>
@@ -43,7 +41,7 @@
 #define HEARTBEAT_DEFAULT_MS 10000
 #define SILENCE_WITHOUT_HEARTBEAT_S 600.0
 #define AGENT_POLL_MS 50
-#define AGENT_REPLY_MAX ((size_t)64 << 20)
+#define AGENT_REPLY_MAX FM_MTC_STREAMS_MAX
 #define CONNECT_TIMEOUT_MS 5000
 #define STREAM_HEARTBEAT_MS 1000
 
@@ -511,88 +509,17 @@ static char *http_get(fm_live_source *s, const char *path, size_t *size, int *st
     return buf;
 }
 
-typedef struct agent_obs {
-    uint64_t seq;
-    double time;
-    xmlNodePtr node;
-} agent_obs;
-
-static int by_sequence(const void *a, const void *b)
+static void agent_observation(void *ctx, const fm_mtc_observation *o)
 {
-    const agent_obs *x = a, *y = b;
-    return x->seq < y->seq ? -1 : x->seq > y->seq;
+    observe(ctx, o->name, o->data_item_id, o->value, o->time);
 }
 
-static void collect(xmlNodePtr node, agent_obs **list, size_t *count, size_t *cap)
-{
-    for (xmlNodePtr n = node; n; n = n->next) {
-        if (n->type != XML_ELEMENT_NODE) continue;
-        xmlChar *seq = xmlGetProp(n, (const xmlChar *)"sequence");
-        if (seq) {
-            if (*count == *cap) {
-                size_t c = *cap ? *cap * 2 : 256;
-                agent_obs *l = realloc(*list, c * sizeof *l);
-                if (!l) {
-                    xmlFree(seq);
-                    return;
-                }
-                *list = l;
-                *cap = c;
-            }
-            agent_obs *o = &(*list)[(*count)++];
-            o->seq = strtoull((const char *)seq, NULL, 10);
-            o->node = n;
-            xmlChar *ts = xmlGetProp(n, (const xmlChar *)"timestamp");
-            o->time = NAN;
-            if (ts) fm_mtc_parse_time((const char *)ts, strlen((const char *)ts), &o->time);
-            xmlFree(ts);
-            xmlFree(seq);
-        } else {
-            collect(n->children, list, count, cap);
-        }
-    }
-}
-
-/* Apply a Streams document in sequence order; its nextSequence in *next.
- * -1 with why when it is not one. */
+/* Apply a Streams document in sequence order (protocols/mtconnect's
+ * reader); its nextSequence in *next. -1 with why when it is not one. */
 static int apply_streams(fm_live_source *s, const char *body, size_t size, uint64_t *next, char *why,
                          size_t why_size)
 {
-    xmlDocPtr doc = xmlReadMemory(body, (int)size, "agent.xml", NULL, XML_PARSE_NONET | XML_PARSE_NOBLANKS);
-    if (!doc) {
-        snprintf(why, why_size, "the agent's document is not XML");
-        return -1;
-    }
-    xmlNodePtr root = xmlDocGetRootElement(doc);
-    if (!root || strcmp((const char *)root->name, "MTConnectStreams") != 0) {
-        snprintf(why, why_size, "the agent answered %s, not MTConnectStreams",
-                 root ? (const char *)root->name : "nothing");
-        xmlFreeDoc(doc);
-        return -1;
-    }
-    for (xmlNodePtr n = root->children; n; n = n->next) {
-        if (n->type == XML_ELEMENT_NODE && !strcmp((const char *)n->name, "Header")) {
-            xmlChar *v = xmlGetProp(n, (const xmlChar *)"nextSequence");
-            if (v) *next = strtoull((const char *)v, NULL, 10);
-            xmlFree(v);
-        }
-    }
-    agent_obs *list = NULL;
-    size_t count = 0, cap = 0;
-    collect(root->children, &list, &count, &cap);
-    if (count) qsort(list, count, sizeof *list, by_sequence);
-    for (size_t i = 0; i < count; i++) {
-        xmlChar *name = xmlGetProp(list[i].node, (const xmlChar *)"name");
-        xmlChar *id = xmlGetProp(list[i].node, (const xmlChar *)"dataItemId");
-        xmlChar *text = xmlNodeGetContent(list[i].node);
-        observe(s, (const char *)name, (const char *)id, text ? (const char *)text : "", list[i].time);
-        xmlFree(name);
-        xmlFree(id);
-        xmlFree(text);
-    }
-    free(list);
-    xmlFreeDoc(doc);
-    return 0;
+    return fm_mtc_streams_read(body, size, agent_observation, s, next, why, why_size);
 }
 
 /* The sample stream (interval=0, heartbeat 1 s): each multipart part a

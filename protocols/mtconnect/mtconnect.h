@@ -276,6 +276,31 @@ void fm_shdr_reader_feed(fm_shdr_reader *reader, const char *data, size_t size);
 void fm_shdr_reader_finish(fm_shdr_reader *reader);
 void fm_shdr_reader_free(fm_shdr_reader *reader);
 
+/* ------------------------------------------- an agent's Streams reader -- */
+
+/* The largest Streams document read (an agent's current or sample answer). */
+#define FM_MTC_STREAMS_MAX ((size_t)64 << 20)
+
+/* One observation of a Streams document; the strings live for the call. */
+typedef struct fm_mtc_observation {
+    uint64_t sequence;
+    double time;              /* seconds since 1970; NAN when absent or bad */
+    const char *name;         /* the data item's name, NULL when absent */
+    const char *data_item_id; /* NULL when absent */
+    const char *value;        /* the element's text ("" when empty) */
+} fm_mtc_observation;
+
+typedef void (*fm_mtc_observation_fn)(void *ctx, const fm_mtc_observation *o);
+
+/* Read an MTConnectStreams document: each observation (an element with a
+ * decimal sequence attribute, at any depth) to fn in sequence order, and
+ * the header's nextSequence into *next_sequence (left as it is when
+ * absent). 0, or -1 with why (not XML: its line and column; another
+ * document; over FM_MTC_STREAMS_MAX; out of memory): then fn was not
+ * called. (mtc_streams.c) */
+int fm_mtc_streams_read(const char *xml, size_t size, fm_mtc_observation_fn fn, void *ctx,
+                        uint64_t *next_sequence, char *why, size_t why_size);
+
 /* An SHDR or MTConnect timestamp ("2022-08-08T13:51:34.7167146Z", "Z" or
  * "+hh:mm"; fractions to any length) in seconds since 1970; 0 on success. */
 int fm_mtc_parse_time(const char *text, size_t len, double *out);
