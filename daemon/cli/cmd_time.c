@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "runner/cycle_times.h"
 #include "runner/dynamics.h"
 #include "runner/job.h"
 #include "runner/machine.h"
@@ -36,88 +37,6 @@ static void usage(FILE *out)
             "   \"blocks\":[{\"line\":12,\"block\":120,\"time_s\":..,\"feed_only_s\":..}],\n"
             "   \"plan_seconds\":..}\n"
             "Exit status: 0 ok, 2 bad input, 3 limit exceeded, 4 I/O error.\n");
-}
-
-typedef struct tool_sum {
-    int tool;
-    double time, feed;
-} tool_sum;
-
-typedef struct block_sum {
-    int line;
-    long block;
-    double time, feed;
-} block_sum;
-
-typedef struct timing {
-    tool_sum *tools;
-    int ntools, captools;
-    block_sum *top; /* the slowest blocks, slowest first */
-    int ntop, maxtop;
-    block_sum cur;  /* the block being summed (consecutive motions of a line) */
-    int have_cur;
-    int failed;
-} timing;
-
-static void offer_block(timing *tm, const block_sum *b)
-{
-    int i;
-    if (tm->ntop < tm->maxtop) i = tm->ntop++;
-    else if (tm->maxtop == 0 || tm->top[tm->maxtop - 1].time >= b->time) return;
-    else i = tm->maxtop - 1;
-    tm->top[i] = *b;
-    for (; i > 0 && tm->top[i - 1].time < tm->top[i].time; i--) {
-        block_sum t = tm->top[i - 1];
-        tm->top[i - 1] = tm->top[i];
-        tm->top[i] = t;
-    }
-}
-
-static int on_planned(void *user, const fm_plan_motion *pm)
-{
-    timing *tm = user;
-    const fm_motion *m = &pm->motion;
-    double dt = m->t1 - m->t0, df = pm->feed_t1 - pm->feed_t0;
-    int k = 0;
-    while (k < tm->ntools && tm->tools[k].tool != m->tool) k++;
-    if (k == tm->ntools) {
-        if (tm->ntools == tm->captools) {
-            int cap = tm->captools ? 2 * tm->captools : 8;
-            tool_sum *n = realloc(tm->tools, (size_t)cap * sizeof *n);
-            if (!n) {
-                tm->failed = 1;
-                return 1;
-            }
-            tm->tools = n;
-            tm->captools = cap;
-        }
-        tm->tools[tm->ntools++] = (tool_sum){m->tool, 0, 0};
-    }
-    tm->tools[k].time += dt;
-    tm->tools[k].feed += df;
-    if (tm->have_cur && tm->cur.line != m->line) {
-        offer_block(tm, &tm->cur);
-        tm->have_cur = 0;
-    }
-    if (!tm->have_cur) {
-        tm->cur = (block_sum){m->line, m->block, 0, 0};
-        tm->have_cur = 1;
-    }
-    tm->cur.time += dt;
-    tm->cur.feed += df;
-    return 0;
-}
-
-/* A JSON string: quotes, backslashes and control characters escaped. */
-static void print_json_string(const char *text)
-{
-    putchar('"');
-    for (const unsigned char *c = (const unsigned char *)text; *c; c++) {
-        if (*c == '"' || *c == '\\') printf("\\%c", *c);
-        else if (*c < 0x20) printf("\\u%04x", *c);
-        else putchar(*c);
-    }
-    putchar('"');
 }
 
 int fm_cmd_time(int argc, char **argv)
@@ -205,10 +124,9 @@ int fm_cmd_time(int argc, char **argv)
     fm_job_spec_start_state(&spec, machine_path ? &machine : NULL, initial_tool);
     /* feed-only rapids at the rate the motions were timed with */
     if (spec.rapid_rate > 0) dyn.rapid_rate = spec.rapid_rate;
-    timing tm = {0};
-    tm.maxtop = nblocks;
-    tm.top = nblocks ? calloc((size_t)nblocks, sizeof *tm.top) : NULL;
-    fm_planner *p = fm_planner_new(&dyn, on_planned, &tm, &err);
+    fm_cycle_times tm;
+    fm_cycle_times_init(&tm, nblocks);
+    fm_planner *p = fm_planner_new(&dyn, fm_cycle_times_sink, &tm, &err);
     fm_status st = p ? FM_OK : err.code;
     double c0 = fm_clock_monotonic_s();
     fm_plan_totals tot = {0};
@@ -224,31 +142,30 @@ int fm_cmd_time(int argc, char **argv)
     fm_planner_free(p);
     fm_tool_table_free(&table);
     if (!st && tm.failed) st = fm_error_set(&err, FM_ERR_LIMIT, "frepmill time: out of memory");
+    fm_cycle_times_finish(&tm);
+    json_t *doc = NULL;
+    if (!st && json) {
+        json_t *parts = fm_cycle_times_json(&tm);
+        doc = json_pack("{s:s, s:f, s:f, s:b, s:I, s:I, s:I, s:I, s:I}", "program", program,
+                        "cycle_time_s", tot.cycle_time_s, "feed_only_s", tot.feed_only_s, "planned",
+                        dyn.given, "motions", (json_int_t)tot.motions, "segments",
+                        (json_int_t)tot.segments, "blends", (json_int_t)tot.blends, "stops",
+                        (json_int_t)tot.stops, "tool_changes", (json_int_t)tot.tool_changes);
+        if (!parts || !doc || json_object_update(doc, parts) ||
+            json_object_set_new(doc, "plan_seconds", json_real(secs)))
+            st = fm_error_set(&err, FM_ERR_LIMIT, "frepmill time: out of memory");
+        json_decref(parts);
+    }
     if (st) {
         fprintf(stderr, "%s\n", fm_error_format(&err, msg, sizeof msg));
-        free(tm.tools);
-        free(tm.top);
+        json_decref(doc);
+        fm_cycle_times_free(&tm);
         return (int)st;
     }
-    if (tm.have_cur) offer_block(&tm, &tm.cur);
     if (json) {
-        printf("{\"program\":");
-        print_json_string(program);
-        printf(",\"cycle_time_s\":%.6f,\"feed_only_s\":%.6f,\"planned\":%s,"
-               "\"motions\":%ld,\"segments\":%ld,\"blends\":%ld,\"stops\":%ld,\"tool_changes\":%ld,"
-               "\"tools\":[",
-               tot.cycle_time_s, tot.feed_only_s, dyn.given ? "true" : "false", tot.motions,
-               tot.segments, tot.blends, tot.stops, tot.tool_changes);
-        for (int k = 0; k < tm.ntools; k++)
-            printf("%s{\"tool\":%d,\"time_s\":%.6f,\"feed_only_s\":%.6f}", k ? "," : "",
-                   tm.tools[k].tool, tm.tools[k].time, tm.tools[k].feed);
-        printf("],\"blocks\":[");
-        for (int k = 0; k < tm.ntop; k++) {
-            printf("%s{\"line\":%d,", k ? "," : "", tm.top[k].line);
-            if (tm.top[k].block >= 0) printf("\"block\":%ld,", tm.top[k].block);
-            printf("\"time_s\":%.6f,\"feed_only_s\":%.6f}", tm.top[k].time, tm.top[k].feed);
-        }
-        printf("],\"plan_seconds\":%.6f}\n", secs);
+        json_dumpf(doc, stdout, JSON_COMPACT | JSON_REAL_PRECISION(10));
+        putchar('\n');
+        json_decref(doc);
     } else {
         printf("%s: cycle time %.3f s, feed-only %.3f s%s\n", program, tot.cycle_time_s, tot.feed_only_s,
                dyn.given ? "" : " (no dynamics in the machine file: the time is feed-only; docs/plan.md)");
@@ -256,18 +173,22 @@ int fm_cmd_time(int argc, char **argv)
             printf("  %ld motions, %ld segments (%ld blend arcs, %ld stops), %ld tool changes\n",
                    tot.motions, tot.segments, tot.blends, tot.stops, tot.tool_changes);
         printf("  planned in %.3f s (%.0f motions/s)\n", secs, secs > 0 ? (double)tot.motions / secs : 0.0);
-        for (int k = 0; k < tm.ntools; k++)
-            printf("  tool %d: %.3f s, feed-only %.3f s\n", tm.tools[k].tool, tm.tools[k].time,
-                   tm.tools[k].feed);
-        if (tm.ntop) printf("  the %d longest blocks:\n", tm.ntop);
-        for (int k = 0; k < tm.ntop; k++) {
+        for (int k = 0; k < tm.tool_count; k++)
+            printf("  tool %d: %.3f s, feed-only %.3f s\n", tm.tools[k].tool, tm.tools[k].time_s,
+                   tm.tools[k].feed_only_s);
+        if (tm.operation_total > 1)
+            for (int k = 0; k < tm.operation_count; k++)
+                printf("  operation %d (tool %d, lines %d-%d): %.3f s, feed-only %.3f s\n", k + 1,
+                       tm.operations[k].tool, tm.operations[k].first_line, tm.operations[k].last_line,
+                       tm.operations[k].time_s, tm.operations[k].feed_only_s);
+        if (tm.top_count) printf("  the %d longest blocks:\n", tm.top_count);
+        for (int k = 0; k < tm.top_count; k++) {
             printf("    line %d", tm.top[k].line);
             if (tm.top[k].block >= 0) printf(" (N%ld)", tm.top[k].block);
-            printf(": %.3f s, feed-only %.3f s\n", tm.top[k].time, tm.top[k].feed);
+            printf(": %.3f s, feed-only %.3f s\n", tm.top[k].time_s, tm.top[k].feed_only_s);
         }
     }
-    free(tm.tools);
-    free(tm.top);
+    fm_cycle_times_free(&tm);
     if (fflush(stdout) || ferror(stdout)) {
         fprintf(stderr, "frepmill time: error writing the output\n");
         return 4;

@@ -9,6 +9,7 @@
 #include <stdint.h>
 
 #include "check/check.h"
+#include "cycle_times.h"
 #include "core/core.h"
 #include "stock/stock.h"
 #include "sweep/motion.h"
@@ -157,6 +158,10 @@ typedef struct fm_job_progress {
     long motions_total;
     double program_time;       /* s, end of the last motion cut */
     double program_time_total; /* s */
+    /* 1: program_time and program_time_total are the controller's (the
+     * machine's dynamics planned them, docs/plan.md); 0: feed-only */
+    int time_planned;
+    double feed_only_time_total; /* s, the feed-only figure beside */
     int line;                  /* source line of the last motion cut */
     long block;                /* N number of that line, -1 if none */
     int tool;
@@ -231,6 +236,10 @@ typedef struct fm_job_result {
     double program_time_s;     /* feed-only: each motion's length over its feed */
     double cycle_time_s;       /* as the controller plans it; program_time_s when not planned */
     int cycle_time_planned;    /* 1: from the machine's dynamics (toolpaths/plan) */
+    /* cycle_time_s per tool, operation and block with the feed-only figures
+     * beside (has_cycle_times: 0 for live jobs, or when the planner failed) */
+    int has_cycle_times;
+    fm_cycle_times cycle_times;
     double wall_time_s;
     size_t peak_memory_bytes;  /* peak resident set of the process */
     double voxel_mm;

@@ -23,15 +23,23 @@ static void grow_box(job_survey *s, const double lo[3], const double hi[3])
 int job_survey_sink(void *user, const fm_motion *m)
 {
     job_survey *s = user;
-    job_motions_add(s->log, m); /* all of them: the cut stops itself */
     /* past a stop the program is still checked, but not counted */
-    if (s->stop.line > 0 && (s->stopped || (s->stopped = job_stop_before(&s->stop, m)))) return 0;
-    s->motions++;
-    if (m->t1 > s->time_total) s->time_total = m->t1;
+    int past = s->stop.line > 0 && (s->stopped || (s->stopped = job_stop_before(&s->stop, m)));
+    if (past && m->index < s->stop_index) s->stop_index = m->index;
+    /* all of them into the log (the cut stops itself), through the planner */
     if (s->planner && !s->plan_failed) {
         fm_error perr;
-        if (fm_planner_push(s->planner, m, &perr) != FM_OK) s->plan_failed = 1;
+        if (fm_planner_push(s->planner, m, &perr) != FM_OK) {
+            /* the motions it still holds cannot reach the log */
+            s->plan_failed = 1;
+            job_motions_spoil(s->log);
+        }
+    } else {
+        job_motions_add(s->log, m);
     }
+    if (past) return 0;
+    s->motions++;
+    if (m->t1 > s->time_total) s->time_total = m->t1;
     if (m->line > s->max_line) s->max_line = m->line;
     /* where the tip goes: both ends, an arc's whole circle, a path's bounds */
     double lo[3], hi[3];
@@ -62,6 +70,17 @@ int job_survey_sink(void *user, const fm_motion *m)
         }
     }
     grow_box(s, lo, hi);
+    return 0;
+}
+
+int job_survey_planned(void *user, const fm_plan_motion *pm)
+{
+    job_survey *s = user;
+    job_motions_add(s->log, &pm->motion);
+    if (pm->motion.index < s->stop_index) {
+        fm_cycle_times_add(&s->times, pm);
+        s->plan_end = pm->motion.t1;
+    }
     return 0;
 }
 

@@ -15,6 +15,7 @@
 
 #include <stdio.h>
 
+#include "cycle_times.h"
 #include "frep/frep.h"
 #include "job.h"
 
@@ -78,6 +79,9 @@ fm_job_motions *job_motions_open_log(const char *path, fm_error *err);
  * path when usable, else no file there. */
 fm_status job_motions_keep(fm_job_motions *log, const char *path, int keep);
 void job_motions_add(fm_job_motions *log, const fm_motion *m);
+/* Some motions cannot reach the log (the planner in front of it failed):
+ * the cut interprets the program again. */
+void job_motions_spoil(fm_job_motions *log);
 /* Every motion the program made is in it (none was a PARAM motion, no
  * write failed). */
 int job_motions_usable(const fm_job_motions *log);
@@ -96,12 +100,21 @@ typedef struct job_survey {
     int stopped;
     fm_job_motions *log; /* the motions kept for the cut and the blame */
     int probing;         /* a G38 move: the cut's motions depend on the stock */
-    fm_planner *planner; /* the machine's dynamics given: the cycle time's planner */
+    /* Every motion goes through the planner (the machine's dynamics, or
+     * none: feed-only times) on its way into the log, which so holds the
+     * planned times the cut, the progress and the toolpath then use. */
+    fm_planner *planner;
     int plan_failed;     /* the planner refused a motion: the cycle time stays feed-only */
     fm_plan_totals plan;
+    long stop_index;     /* the first motion past the stop (LONG_MAX: none) */
+    double plan_end;     /* the planned end of the last motion before it */
+    fm_cycle_times times; /* the planned time per tool, operation and block */
 } job_survey;
 
 int job_survey_sink(void *user, const fm_motion *m);
+/* The survey planner's sink (user: the survey): into the log and the
+ * breakdown. */
+int job_survey_planned(void *user, const fm_plan_motion *pm);
 /* The survey's G38: noted (the cut then interprets the program again, its
  * probe reading the stock), tripped at the end as with no probe. */
 fm_status job_survey_probe(void *user, const fm_motion *move, int toward, int *tripped,

@@ -84,6 +84,11 @@ void job_motions_add(fm_job_motions *log, const fm_motion *m)
     log->spilled++;
 }
 
+void job_motions_spoil(fm_job_motions *log)
+{
+    if (log) log->usable = 0;
+}
+
 fm_status fm_job_motions_replay(fm_job_motions *log, const fm_machine *machine,
                                 fm_motion_sink sink, void *user, fm_error *err)
 {

@@ -2,6 +2,7 @@
  * the program, the stock and design, the cutting pass (with the check in
  * it, or a live source), the design comparison, and the result's figures.
  * The concerns live in the files job_internal.h lists. */
+#include <limits.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -33,6 +34,8 @@ void fm_job_result_release(fm_job_result *r)
     r->has_deviation = 0;
     fm_check_free(r->check);
     r->check = NULL;
+    fm_cycle_times_free(&r->cycle_times);
+    r->has_cycle_times = 0;
 }
 
 /* The stock's bounds before the first cut (mm, within a voxel). */
@@ -68,18 +71,25 @@ static fm_status survey(const fm_job_spec *spec, const job_tools *tools, job_sur
     /* job_motions_new says nothing of its failure */
     if (!sv->log) return fm_error_set(err, FM_ERR_LIMIT, "out of memory keeping the program's motions");
     result->interpretations++;
-    if (spec->dynamics && spec->dynamics->given) {
-        fm_error perr;
-        sv->planner = fm_planner_new(spec->dynamics, NULL, NULL, &perr);
-        sv->plan_failed = !sv->planner;
-    }
+    sv->stop_index = LONG_MAX;
+    fm_cycle_times_init(&sv->times, FM_JOB_TOP_BLOCKS);
+    /* without dynamics the planner passes the feed-only times through */
+    fm_plan_machine none;
+    fm_plan_machine_default(&none);
+    fm_error perr;
+    sv->planner = fm_planner_new(spec->dynamics ? spec->dynamics : &none, job_survey_planned, sv,
+                                 &perr);
+    sv->plan_failed = !sv->planner;
     fm_status st = job_run_program(spec, tools->use, job_survey_sink, sv, job_survey_probe, err);
     if (sv->planner) {
-        fm_error perr;
-        if (fm_planner_finish(sv->planner, &sv->plan, &perr) != FM_OK) sv->plan_failed = 1;
+        if (fm_planner_finish(sv->planner, &sv->plan, &perr) != FM_OK) {
+            sv->plan_failed = 1;
+            job_motions_spoil(sv->log);
+        }
         fm_planner_free(sv->planner);
         sv->planner = NULL;
     }
+    fm_cycle_times_finish(&sv->times);
     /* a log that cannot serve the toolpath leaves no file to be read */
     if (spec->motion_log) job_motions_keep(sv->log, spec->motion_log, st == FM_OK);
     return st;
@@ -116,8 +126,22 @@ static fm_status compare(job_cutter *c, fm_design *design, fm_job_motions *log,
     return st;
 }
 
+static int dynamics_given(const fm_job_spec *spec)
+{
+    return spec->dynamics && spec->dynamics->given;
+}
+
+/* The motions the cut replays carry the planned times (the survey's
+ * planner gave them to the log): the progress, the stock's cut times and
+ * the toolpath are in controller time. Not when the cut interprets the
+ * program again (a parametric path, a G38 probe). */
+static int timeline_planned(const fm_job_spec *spec, const job_survey *sv)
+{
+    return dynamics_given(spec) && !sv->plan_failed && !sv->probing && job_motions_usable(sv->log);
+}
+
 /* The figures of a finished job. */
-static void fill_result(const job_cutter *c, const job_survey *sv, fm_job_result *result)
+static void fill_result(const job_cutter *c, job_survey *sv, fm_job_result *result)
 {
     fm_stock *stock = c->stock;
     const int live = c->spec->program_kind == FM_PROGRAM_LIVE;
@@ -133,9 +157,14 @@ static void fill_result(const job_cutter *c, const job_survey *sv, fm_job_result
     result->motions = live ? c->progress.motions_total : sv->motions;
     result->blocks = c->blocks;
     result->program_time_s = live ? c->progress.program_time_total : sv->time_total;
-    result->cycle_time_planned = !live && c->spec->dynamics && c->spec->dynamics->given &&
-                                 !sv->plan_failed && !sv->probing;
-    result->cycle_time_s = result->cycle_time_planned ? sv->plan.cycle_time_s : result->program_time_s;
+    result->cycle_time_planned = !live && dynamics_given(c->spec) && !sv->plan_failed && !sv->probing;
+    result->cycle_time_s = result->cycle_time_planned ? sv->plan_end : result->program_time_s;
+    /* the breakdown (planned, or feed-only without dynamics), handed over */
+    if (!live && !sv->plan_failed && !sv->times.failed && (result->cycle_time_planned || !dynamics_given(c->spec))) {
+        result->cycle_times = sv->times;
+        result->has_cycle_times = 1;
+        memset((void *)&sv->times, 0, sizeof sv->times);
+    }
     result->voxel_mm = fm_stock_voxel_size(stock);
     size_t n = fm_stock_tool_volumes(stock, result->tools,
                                      sizeof result->tools / sizeof result->tools[0]);
@@ -200,7 +229,9 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
         c->err = err;
         c->started = fm_clock_monotonic_s();
         c->progress.motions_total = sv.motions;
-        c->progress.program_time_total = sv.time_total;
+        c->progress.time_planned = timeline_planned(spec, &sv);
+        c->progress.program_time_total = c->progress.time_planned ? sv.plan_end : sv.time_total;
+        c->progress.feed_only_time_total = sv.time_total;
         c->progress.block = -1;
         c->progress.design = design;
         c->stop.line = spec->stop_at_line;
@@ -233,6 +264,7 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
         free(c);
     }
     fm_job_motions_free(sv.log);
+    fm_cycle_times_free(&sv.times);
     job_tools_free(&tools);
     return st;
 }

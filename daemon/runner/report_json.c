@@ -108,6 +108,11 @@ json_t *fm_job_report_json(const fm_job_result *r)
          * (docs/plan.md); without dynamics the two are the same */
         json_object_set_new(out, "cycle_time_s", json_real(r->cycle_time_s));
         json_object_set_new(out, "cycle_time_planned", json_boolean(r->cycle_time_planned));
+        /* cycle_time_s per tool, operation and block, feed-only beside */
+        if (r->has_cycle_times) {
+            json_t *ct = fm_cycle_times_json(&r->cycle_times);
+            if (ct) json_object_set_new(out, "cycle_times", ct);
+        }
         json_object_set_new(out, "voxels_uncertain", json_integer((json_int_t)r->voxels_uncertain));
         json_object_set_new(out, "uncertain_max_mm", json_real(r->uncertain_max_mm));
         json_object_set_new(out, "uncertain_line", r->voxels_uncertain && r->uncertain_line > 0
