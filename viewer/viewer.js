@@ -154,6 +154,7 @@ const S = {
   syncing: false,
   syncAgain: false,
   synced: false,        // the job has ended and the chunks shown match the daemon's
+  timePlanned: false,   // the job's times are the controller's (status program_time_planned)
   shownAt: null,        // program time of the stock shown when replaying (null: the current stock)
   historyNote: '',      // why the stock of an earlier time cannot be shown
   events: null,         // EventSource
@@ -646,6 +647,8 @@ function showStatus(st) {
   $('job-percent').textContent = `${Math.round(p * 100)}%`;
   $('removed').textContent = j.removed_volume_mm3 != null ? `${fmt(j.removed_volume_mm3, 1)} mm³` : '-';
   $('stock').textContent = j.stock_volume_mm3 != null ? `${fmt(j.stock_volume_mm3, 1)} mm³` : '-';
+  if (typeof st.program_time_planned === 'boolean') S.timePlanned = st.program_time_planned;
+  if (typeof st.program_time_planned === 'boolean') S.timePlanned = st.program_time_planned;
   if (Array.isArray(st.tools))
     S.toolNames = Object.fromEntries(st.tools.map(({ tool, description }) => [tool, description]));
   if (Array.isArray(st.tool_colors)) showToolKeys(st.tool_colors);
@@ -687,7 +690,9 @@ function showPosition(pos, tool) {
 function setScrub(t) {
   const T = S.totalT || 0;
   $('scrub').value = T > 0 ? Math.round(1000 * Math.min(t / T, 1)) : 1000;
-  $('time').textContent = `${fmt(t, 1)} / ${fmt(T, 1)} s`;
+  // the controller's time when the machine's dynamics planned it (the
+  // toolpath's times and the status' program_time_s are then both planned)
+  $('time').textContent = `${fmt(t, 1)} / ${fmt(T, 1)} s` + (S.timePlanned ? ' planned' : '');
 }
 
 function applyReplay() {
@@ -758,7 +763,7 @@ function closeJob() {
   bounds = null;
   Object.assign(S, {
     job: null, jobState: null, version: 0, syncing: false, syncAgain: false, synced: false,
-    shownAt: null, historyNote: '',
+    shownAt: null, historyNote: '', timePlanned: false,
     toolpath: null, programLines: [], line: 0, live: true, playing: false, replayT: 0, totalT: 0,
     framed: false, toolNames: {},
   });

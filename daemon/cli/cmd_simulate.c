@@ -111,17 +111,20 @@ static int show_progress(void *user, const fm_job_progress *p)
     bar->last_shown = p->elapsed_s;
     bar->last_permille = permille;
     double rate = p->elapsed_s > 0 ? (double)p->motions_done / p->elapsed_s : 0;
+    /* the fraction is of program time: the controller's when the
+     * machine's dynamics planned it, else feed-only (labelled) */
     double eta = fraction > 0.001 ? p->elapsed_s * (1 - fraction) / fraction : 0;
+    const char *clock = p->time_planned ? "planned" : "feed-only";
     if (bar->is_tty) {
         char cells[31];
         int filled = (int)(fraction * 30);
         for (int i = 0; i < 30; i++) cells[i] = i < filled ? '#' : '.';
         cells[30] = '\0';
-        fprintf(stderr, "\r[%s] %5.1f%%  line %d  %.0f motions/s  ETA %.0f s ", cells,
-                fraction * 100, p->line, rate, eta);
+        fprintf(stderr, "\r[%s] %5.1f%%  line %d  %.0f motions/s  ETA %.0f s  %.1f/%.1f s %s ", cells,
+                fraction * 100, p->line, rate, eta, p->program_time, p->program_time_total, clock);
     } else {
-        fprintf(stderr, "progress %5.1f%%  line %d  %.0f motions/s  ETA %.0f s\n", fraction * 100,
-                p->line, rate, eta);
+        fprintf(stderr, "progress %5.1f%%  line %d  %.0f motions/s  ETA %.0f s  %.1f/%.1f s %s\n",
+                fraction * 100, p->line, rate, eta, p->program_time, p->program_time_total, clock);
     }
     fflush(stderr);
     return 0;
@@ -148,7 +151,8 @@ static json_t *pose_json(const fm_machine_pose *pose, const double rot[9], const
                          const fm_job_result *result)
 {
     json_t *o = json_object();
-    double t = pose->time_s < result->program_time_s ? pose->time_s : result->program_time_s;
+    double end = result->times_planned ? result->cycle_time_s : result->program_time_s;
+    double t = pose->time_s < end ? pose->time_s : end;
     json_object_set_new(o, "time_s", json_real(t));
     json_t *joints = json_object();
     for (int i = 0; pose->machine && i < pose->machine->rotary_count; i++) {
@@ -475,10 +479,16 @@ static int simulate(int argc, char **argv, job_file *jf)
         fprintf(stderr, "frepmill simulate: the picture shows only the start of the toolpath "
                         "(too many points)\n");
 
+    char times[128];
+    if (result.cycle_time_planned)
+        snprintf(times, sizeof times, "%.1f s of program time as planned (feed-only %.1f s)",
+                 result.cycle_time_s, result.program_time_s);
+    else
+        snprintf(times, sizeof times, "%.1f s of program time (feed-only)", result.program_time_s);
     fprintf(stderr,
-            "frepmill simulate: %ld motions, %.1f s of program time; removed %.1f mm3 of %.1f mm3 "
+            "frepmill simulate: %ld motions, %s; removed %.1f mm3 of %.1f mm3 "
             "in %.2f s, peak memory %.0f MB\n",
-            result.motions, result.program_time_s, result.removed_volume_mm3,
+            result.motions, times, result.removed_volume_mm3,
             result.initial_volume_mm3, result.wall_time_s,
             (double)result.peak_memory_bytes / (1024.0 * 1024.0));
     if (result.check)

@@ -236,6 +236,9 @@ typedef struct fm_job_result {
     double program_time_s;     /* feed-only: each motion's length over its feed */
     double cycle_time_s;       /* as the controller plans it; program_time_s when not planned */
     int cycle_time_planned;    /* 1: from the machine's dynamics (toolpaths/plan) */
+    /* 1: the motions were cut with their planned times (top_blocks' t0/t1,
+     * the progress, the stock's history are the controller's) */
+    int times_planned;
     /* cycle_time_s per tool, operation and block with the feed-only figures
      * beside (has_cycle_times: 0 for live jobs, or when the planner failed) */
     int has_cycle_times;

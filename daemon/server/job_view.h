@@ -37,6 +37,11 @@ typedef struct fm_job_view {
     double spindle_rpm;
     int has_spindle;
     double program_time_s;
+    /* the whole program's time, the controller's when time_planned (the
+     * machine's dynamics planned it), and its feed-only figure */
+    double program_time_total_s;
+    int time_planned;
+    double feed_only_total_s;
     double removed_mm3;
     double stock_mm3;
     double removal_rate_mm3_s;

@@ -94,6 +94,11 @@ json_t *fm_publish_status_json(job *j)
         /* the viewer asks for GET .../deviation once such a job is done */
         json_object_set_new(out, "design", json_boolean(j->doc->spec.design_path != NULL));
         json_object_set_new(out, "voxels_uncertain", json_integer((json_int_t)v->voxels_uncertain));
+        /* program_time_s is the controller's time when the machine's
+         * dynamics planned it (docs/api.md), the feed-only total beside */
+        json_object_set_new(out, "program_time_planned", json_boolean(v->time_planned));
+        json_object_set_new(out, "program_time_total_s", json_real(v->program_time_total_s));
+        json_object_set_new(out, "feed_only_total_s", json_real(v->feed_only_total_s));
         if (j->live_note[0]) json_object_set_new(out, "live_source", json_string(j->live_note));
         json_t *rotary = json_object();
         for (int a = 0; a < 3; a++)
@@ -152,6 +157,9 @@ void fm_publish_view_from_status(job *j, json_t *status)
     v->has_spindle = json_is_number(rpm);
     v->spindle_rpm = json_number_value(rpm);
     v->program_time_s = json_number_value(json_object_get(status, "program_time_s"));
+    v->program_time_total_s = json_number_value(json_object_get(status, "program_time_total_s"));
+    v->time_planned = json_is_true(json_object_get(status, "program_time_planned"));
+    v->feed_only_total_s = json_number_value(json_object_get(status, "feed_only_total_s"));
     v->removed_mm3 = json_number_value(json_object_get(status, "removed_volume_mm3"));
     v->stock_mm3 = json_number_value(json_object_get(status, "stock_volume_mm3"));
     j->initial_mm3 = json_number_value(json_object_get(status, "initial_volume_mm3"));
@@ -194,6 +202,9 @@ void fm_publish_progress(job *j, const fm_job_progress *p, publish_pace *pace)
     v->has_spindle = isfinite(p->spindle_rpm);
     v->spindle_rpm = v->has_spindle ? p->spindle_rpm : 0.0;
     v->program_time_s = p->program_time;
+    v->program_time_total_s = p->program_time_total;
+    v->time_planned = p->time_planned;
+    v->feed_only_total_s = p->feed_only_time_total;
     v->removed_mm3 = p->removed_mm3;
     v->stock_mm3 = j->initial_mm3 - p->removed_mm3;
     v->removal_rate_mm3_s = p->program_time > 0 ? p->removed_mm3 / p->program_time : 0;
