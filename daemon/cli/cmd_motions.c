@@ -3,13 +3,16 @@
  * file:line:column: message on stderr. */
 #include "commands.h"
 
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "runner/dynamics.h"
 #include "runner/job.h"
 #include "runner/machine.h"
 #include "toolpaths/gcode/gcode.h"
+#include "toolpaths/plan/plan.h"
 #include "toolpaths/tooltable/tooltable.h"
 
 static void usage(FILE *out)
@@ -25,8 +28,11 @@ static void usage(FILE *out)
             "(PROGRAM.json, docs/trajectory.md), and print one motion per line:\n"
             "  {\"line\":12,\"block\":12,\"kind\":\"arc\",\"start\":[x,y,z],\"end\":[x,y,z],\n"
             "   \"center\":[x,y,z],\"axis\":\"z\",\"turns\":-1,\"feed\":500,\"tool\":1,\n"
-            "   \"tip_offset\":[0,0,0],\"t\":[t0,t1]}\n"
+            "   \"tip_offset\":[0,0,0],\"t\":[t0,t1],\"cycle_t\":[t0,t1]}\n"
             "Positions are machine millimetres (program point + G5x + G92 offsets).\n"
+            "t is the feed-only time (each move's length over its feed); cycle_t the\n"
+            "controller's, planned with the machine file's \"dynamics\" (docs/plan.md;\n"
+            "the same as t without them).\n"
             "TOOLS is a JSON tool table or a LinuxCNC .tbl file. --skip N interprets\n"
             "everything but prints motions from index N on. --subroutine-path lists the\n"
             "folders (':'-separated) holding NAME.ngc files for o<NAME> call (Fanuc:\n"
@@ -55,9 +61,11 @@ static const char *kind_name(fm_motion_kind k)
     }
 }
 
-static int print_motion(void *user, const fm_motion *m)
+/* One motion; t: the times it came with (feed-only), cycle_t: the
+ * planned ones (the same without dynamics). */
+static int print_motion_timed(FILE *out, const fm_motion *m, double t0, double t1, double c0,
+                              double c1)
 {
-    FILE *out = user;
     fprintf(out, "{\"index\":%ld,\"line\":%d,", m->index, m->line);
     if (m->block >= 0) fprintf(out, "\"block\":%ld,", m->block);
     fprintf(out, "\"kind\":\"%s\",\"start\":[%.6f,%.6f,%.6f],\"end\":[%.6f,%.6f,%.6f],",
@@ -78,10 +86,91 @@ static int print_motion(void *user, const fm_motion *m)
                 m->axis_end[2]);
     fprintf(out,
             "\"feed\":%.6f,\"tool\":%d,\"spindle\":%.6f,\"tip_offset\":[%.6f,%.6f,%.6f],"
-            "\"t\":[%.6f,%.6f]}\n",
+            "\"t\":[%.6f,%.6f],\"cycle_t\":[%.6f,%.6f]}\n",
             m->feed, m->tool, m->spindle_rpm * m->spindle_dir, m->tip_offset[0],
-            m->tip_offset[1], m->tip_offset[2], m->t0, m->t1);
+            m->tip_offset[1], m->tip_offset[2], t0, t1, c0, c1);
     return ferror(out) ? 1 : 0;
+}
+
+/* Without dynamics: the motion as the program made it. */
+static int print_motion(void *user, const fm_motion *m)
+{
+    return print_motion_timed(user, m, m->t0, m->t1, m->t0, m->t1);
+}
+
+/* With dynamics the motions come out of the planner a look-ahead later
+ * than the program makes them: messages wait for the motions before them. */
+typedef struct held_message {
+    long before; /* motions the program had made when it printed this */
+    int line;
+    char *text;
+} held_message;
+
+typedef struct planned_out {
+    FILE *out;
+    long skip;      /* print motions from this index on */
+    long pushed;    /* motions given to the planner */
+    long delivered; /* motions it gave back */
+    held_message *held;
+    size_t held_count, held_cap, held_first;
+    int failed;
+} planned_out;
+
+static void print_message(void *user, int line, const char *text);
+
+static void release_messages(planned_out *po, long upto)
+{
+    while (po->held_first < po->held_count && po->held[po->held_first].before <= upto) {
+        held_message *h = &po->held[po->held_first++];
+        print_message(po->out, h->line, h->text);
+        free(h->text);
+        h->text = NULL;
+    }
+}
+
+static void hold_message(void *user, int line, const char *text)
+{
+    planned_out *po = user;
+    if (po->held_count == po->held_cap) {
+        size_t cap = po->held_cap ? 2 * po->held_cap : 16;
+        held_message *n = realloc(po->held, cap * sizeof *n);
+        if (!n) {
+            po->failed = 1;
+            return;
+        }
+        po->held = n;
+        po->held_cap = cap;
+    }
+    char *copy = strdup(text);
+    if (!copy) {
+        po->failed = 1;
+        return;
+    }
+    po->held[po->held_count++] = (held_message){po->pushed, line, copy};
+}
+
+static int print_planned(void *user, const fm_plan_motion *pm)
+{
+    planned_out *po = user;
+    release_messages(po, po->delivered);
+    po->delivered++;
+    if (pm->motion.index < po->skip) return 0;
+    return print_motion_timed(po->out, &pm->motion, pm->feed_t0, pm->feed_t1, pm->motion.t0,
+                              pm->motion.t1);
+}
+
+/* The program's motions into the planner (user: the planned_out; the
+ * planner is its second member). */
+typedef struct planned_push {
+    planned_out *po;
+    fm_planner *planner;
+} planned_push;
+
+static int push_planned(void *user, const fm_motion *m)
+{
+    planned_push *pp = user;
+    pp->po->pushed++;
+    return fm_planner_motion_sink(pp->planner, m);
 }
 
 /* A message as a JSON string (quotes, backslashes and control characters
@@ -184,6 +273,8 @@ int fm_cmd_motions(int argc, char **argv)
     fm_error err;
     char msg[1024];
     fm_tool_table table = {0, NULL};
+    fm_plan_machine dyn;
+    fm_plan_machine_default(&dyn);
     if (tools_path) {
         if (fm_tooltable_load(tools_path, &table, &err)) {
             fprintf(stderr, "%s\n", fm_error_format(&err, msg, sizeof msg));
@@ -191,7 +282,8 @@ int fm_cmd_motions(int argc, char **argv)
         }
     }
     if (machine_path) {
-        if (fm_check_machine_load(machine_path, &machine, &err)) {
+        if (fm_check_machine_load(machine_path, &machine, &err) ||
+            fm_plan_machine_load(machine_path, &dyn, &err)) {
             fprintf(stderr, "%s\n", fm_error_format(&err, msg, sizeof msg));
             fm_tool_table_free(&table);
             return (int)err.code;
@@ -206,16 +298,40 @@ int fm_cmd_motions(int argc, char **argv)
     fm_status st = fm_job_program_options(&spec, tools_path ? &table : NULL, &opt, &topt, &err);
     /* a trajectory's units come from its document: --inch and
      * --block-delete are G-code's */
-    opt.skip_motions = topt.skip_motions = skip;
+    /* with dynamics every motion is planned, so none is skipped before it
+     * is; the printing skips them */
+    planned_out po = {stdout, skip, 0, 0, NULL, 0, 0, 0, 0};
+    opt.skip_motions = topt.skip_motions = dyn.given ? 0 : skip;
     opt.start_inch = start_inch;
     opt.block_delete = block_delete;
     if (messages) {
-        opt.message = print_message;
-        opt.message_user = stdout;
+        opt.message = dyn.given ? hold_message : print_message;
+        opt.message_user = dyn.given ? (void *)&po : (void *)stdout;
     }
     static char outbuf[1 << 16];
     setvbuf(stdout, outbuf, _IOFBF, sizeof outbuf);
-    if (st == FM_OK) st = fm_job_program_run(&spec, &opt, &topt, print_motion, stdout, &err);
+    if (st == FM_OK && dyn.given) {
+        planned_push pp = {&po, fm_planner_new(&dyn, print_planned, &po, &err)};
+        st = pp.planner ? FM_OK : err.code;
+        if (st == FM_OK) {
+            st = fm_job_program_run(&spec, &opt, &topt, push_planned, &pp, &err);
+            if (st && fm_planner_error(pp.planner)->code) err = *fm_planner_error(pp.planner);
+            /* the motions before an error are printed, as without dynamics */
+            fm_error ferr;
+            fm_status fst = fm_planner_finish(pp.planner, NULL, &ferr);
+            if (st == FM_OK && fst != FM_OK) {
+                st = fst;
+                err = ferr;
+            }
+        }
+        fm_planner_free(pp.planner);
+        release_messages(&po, LONG_MAX);
+        for (size_t i = po.held_first; i < po.held_count; i++) free(po.held[i].text);
+        free(po.held);
+        if (st == FM_OK && po.failed) st = fm_error_set(&err, FM_ERR_LIMIT, "out of memory");
+    } else if (st == FM_OK) {
+        st = fm_job_program_run(&spec, &opt, &topt, print_motion, stdout, &err);
+    }
     fflush(stdout);
     fm_tool_table_free(&table);
     if (st) {
