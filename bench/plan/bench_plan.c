@@ -3,13 +3,19 @@
  * every corner a blend arc candidate, naive-CAM merging on): segments per
  * second planned from motions in memory (the goal, >= 1 M/s on one core),
  * then `frepmill time`'s whole path, interpreting and planning, beside its
- * floor, interpreting without planning. Wall and CPU time are printed; on a
- * shared machine the CPU figure is the comparable one. */
+ * floor, interpreting without planning (with the breakdown per tool,
+ * operation and block that `frepmill time` and the report make). Wall and
+ * CPU time are printed; on a shared machine the CPU figure is the
+ * comparable one.
+ * usage: bench_plan [SEGMENTS] [--program FILE]: FILE gets the generated
+ * G-code, for `frepmill time` and `frepmill simulate` (docs/plan.md). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "toolpaths/gcode/gcode.h"
+#include "runner/cycle_times.h"
 #include "toolpaths/plan/plan.h"
 #include "bench_clock.h"
 
@@ -55,7 +61,15 @@ static fm_plan_machine machine(void)
 
 int main(int argc, char **argv)
 {
-    long n = argc > 1 ? atol(argv[1]) : 1000000;
+    long n = 1000000;
+    const char *program = NULL;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--program") && i + 1 < argc) program = argv[++i];
+        else if ((n = atol(argv[i])) <= 0) {
+            fprintf(stderr, "usage: bench_plan [SEGMENTS] [--program FILE]\n");
+            return 2;
+        }
+    }
     fm_plan_machine m = machine();
     fm_error err;
 
@@ -113,24 +127,35 @@ int main(int argc, char **argv)
         len += (size_t)snprintf(text + len, cap - len, "X%.4f Y%.4f Z%.4f\n", q[0], q[1], q[2]);
     }
     len += (size_t)snprintf(text + len, cap - len, "M2\n");
+    if (program) {
+        FILE *f = fopen(program, "w");
+        if (!f || fwrite(text, 1, len, f) != len || fclose(f)) {
+            fprintf(stderr, "bench_plan: cannot write %s\n", program);
+            return 4;
+        }
+    }
     long motions = 0;
     double w0 = bench_wall_s(), c0 = bench_cpu_s();
     if (fm_gcode_run_string(text, len, "bench", NULL, count, &motions, NULL, &err)) return 2;
     double iw = bench_wall_s() - w0, ic = bench_cpu_s() - c0;
     printf("floor, interpreting only: %ld motions in %.3f s wall, %.3f s CPU: %.0f per CPU second\n",
            motions, iw, ic, motions / ic);
-    long planned = 0;
-    fm_planner *p = fm_planner_new(&m, count_planned, &planned, &err);
+    fm_cycle_times ct;
+    fm_cycle_times_init(&ct, 10);
+    fm_planner *p = fm_planner_new(&m, fm_cycle_times_sink, &ct, &err);
     if (!p) return 3;
     w0 = bench_wall_s();
     c0 = bench_cpu_s();
     if (fm_gcode_run_string(text, len, "bench", NULL, fm_planner_motion_sink, p, NULL, &err)) return 2;
     if (fm_planner_finish(p, &tot, &err)) return 2;
+    fm_cycle_times_finish(&ct);
     double tw = bench_wall_s() - w0, tc = bench_cpu_s() - c0;
     fm_planner_free(p);
-    printf("interpreting and planning: %ld motions in %.3f s wall, %.3f s CPU: %.0f per CPU second "
-           "(%.2fx the floor's time); cycle time %.1f s\n",
-           planned, tw, tc, planned / tc, tc / ic, tot.cycle_time_s);
+    printf("interpreting and planning (frepmill time's path, with the breakdown): %ld motions in "
+           "%.3f s wall, %.3f s CPU: %.0f per CPU second (%.2fx the floor's time); cycle time %.1f "
+           "s, feed-only %.1f s\n",
+           ct.motions, tw, tc, ct.motions / tc, tc / ic, tot.cycle_time_s, tot.feed_only_s);
+    fm_cycle_times_free(&ct);
     free(text);
     return 0;
 }
