@@ -26,7 +26,8 @@ int job_survey_sink(void *user, const fm_motion *m)
     /* past a stop the program is still checked, but not counted */
     int past = s->stop.line > 0 && (s->stopped || (s->stopped = job_stop_before(&s->stop, m)));
     if (past && m->index < s->stop_index) s->stop_index = m->index;
-    /* all of them into the log (the cut stops itself), through the planner */
+    /* all of them into the log (the cut stops itself), through the planner
+     * when the machine has dynamics */
     if (s->planner && !s->plan_failed) {
         fm_error perr;
         if (fm_planner_push(s->planner, m, &perr) != FM_OK) {
@@ -36,6 +37,11 @@ int job_survey_sink(void *user, const fm_motion *m)
         }
     } else {
         job_motions_add(s->log, m);
+        if (!s->planner && !past) {
+            /* no dynamics: the breakdown of the feed-only times */
+            fm_plan_motion pm = {.motion = *m, .feed_t0 = m->t0, .feed_t1 = m->t1};
+            fm_cycle_times_add(&s->times, &pm);
+        }
     }
     if (past) return 0;
     s->motions++;

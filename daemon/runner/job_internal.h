@@ -100,9 +100,9 @@ typedef struct job_survey {
     int stopped;
     fm_job_motions *log; /* the motions kept for the cut and the blame */
     int probing;         /* a G38 move: the cut's motions depend on the stock */
-    /* Every motion goes through the planner (the machine's dynamics, or
-     * none: feed-only times) on its way into the log, which so holds the
-     * planned times the cut, the progress and the toolpath then use. */
+    /* With the machine's dynamics every motion goes through the planner on
+     * its way into the log, which so holds the planned times the cut, the
+     * progress and the toolpath then use (without: feed-only times). */
     fm_planner *planner;
     int plan_failed;     /* the planner refused a motion: the cycle time stays feed-only */
     fm_plan_totals plan;

@@ -57,6 +57,11 @@ static void initial_bounds(fm_stock *stock, double lo[3], double hi[3])
     }
 }
 
+static int dynamics_given(const fm_job_spec *spec)
+{
+    return spec->dynamics && spec->dynamics->given;
+}
+
 /* The survey: the whole program is checked before anything is cut, its
  * length gives the progress its denominator, and its motions are kept for
  * the cut and the blame (the one interpretation). */
@@ -73,13 +78,11 @@ static fm_status survey(const fm_job_spec *spec, const job_tools *tools, job_sur
     result->interpretations++;
     sv->stop_index = LONG_MAX;
     fm_cycle_times_init(&sv->times, FM_JOB_TOP_BLOCKS);
-    /* without dynamics the planner passes the feed-only times through */
-    fm_plan_machine none;
-    fm_plan_machine_default(&none);
     fm_error perr;
-    sv->planner = fm_planner_new(spec->dynamics ? spec->dynamics : &none, job_survey_planned, sv,
-                                 &perr);
-    sv->plan_failed = !sv->planner;
+    if (dynamics_given(spec)) {
+        sv->planner = fm_planner_new(spec->dynamics, job_survey_planned, sv, &perr);
+        sv->plan_failed = !sv->planner;
+    }
     fm_status st = job_run_program(spec, tools->use, job_survey_sink, sv, job_survey_probe, err);
     if (sv->planner) {
         if (fm_planner_finish(sv->planner, &sv->plan, &perr) != FM_OK) {
@@ -124,11 +127,6 @@ static fm_status compare(job_cutter *c, fm_design *design, fm_job_motions *log,
     result->design_blame_wall_s = fm_clock_monotonic_s() - w1;
     result->design_blame_cpu_s = fm_clock_cpu_s() - c1;
     return st;
-}
-
-static int dynamics_given(const fm_job_spec *spec)
-{
-    return spec->dynamics && spec->dynamics->given;
 }
 
 /* The motions the cut replays carry the planned times (the survey's

@@ -494,6 +494,39 @@ async function main() {
     const endGot = apply(placed.end.m, [0, 10, 0]);
     ok(far(endGot, [0, 0, 10]) < 1e-6, `after A90 the page puts (0, 10, 0) at (0, 0, 10) (got ${endGot.map((v) => v.toFixed(4)).join(' ')})`);
 
+    // The controller's time (issue 34): a job whose machine has dynamics
+    // runs on the planned timeline. One 100 mm move at F1200 (20 mm/s) from
+    // rest to rest with 500 mm/s^2 takes L/v + v/a = 5 + 0.04 s (feed-only:
+    // 5 s); the scrubber's end and the readout are that, labelled planned.
+    const planJob = {
+      stock: 'box:0,-10,-20,120,10,-5',
+      voxel: 1,
+      tools: JSON.parse(fs.readFileSync(path.join(ROOT, 'deploy/demo/tools.json'), 'utf8')),
+      program: { gcode: 'G21 G90\nT1 M6\nG1 X100 F1200\nM2\n' },
+      machine: { dynamics: { axes: { x: { max_velocity: 100, max_acceleration: 500 } } } },
+      options: { name: 'viewer-planned-test' },
+    };
+    const rPlan = await fetch(`${url}/v1/jobs`, {
+      method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(planJob),
+    });
+    ok(rPlan.status === 202, `planned-time job accepted (HTTP ${rPlan.status})`);
+    const idPlan = (await rPlan.json()).id;
+    await page.evaluate((jid) => window.frepmillViewer.open(jid), idPlan);
+    await page.waitForFunction(() => window.frepmillViewer.idle() && window.frepmillViewer.state.toolpath
+      && window.frepmillViewer.state.jobState === 'done', null, { timeout: 60000 * WAIT });
+    const planned = await page.evaluate(() => {
+      const s = document.getElementById('scrub');
+      s.value = 1000;
+      s.dispatchEvent(new Event('input'));
+      return { total: window.frepmillViewer.state.totalT, t: window.frepmillViewer.state.replayT,
+        text: document.getElementById('time').textContent };
+    });
+    const planT = 100 / 20 + 20 / 500;
+    console.log(`planned-time job: timeline ${planned.total} s, readout '${planned.text}'`);
+    ok(Math.abs(planned.total - planT) < 1e-3 && Math.abs(planned.t - planT) < 1e-3 &&
+      planned.text === `${planT.toFixed(1)} / ${planT.toFixed(1)} s planned`,
+      `the timeline ends at the planned ${planT} s (not the feed-only 5 s), its readout says planned`);
+
     // The deviation colour mode (issue 16). The demo job has no design: no
     // deviation, and the mode stays off.
     const noDev = await fetch(`${url}/v1/jobs/${id}/deviation`);
