@@ -114,6 +114,32 @@ int fm_cycle_times_sink(void *user, const fm_plan_motion *pm)
     return 0;
 }
 
+static int smaller(int a, int b) { return a < b ? a : b; }
+
+void fm_cycle_times_summarize(const fm_cycle_times *ct, fm_cycle_summary *out)
+{
+    memset(out, 0, sizeof *out);
+    out->tool_count = smaller(ct->tool_count, FM_CYCLE_SUMMARY_TOOLS);
+    memcpy(out->tools, ct->tools, (size_t)out->tool_count * sizeof *out->tools);
+    out->operation_count = smaller(ct->operation_count, FM_CYCLE_SUMMARY_OPERATIONS);
+    memcpy(out->operations, ct->operations, (size_t)out->operation_count * sizeof *out->operations);
+    out->operation_total = ct->operation_total;
+    out->block_count = smaller(ct->top_count, FM_CYCLE_SUMMARY_BLOCKS);
+    memcpy(out->blocks, ct->top, (size_t)out->block_count * sizeof *out->blocks);
+}
+
+void fm_cycle_summary_view(const fm_cycle_summary *s, fm_cycle_times *view)
+{
+    memset(view, 0, sizeof *view);
+    view->tools = (fm_cycle_tool *)s->tools;
+    view->tool_count = s->tool_count;
+    view->operations = (fm_cycle_operation *)s->operations;
+    view->operation_count = s->operation_count;
+    view->operation_total = s->operation_total;
+    view->top = (fm_cycle_block *)s->blocks;
+    view->top_count = s->block_count;
+}
+
 json_t *fm_cycle_times_json(const fm_cycle_times *ct)
 {
     json_t *tools = json_array(), *ops = json_array(), *blocks = json_array();

@@ -60,6 +60,27 @@ void fm_cycle_times_free(fm_cycle_times *ct);
 /* An fm_plan_sink over a breakdown (user: the fm_cycle_times). */
 int fm_cycle_times_sink(void *user, const fm_plan_motion *pm);
 
+/* A breakdown kept by value (the job result's: no allocation to free): the
+ * first FM_CYCLE_SUMMARY_TOOLS tools and FM_CYCLE_SUMMARY_OPERATIONS
+ * operations, the slowest FM_CYCLE_SUMMARY_BLOCKS blocks. */
+#define FM_CYCLE_SUMMARY_TOOLS 64
+#define FM_CYCLE_SUMMARY_OPERATIONS 64
+#define FM_CYCLE_SUMMARY_BLOCKS 10
+typedef struct fm_cycle_summary {
+    fm_cycle_tool tools[FM_CYCLE_SUMMARY_TOOLS];
+    int tool_count;
+    fm_cycle_operation operations[FM_CYCLE_SUMMARY_OPERATIONS];
+    int operation_count;
+    long operation_total;
+    fm_cycle_block blocks[FM_CYCLE_SUMMARY_BLOCKS];
+    int block_count;
+} fm_cycle_summary;
+
+void fm_cycle_times_summarize(const fm_cycle_times *ct, fm_cycle_summary *out);
+/* *view reads the summary's arrays (valid while it lives; not to be freed
+ * or added to): for fm_cycle_times_json. */
+void fm_cycle_summary_view(const fm_cycle_summary *s, fm_cycle_times *view);
+
 /* {"tools": [{"tool", "time_s", "feed_only_s"}], "operations": [{"tool",
  * "first_line", "last_line", "t0", "t1", "time_s", "feed_only_s"}],
  * "operation_count": all of them, "blocks": [{"line", "block"?, "time_s",

@@ -242,7 +242,7 @@ typedef struct fm_job_result {
     /* cycle_time_s per tool, operation and block with the feed-only figures
      * beside (has_cycle_times: 0 for live jobs, or when the planner failed) */
     int has_cycle_times;
-    fm_cycle_times cycle_times;
+    fm_cycle_summary cycle_times;
     double wall_time_s;
     size_t peak_memory_bytes;  /* peak resident set of the process */
     double voxel_mm;

@@ -34,8 +34,6 @@ void fm_job_result_release(fm_job_result *r)
     r->has_deviation = 0;
     fm_check_free(r->check);
     r->check = NULL;
-    fm_cycle_times_free(&r->cycle_times);
-    r->has_cycle_times = 0;
 }
 
 /* The stock's bounds before the first cut (mm, within a voxel). */
@@ -77,7 +75,7 @@ static fm_status survey(const fm_job_spec *spec, const job_tools *tools, job_sur
     if (!sv->log) return fm_error_set(err, FM_ERR_LIMIT, "out of memory keeping the program's motions");
     result->interpretations++;
     sv->stop_index = LONG_MAX;
-    fm_cycle_times_init(&sv->times, FM_JOB_TOP_BLOCKS);
+    fm_cycle_times_init(&sv->times, FM_CYCLE_SUMMARY_BLOCKS);
     fm_error perr;
     if (dynamics_given(spec)) {
         sv->planner = fm_planner_new(spec->dynamics, job_survey_planned, sv, &perr);
@@ -139,7 +137,7 @@ static int timeline_planned(const fm_job_spec *spec, const job_survey *sv)
 }
 
 /* The figures of a finished job. */
-static void fill_result(const job_cutter *c, job_survey *sv, fm_job_result *result)
+static void fill_result(const job_cutter *c, const job_survey *sv, fm_job_result *result)
 {
     fm_stock *stock = c->stock;
     const int live = c->spec->program_kind == FM_PROGRAM_LIVE;
@@ -159,10 +157,10 @@ static void fill_result(const job_cutter *c, job_survey *sv, fm_job_result *resu
     result->times_planned = !live && c->progress.time_planned;
     result->cycle_time_s = result->cycle_time_planned ? sv->plan_end : result->program_time_s;
     /* the breakdown (planned, or feed-only without dynamics), handed over */
-    if (!live && !sv->plan_failed && !sv->times.failed && (result->cycle_time_planned || !dynamics_given(c->spec))) {
-        result->cycle_times = sv->times;
+    if (!live && !sv->plan_failed && !sv->times.failed &&
+        (result->cycle_time_planned || !dynamics_given(c->spec))) {
+        fm_cycle_times_summarize(&sv->times, &result->cycle_times);
         result->has_cycle_times = 1;
-        memset((void *)&sv->times, 0, sizeof sv->times);
     }
     result->voxel_mm = fm_stock_voxel_size(stock);
     size_t n = fm_stock_tool_volumes(stock, result->tools,

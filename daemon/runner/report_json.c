@@ -110,7 +110,9 @@ json_t *fm_job_report_json(const fm_job_result *r)
         json_object_set_new(out, "cycle_time_planned", json_boolean(r->cycle_time_planned));
         /* cycle_time_s per tool, operation and block, feed-only beside */
         if (r->has_cycle_times) {
-            json_t *ct = fm_cycle_times_json(&r->cycle_times);
+            fm_cycle_times view;
+            fm_cycle_summary_view(&r->cycle_times, &view);
+            json_t *ct = fm_cycle_times_json(&view);
             if (ct) json_object_set_new(out, "cycle_times", ct);
         }
         json_object_set_new(out, "voxels_uncertain", json_integer((json_int_t)r->voxels_uncertain));
