@@ -156,7 +156,7 @@ static void fill_result(const job_cutter *c, const job_survey *sv, fm_job_result
     result->cycle_time_planned = !live && dynamics_given(c->spec) && !sv->plan_failed && !sv->probing;
     result->times_planned = !live && c->progress.time_planned;
     result->cycle_time_s = result->cycle_time_planned ? sv->plan_end : result->program_time_s;
-    /* the breakdown (planned, or feed-only without dynamics), handed over */
+    /* the breakdown (planned, or feed-only without dynamics) */
     if (!live && !sv->plan_failed && !sv->times.failed &&
         (result->cycle_time_planned || !dynamics_given(c->spec))) {
         fm_cycle_times_summarize(&sv->times, &result->cycle_times);
