@@ -836,6 +836,14 @@ function listen(id, gen) {
     try {
       const st = await getJSON(`/v1/jobs/${id}`);
       if (gen !== S.generation) return;
+      // A toolpath fetched before the job had read its program has the
+      // feed-only times; the job's kept motions have the planned ones.
+      if (st.program_time_planned && Math.abs(S.totalT - st.program_time_total_s) > 1e-3) {
+        const tp = await getJSON(`/v1/jobs/${id}/toolpath`);
+        if (gen !== S.generation) return;
+        S.toolpath = tp;
+        buildToolpath(tp);
+      }
       showStatus(st);
       setFindings(st.findings);
     } catch (e) {
