@@ -173,8 +173,6 @@ def scenario_restart(frepmilld, server_bin, tmp, daemons):
         check(done_entries(r) == [entry, rerun_entry], "one done record each")
         check(r("XPENDING", "frepmill:jobs", "frepmilld")[0] == 0, "nothing left pending")
         r.close()
-        a.stop()
-        daemons.remove(a)
     finally:
         redis.stop()
 
@@ -260,8 +258,11 @@ def main():
                 print("==== %s" % scenario.__name__)
                 scenario(frepmilld, server_bin, tmp, daemons)
                 for d in list(daemons):
-                    d.stop()
+                    # a clean stop: under the sanitizers a leak or an error
+                    # found at exit is a non-zero status
+                    rc = d.stop()
                     daemons.remove(d)
+                    check(rc == 0, "%s stopped cleanly (status %s)" % (d.state_dir, rc))
         except BaseException:
             for d in daemons:
                 print("---- last lines of %s" % d.log_path)
