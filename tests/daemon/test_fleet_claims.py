@@ -8,8 +8,9 @@ on its own redis-server:
    (resuming at motion N > 0); the resumed job's removed volume equals a
    rerun's of the same job (another entry, cut from the start) and the
    closed form.
-2. lost claim: daemon a runs an entry and is stopped (SIGSTOP, a partition
-   longer than queue_claim_s); daemon b claims the entry and runs it; a,
+2. lost claim: daemon a runs an entry, paused (Modbus) so that it cannot
+   end first, and is stopped (SIGSTOP, a partition longer than
+   queue_claim_s); daemon b claims the entry and runs it; a,
    continued, finds at its next renewal that b owns the entry, releases the
    job ("stopped by its queue") and writes no result; b's result is the
    only one, right, and nothing is left pending.
@@ -28,7 +29,7 @@ import sys
 import tempfile
 import time
 
-from daemon_util import COARSE, INSTRUMENTED, Daemon, check, curl_json
+from daemon_util import COARSE, INSTRUMENTED, Daemon, check, curl_json, modbus_port, modbus_write
 from redis_util import RedisServer, need_redis_server
 
 # 0.1 mm: a job of 8 slots cuts for a few seconds in the optimized build,
@@ -184,13 +185,20 @@ def scenario_lost_claim(frepmilld, server_bin, tmp, daemons):
         job, volume = slot_job("contested", 8)
         entry = r("XADD", "frepmill:jobs", "*", "job", json.dumps(job)).decode()
         job_id = "q-" + entry
-        a = Daemon(frepmilld, os.path.join(tmp, "a2"), *queue_args(redis.port, "a", 2))
+        # Modbus commands: a's job is paused (held between cuts) before the
+        # partition, so that it cannot finish before a notices the loss,
+        # however loaded the machine; a release ends a pause (jobs.c).
+        a = Daemon(frepmilld, os.path.join(tmp, "a2"), *queue_args(redis.port, "a", 2),
+                   "--modbus-listen", "127.0.0.1:0", "--modbus-commands", "yes")
         daemons.append(a)
-        st = wait_for("a runs the entry", lambda: running_job(a, job_id, 0.02), WAIT_S)
+        wait_for("a runs the entry", lambda: running_job(a, job_id, 0.0), WAIT_S)
+        check(modbus_write(modbus_port(a), 100, [2, 1, 0]) == 0, "Modbus pause of a's job")
+        st = wait_for("a's job paused", lambda: (job_status(a, job_id) or {}).get("paused") and
+                      job_status(a, job_id), WAIT_S)
         a.proc.send_signal(signal.SIGSTOP)   # a partition: a neither cuts nor renews
         try:
-            check(st["progress"] < 0.5, "a stopped early in the job (progress %.2f)" %
-                  st["progress"])
+            check(st["state"] == "running" and st["progress"] < 1,
+                  "a's job paused unfinished (progress %.2f)" % st["progress"])
             b = Daemon(frepmilld, os.path.join(tmp, "b2"), *queue_args(redis.port, "b", 2))
             daemons.append(b)
             # b claims the entry once it has been idle for queue_claim_s (2 s).
