@@ -2,24 +2,39 @@
 # test.sh: the README's test command (and CI's: .ci/run). Installs what the
 # tests need, then builds frepmill and runs every test. Steps (FM_TEST_STEPS,
 # default "release sanitize fuzz"):
-#   release   an optimized GCC build (the README's build): every test but
-#             those labelled integration (unit, valgrind, heavy, timing);
+#   release   an optimized GCC build (the README's build) and every test but
+#             the fuzz targets: unit, valgrind, heavy, timing and the
+#             integration tests, each at the full size its tolerance is
+#             argued for (the only build where all of them run at that size
+#             in CI's budget);
 #   sanitize  one clang build with ASan + UBSan and libFuzzer's coverage
 #             (-DFM_SANITIZE=ON -DFM_FUZZ=ON): the integration tests and the
-#             unit tests under the sanitizers, but for those labelled timing
-#             or heavy (minutes of CPU there; they ran in release);
+#             unit tests again under the sanitizers, but for those labelled
+#             timing or heavy (minutes of CPU there; they ran in release);
+#             tests whose cost is their grid take a coarser one there
+#             (FM_TEST_INSTRUMENTED, tests/README.md);
 #   fuzz      (after sanitize) each fuzz target for FM_FUZZ_SECONDS (30) from
 #             its committed corpus, two at a time, with a seed that changes
 #             with the commit (printed; FM_FUZZ_SEED=N reruns it);
 #   asan      (on demand) a GCC build with AddressSanitizer + UBSan: the unit
 #             tests again (but those labelled timing).
-# Every test runs in some step of the default: a test labelled integration
-# is one the sanitizer build runs (CMakeLists.txt fm_test refuses one that
-# would not be built there).
+# `deploy/test.sh full` (nightly size, over CI's 25 minutes): the same steps
+# with FM_TEST_FULL_SIZE=1, so that the sanitizer build too runs every test
+# at full size, its heavy tests included.
 # With CI=true no test may skip: tests that miss a tool fail themselves, and
 # any test ctest still reports as skipped fails the run here.
 set -eu
 cd "$(dirname "$0")/.."
+
+full=0
+if [ "${1:-}" = full ]; then
+    full=1
+    FM_TEST_FULL_SIZE=1
+    export FM_TEST_FULL_SIZE
+elif [ $# -gt 0 ]; then
+    echo "test.sh: unknown argument '$1' (none, or full)" >&2
+    exit 2
+fi
 
 deploy/install-deps.sh test
 
@@ -82,8 +97,8 @@ for s in $steps; do
         cmake -S . -B build/release $(generator build/release) -DCMAKE_BUILD_TYPE=RelWithDebInfo
         cmake --build build/release -j "$jobs"
         step_done "optimized build"
-        step "the optimized build's tests (all but the integration tests: those run under the sanitizers)"
-        run_ctest build/release -LE integration
+        step "the optimized build's tests (all but the fuzz targets; integration tests at full size)"
+        run_ctest build/release -LE fuzz
         step_done "optimized tests"
         ;;
     asan)
@@ -102,9 +117,14 @@ for s in $steps; do
             -DFM_FUZZ=ON -DFM_BENCH=OFF
         cmake --build build/sanitize -j "$jobs"
         step_done "sanitizer build"
-        step "unit and integration tests under ASan + UBSan"
         sanitize_env
-        run_ctest build/sanitize -L 'unit|integration' -LE 'timing|heavy'
+        if [ "$full" = 1 ]; then
+            step "unit, heavy and integration tests under ASan + UBSan, at full size"
+            run_ctest build/sanitize -L 'unit|integration|heavy' -LE timing
+        else
+            step "unit and integration tests under ASan + UBSan (coarser grids: FM_TEST_INSTRUMENTED)"
+            run_ctest build/sanitize -L 'unit|integration' -LE 'timing|heavy'
+        fi
         step_done "sanitizer tests"
         ;;
     fuzz)

@@ -12,8 +12,10 @@
 
 /* FM_TEST_INSTRUMENTED: 1 in a build with AddressSanitizer (FM_SANITIZE or
  * FM_FUZZ), where the code runs several times slower. A test whose cost is
- * the size of its grid may use a coarser one there: it still asserts its
- * figures, and the optimized build runs the fine grid. */
+ * the size of its grid may use a coarser one when test_coarse() says so (in
+ * that build, unless FM_TEST_FULL_SIZE=1: deploy/test.sh full): it still
+ * asserts its figures, and CI runs the fine grid in the optimized build
+ * (deploy/test.sh's release step runs every test there). */
 #ifndef FM_TEST_INSTRUMENTED
 #if defined(__SANITIZE_ADDRESS__)
 #define FM_TEST_INSTRUMENTED 1
@@ -26,6 +28,12 @@
 #ifndef FM_TEST_INSTRUMENTED
 #define FM_TEST_INSTRUMENTED 0
 #endif
+
+static inline int test_coarse(void)
+{
+    const char *full = getenv("FM_TEST_FULL_SIZE");
+    return FM_TEST_INSTRUMENTED && !(full && !strcmp(full, "1"));
+}
 
 static int fm_test_failures;
 static int fm_test_checks;

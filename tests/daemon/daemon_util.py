@@ -17,10 +17,13 @@ from fm_skip import skip  # noqa: E402  (re-exported: the tests' skip rule)
 DEMO = os.path.join(ROOT, "deploy", "demo")
 DEMO_STOCK = "box:0,0,-30,100,60,0"
 # Set by ctest in sanitizer builds (fm_tool_test): frepmilld and frepmill are
-# instrumented there, several times slower. A test whose cost is its grid or
-# its number of jobs may take a coarser grid or fewer jobs then; it asserts
-# the same things, and the optimized build keeps the full size.
+# instrumented there, several times slower, and waits are doubled. A test
+# whose cost is its grid or its number of jobs takes a coarser grid or fewer
+# jobs when COARSE; it asserts the same things. The optimized build runs the
+# full size in CI (deploy/test.sh's release step), and FM_TEST_FULL_SIZE=1
+# (deploy/test.sh full) keeps the full size in the sanitizer build too.
 INSTRUMENTED = os.environ.get("FM_TEST_INSTRUMENTED") == "1"
+COARSE = INSTRUMENTED and os.environ.get("FM_TEST_FULL_SIZE") != "1"
 
 
 class Daemon:

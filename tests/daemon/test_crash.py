@@ -10,11 +10,11 @@ import sys
 import tempfile
 import time
 
-from daemon_util import INSTRUMENTED, Daemon, check, cli_reference, curl_json, demo_job, submit, wait_state
+from daemon_util import COARSE, INSTRUMENTED, Daemon, check, cli_reference, curl_json, demo_job, submit, wait_state
 
 # Instrumented (sanitizer build): a coarser grid, for a daemon several times
 # slower; wait_state doubles its bound there itself (the same checks).
-VOXEL = 0.4 if INSTRUMENTED else 0.25
+VOXEL = 0.4 if COARSE else 0.25
 WAIT_S = 300
 
 

@@ -20,12 +20,12 @@ import subprocess
 import sys
 import tempfile
 
-from daemon_util import INSTRUMENTED, Daemon, check, curl_json, submit, wait_state
+from daemon_util import COARSE, Daemon, check, curl_json, submit, wait_state
 
 # Instrumented (sanitizer build): 0.2 mm. Most of an instrumented job's time
 # goes to meshing the whole stock for the viewer (its uncut state and its
 # final one), which scales with the stock's surface in voxels.
-VOXEL = 0.2 if INSTRUMENTED else 0.1
+VOXEL = 0.2 if COARSE else 0.1
 STOCK = "box:0,0,-10,60,40,0"
 TOOLS = {"units": "mm", "tools": [{"number": 1, "shape": "flat", "diameter": 6,
                                    "flute_length": 20, "length": 40}]}

@@ -15,10 +15,10 @@ import sys
 import tempfile
 import time
 
-from daemon_util import INSTRUMENTED, Daemon, check, curl_json, submit, wait_state
+from daemon_util import COARSE, INSTRUMENTED, Daemon, check, curl_json, submit, wait_state
 from redis_util import RedisServer, need_redis_server
 
-VOXEL = 0.2 if INSTRUMENTED else 0.1
+VOXEL = 0.2 if COARSE else 0.1
 R = 3.0          # 6 mm flat end mill
 LENGTH = 60.0    # the slot's straight length
 SLOT_DEPTH = 2.0

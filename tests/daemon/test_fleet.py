@@ -16,7 +16,7 @@ import sys
 import tempfile
 import time
 
-from daemon_util import INSTRUMENTED, Daemon, check, curl_json
+from daemon_util import COARSE, INSTRUMENTED, Daemon, check, curl_json
 from redis_util import RedisServer, need_redis_server
 
 # 0.1 mm: a job then cuts for over a second on an idle machine, long enough
@@ -24,11 +24,11 @@ from redis_util import RedisServer, need_redis_server
 # the snapshot interval, and the victim was never found). Instrumented
 # (sanitizer build, several times slower): 0.2 mm and 4 jobs, which still
 # run long enough; longer waits (bounds only), the same checks.
-VOXEL = 0.2 if INSTRUMENTED else 0.1
+VOXEL = 0.2 if COARSE else 0.1
 RADIUS = 3.0      # 6 mm flat end mill
 LENGTH = 80.0     # each slot's straight length
 SLOTS = 4
-JOBS = 4 if INSTRUMENTED else 8
+JOBS = 4 if COARSE else 8
 WAIT_S = 600 if INSTRUMENTED else 300
 TOOLS = {"units": "mm", "tools": [{"number": 1, "shape": "flat", "diameter": 2 * RADIUS,
                                     "flute_length": 20, "length": 40}]}

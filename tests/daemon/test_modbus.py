@@ -12,7 +12,7 @@ import sys
 import tempfile
 import time
 
-from daemon_util import DEMO, INSTRUMENTED, Daemon, check, curl_json, demo_job, modbus_port, skip, submit, wait_state
+from daemon_util import DEMO, COARSE, INSTRUMENTED, Daemon, check, curl_json, demo_job, modbus_port, skip, submit, wait_state
 from test_live import client, need_node_client
 
 
@@ -20,7 +20,7 @@ from test_live import client, need_node_client
 # job's set-up (the stock, its first meshes) comes before its first blocks:
 # a coarser grid and a longer polling window there. The window only bounds
 # the wait; the test reads the same registers.
-VOXEL = 0.4 if INSTRUMENTED else 0.2
+VOXEL = 0.4 if COARSE else 0.2
 POLL_S = 180 if INSTRUMENTED else 60
 
 

@@ -28,9 +28,9 @@ import subprocess
 import sys
 import tempfile
 
-from daemon_util import INSTRUMENTED, Daemon, check, curl_json, submit, wait_state
+from daemon_util import COARSE, INSTRUMENTED, Daemon, check, curl_json, submit, wait_state
 
-VOXEL = 0.2 if INSTRUMENTED else 0.1
+VOXEL = 0.2 if COARSE else 0.1
 R = 3.0
 LENGTH = 40.0
 DEPTH = 2.0

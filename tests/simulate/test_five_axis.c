@@ -32,7 +32,7 @@ static double removed(const char *program, const char *name, const fm_machine *m
     spec.program_name = name;
     spec.stock_spec = "box:-10,-10,-12,40,30,-1";
     spec.tools = &tools;
-    spec.stock.voxel_mm = FM_TEST_INSTRUMENTED ? 0.4 : 0.2;
+    spec.stock.voxel_mm = test_coarse() ? 0.4 : 0.2;
     spec.machine = machine;
     fm_job_result result;
     fm_error err;

@@ -25,10 +25,11 @@ const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '.
 const VIEWER = path.join(ROOT, 'viewer');
 const CHROMIUM = process.env.FM_CHROMIUM || '/usr/bin/chromium';
 // Set by ctest in sanitizer builds: the daemon is instrumented, several times
-// slower. The demo job then takes a coarser grid and every wait is doubled
-// (bounds only: the same checks).
+// slower. The demo job then takes a coarser grid (but with FM_TEST_FULL_SIZE=1,
+// deploy/test.sh full) and every wait is doubled (bounds only: the same checks).
 const INSTRUMENTED = process.env.FM_TEST_INSTRUMENTED === '1';
-const VOXEL = Number(process.env.FM_VIEWER_VOXEL || (INSTRUMENTED ? 0.5 : 0.3));
+const COARSE = INSTRUMENTED && process.env.FM_TEST_FULL_SIZE !== '1';
+const VOXEL = Number(process.env.FM_VIEWER_VOXEL || (COARSE ? 0.5 : 0.3));
 const WAIT = INSTRUMENTED ? 2 : 1;
 const daemonBin = process.argv[2];
 const artifactDir = process.argv[3] || os.tmpdir();
