@@ -29,6 +29,7 @@ Exit 0 when all agree, 1 on a difference. When rs274 or the example folder
 is missing: exit 77 (skipped) with a message, or 1 when the environment has
 CI=true or CI=1 (CI never skips; tests/support/fm_skip.py).
 """
+import atexit
 import json
 import math
 import os
@@ -132,6 +133,22 @@ def rot(x, y, deg):
     return x * math.cos(t) - y * math.sin(t), x * math.sin(t) + y * math.cos(t)
 
 
+# rs274 keeps its tool table in $HOME/.tool.mmap (LinuxCNC's tooldata_mmap):
+# two rs274 processes with one HOME (this test beside another checkout's, or
+# a developer's LinuxCNC) overwrite each other's tools ("Requested tool 4
+# not found" on offsets.ngc, seen twice). Each run of this script gets a
+# HOME of its own.
+RS274_HOME = None
+
+
+def rs274_env():
+    global RS274_HOME
+    if RS274_HOME is None:
+        RS274_HOME = tempfile.mkdtemp(prefix="fm-rs274-home-")
+        atexit.register(shutil.rmtree, RS274_HOME, True)
+    return dict(os.environ, HOME=RS274_HOME)
+
+
 def rs274_run(program, tbl_inch, ini_path):
     cmd = ["rs274", "-g"]
     if tbl_inch:
@@ -141,7 +158,7 @@ def rs274_run(program, tbl_inch, ini_path):
     cmd.append(program)
     # M0/M1 wait for a key press: feed it newlines
     res = subprocess.run(cmd, input="\n" * 1000, capture_output=True, text=True, timeout=300,
-                         cwd=os.path.dirname(os.path.abspath(program)))
+                         cwd=os.path.dirname(os.path.abspath(program)), env=rs274_env())
     unit = 1.0
     g5x = [0.0, 0.0, 0.0]
     g92 = [0.0, 0.0, 0.0]
