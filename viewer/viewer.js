@@ -258,6 +258,7 @@ async function loadChunk(gen, info, byVersion) {
   const buf = await r.arrayBuffer();
   if (gen !== S.generation) return;
   if (!buf.byteLength) { removeChunk(info.id); return; }
+  const bytes = buf.byteLength; // (the decoder's worker takes the buffer)
   const geometry = await decode(buf);
   if (gen !== S.generation) { geometry.dispose(); return; }
   if (!geometry.getAttribute('normal')) geometry.computeVertexNormals();
@@ -267,8 +268,51 @@ async function loadChunk(gen, info, byVersion) {
   mesh.name = info.id;
   stockGroup.add(mesh);
   if (old) { stockGroup.remove(old.mesh); old.mesh.geometry.dispose(); }
-  S.chunks.set(info.id, { mesh, version: info.version, triangles: info.triangles });
+  S.chunks.set(info.id, { mesh, version: info.version, triangles: info.triangles, bytes });
   invalidate();
+}
+
+// Frame once on the stock and the toolpath together, when the stock first arrives.
+function frameOnStock() {
+  if (S.framed || !stockGroup.children.length) return;
+  const box = new THREE.Box3().setFromObject(stockGroup);
+  if (pathGroup.children.length) box.union(new THREE.Box3().setFromObject(pathGroup));
+  frame(box);
+  S.framed = true;
+}
+
+// A done job opened: its whole stock as one mesh (GET .../stock.drc, meshed
+// once by the daemon with adaptivity: far fewer triangles than its chunks,
+// one request instead of hundreds; docs/viewer.md). It is kept in S.chunks
+// under the name WHOLE, so a replay's chunk list (which never names it)
+// replaces it. False: the daemon has none (an older daemon, no stock).
+const WHOLE = 'whole';
+async function loadWhole(gen, version) {
+  const r = await fetch(`/v1/jobs/${S.jobId}/stock.drc`, { cache: 'no-store' });
+  if (gen !== S.generation) return true;
+  if (!r.ok) return false;
+  const buf = await r.arrayBuffer();
+  if (gen !== S.generation) return true;
+  const bytes = buf.byteLength; // (the decoder's worker takes the buffer)
+  const geometry = await decode(buf);
+  if (gen !== S.generation) { geometry.dispose(); return true; }
+  if (!S.live) { geometry.dispose(); return true; } // replaying meanwhile: its chunks show
+  if (!geometry.getAttribute('normal')) geometry.computeVertexNormals();
+  const material = geometry.getAttribute('color') ? stockMaterialColored : stockMaterial;
+  for (const id of [...S.chunks.keys()]) removeChunk(id);
+  const mesh = new THREE.Mesh(geometry, material);
+  mesh.name = WHOLE;
+  stockGroup.add(mesh);
+  const tris = (geometry.index ? geometry.index.count : geometry.getAttribute('position').count) / 3;
+  S.chunks.set(WHOLE, { mesh, version, triangles: tris, bytes });
+  S.version = version;
+  S.shownAt = null;
+  S.historyNote = '';
+  frameOnStock();
+  updateMeshReadout();
+  invalidate();
+  S.synced = true;
+  return true;
 }
 
 // Bring the chunks shown up to date. Following the job (S.live): those
@@ -311,13 +355,7 @@ async function syncChunks(full = false) {
     if (at === null) S.version = S.shownAt !== null ? list.version : Math.max(S.version, list.version);
     S.shownAt = at;
     S.historyNote = '';
-    // Frame once on the stock and the toolpath together, when the stock first arrives.
-    if (!S.framed && stockGroup.children.length) {
-      const box = new THREE.Box3().setFromObject(stockGroup);
-      if (pathGroup.children.length) box.union(new THREE.Box3().setFromObject(pathGroup));
-      frame(box);
-      S.framed = true;
-    }
+    frameOnStock();
     updateMeshReadout();
   } catch (e) {
     S.errors.push(String(e));
@@ -344,10 +382,17 @@ function triangleCount() {
   return n;
 }
 
+function meshBytes() {
+  let n = 0;
+  for (const c of S.chunks.values()) n += c.bytes || 0;
+  return n;
+}
+
 function updateMeshReadout() {
   const when = S.shownAt === null ? `v${S.version}` : `at ${fmt(S.shownAt, 1)} s`;
-  $('mesh').textContent = `${triangleCount().toLocaleString('en')} triangles, ${S.chunks.size} chunks, ${when}` +
-    (S.historyNote ? ` (${S.historyNote})` : '');
+  const parts = S.chunks.has(WHOLE) ? 'whole stock' : `${S.chunks.size} chunks`;
+  $('mesh').textContent = `${triangleCount().toLocaleString('en')} triangles, ${parts}, ` +
+    `${(meshBytes() / 1e6).toFixed(2)} MB, ${when}` + (S.historyNote ? ` (${S.historyNote})` : '');
 }
 
 function isEnded() {
@@ -810,6 +855,16 @@ async function openJob(id) {
   // Live updates: events first, so no change between the listing and the
   // stream is missed (a chunk listed twice is merely fetched twice).
   if (!isEnded()) listen(id, gen);
+  // Done: the whole stock in one request; else (or without one) the chunks.
+  // (?chunks: always the chunks, to compare.)
+  if (st.state === 'done' && !new URLSearchParams(location.search).has('chunks')) {
+    try {
+      if (await loadWhole(gen, st.mesh_version || 0)) return;
+    } catch (e) {
+      console.warn('no whole stock mesh:', e);
+    }
+    if (gen !== S.generation) return;
+  }
   await syncChunks(true);
 }
 
@@ -905,6 +960,17 @@ const api = {
   // The workpiece's placement on the machine now (column-major 4x4).
   workpieceMatrix: () => workpiece.matrix.toArray(),
   chunkCount: () => S.chunks.size,
+  // The whole stock's mesh is shown (a done job opened), not its chunks.
+  wholeShown: () => S.chunks.has(WHOLE),
+  // Bounding box of the stock shown, workpiece frame: [xmin, ymin, zmin, xmax, ymax, zmax].
+  stockBox: () => {
+    const b = new THREE.Box3();
+    for (const { mesh } of S.chunks.values()) {
+      mesh.geometry.computeBoundingBox();
+      b.union(mesh.geometry.boundingBox);
+    }
+    return [...b.min.toArray(), ...b.max.toArray()];
+  },
   open: (id) => { location.hash = `job=${id}`; },
   // Ended and the chunks shown match the daemon's list.
   idle: () => S.synced && !S.syncing,

@@ -150,6 +150,16 @@ static fm_status svc_stock_path(void *ctx, const char *id, char *path, size_t si
     return FM_OK;
 }
 
+static fm_status svc_stock_mesh_path(void *ctx, const char *id, char *path, size_t size,
+                                    fm_error *err)
+{
+    job *j = fm_jobs_get(ctx, id);
+    if (!j) return not_found(id, err);
+    fm_status rc = fm_publish_stock_mesh(j, path, size, err);
+    fm_jobs_put(ctx, j);
+    return rc;
+}
+
 static fm_status svc_deviation_path(void *ctx, const char *id, int mesh, char *path, size_t size,
                                    fm_error *err)
 {
@@ -294,4 +304,5 @@ void fm_jobs_http_service(fm_jobs *jobs, fm_http_service *out)
     out->check = svc_check;
     out->toolpath = svc_toolpath;
     out->deviation_path = svc_deviation_path;
+    out->stock_mesh_path = svc_stock_mesh_path;
 }

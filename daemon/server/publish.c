@@ -527,6 +527,57 @@ fm_status fm_publish_ensure_meshes(job *j, fm_error *err)
     return rc;
 }
 
+/* --------------------------------------------------------- whole view -- */
+
+/* The finished stock as one mesh for the viewer (GET /v1/jobs/{id}/stock.drc):
+ * meshed once from stock.vdb with OpenVDB's adaptivity, which merges the
+ * cells of flat faces into larger polygons (the demo's 4.83 M triangles in
+ * 717 chunks become one mesh of far fewer; docs/daemon.md gives the figures
+ * and the deviation), and kept as stock.drc beside the job's other files:
+ * every later request, and a restarted daemon, serves the file. Running
+ * jobs and replays keep the chunk meshes (their seams need adaptivity 0). */
+fm_status fm_publish_stock_mesh(job *j, char *path, size_t size, fm_error *err)
+{
+    pthread_mutex_lock(&j->lock);
+    int done = j->state == FM_JOB_DONE;
+    pthread_mutex_unlock(&j->lock);
+    if (!done)
+        return fm_error_set_reason(err, FM_ERR_INPUT, "not_finished",
+                                   "job %s is not done; its whole stock mesh exists once it is", j->id);
+    fm_job_file_path(j, "stock.drc", path, size);
+    pthread_mutex_lock(&j->load_lock);
+    fm_status st = FM_OK;
+    if (access(path, R_OK) != 0) {
+        char vdb[PATH_MAX];
+        fm_job_file_path(j, "stock.vdb", vdb, sizeof vdb);
+        fm_stock_options sopt;
+        fm_stock_options_default(&sopt);
+        fm_error ferr;
+        fm_error_clear(&ferr);
+        fm_stock *stock = access(vdb, R_OK) == 0 ? fm_stock_load_vdb(vdb, &sopt, &ferr) : NULL;
+        fm_mesh *mesh = NULL;
+        if (stock) {
+            fm_mesh_extract_options opt;
+            fm_mesh_extract_default(&opt);
+            opt.adaptivity = FM_PUBLISH_VIEW_ADAPTIVITY;
+            opt.coloring = j->doc->color_tool ? FM_MESH_COLOR_TOOL : FM_MESH_COLOR_NONE;
+            mesh = fm_mesh_from_stock(stock, &opt, &ferr);
+            fm_stock_free(stock);
+        }
+        uint8_t *drc = NULL;
+        size_t drc_size = 0;
+        if (!mesh || !mesh->triangle_count)
+            st = fm_error_set_reason(err, FM_ERR_INPUT, "no_mesh", "job %s has no stock to mesh%s%s",
+                                     j->id, ferr.message[0] ? ": " : "", ferr.message);
+        else if ((st = fm_mesh_encode_draco(mesh, NULL, &drc, &drc_size, err)) == FM_OK)
+            st = fm_store_write_atomic(j->dir, "stock.drc", drc, drc_size, err);
+        free(drc);
+        fm_mesh_free(mesh);
+    }
+    pthread_mutex_unlock(&j->load_lock);
+    return st;
+}
+
 /* ---------------------------------------------------------- deviation -- */
 
 /* The viewer's deviation mode (docs/api.md, GET /v1/jobs/{id}/deviation):

@@ -40,6 +40,12 @@ void fm_publish_chunks(job *j, fm_stock *stock, double program_time_s);
 fm_status fm_publish_ensure_meshes(job *j, fm_error *err);
 /* Free the chunks' remeshing caches (the job's stock will not change again). */
 void fm_publish_chunks_drop_caches(job *j);
+/* The adaptivity of the finished stock's whole mesh (docs/daemon.md: the
+ * triangles and the deviation it was chosen by). */
+#define FM_PUBLISH_VIEW_ADAPTIVITY 0.2
+/* A done job: the path of stock.drc, its whole stock meshed once with that
+ * adaptivity (made on the first call, then kept). */
+fm_status fm_publish_stock_mesh(job *j, char *path, size_t size, fm_error *err);
 /* A finished job with a design: write deviation.drc (the stock's mesh in
  * deviation colours) and deviation.json (its key in mm and the figures) to
  * the job's folder, for GET /v1/jobs/{id}/deviation (the caller owns the

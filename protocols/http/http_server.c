@@ -775,6 +775,13 @@ static enum MHD_Result route_job(fm_http_server *s, struct MHD_Connection *con, 
             return MHD_YES;
         return fail(con, 404, "no_deviation", "job %s has no deviation", id);
     }
+    if (!strcmp(rest, "/stock.drc") && s->svc.stock_mesh_path) {
+        char path[PATH_MAX];
+        if ((st = s->svc.stock_mesh_path(s->svc.ctx, id, path, sizeof path, &err)) != FM_OK)
+            return respond_service_error(con, &err);
+        if (respond_file(con, path, "application/octet-stream") == MHD_YES) return MHD_YES;
+        return fail(con, 404, "no_mesh", "job %s has no stock mesh", id);
+    }
     if (!strcmp(rest, "/stock.vdb")) {
         char path[PATH_MAX];
         if ((st = s->svc.stock_path(s->svc.ctx, id, path, sizeof path, &err)) != FM_OK)

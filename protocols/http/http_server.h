@@ -149,6 +149,10 @@ typedef struct fm_http_service {
      * the path of the file the daemon wrote. NULL: 404. */
     fm_status (*deviation_path)(void *ctx, const char *id, int mesh, char *path, size_t size,
                                 fm_error *err);
+    /* GET /v1/jobs/{id}/stock.drc: a done job's whole stock as one Draco
+     * mesh for the viewer, the path of the file the daemon keeps. NULL: 404. */
+    fm_status (*stock_mesh_path)(void *ctx, const char *id, char *path, size_t size,
+                                 fm_error *err);
     /* Another protocol served on this server (the MTConnect agent): GET
      * and HEAD of mount_prefix ("/mtconnect") and below, with path what
      * follows the prefix and its '/', query the request's arguments

@@ -30,7 +30,8 @@ const CHROMIUM = process.env.FM_CHROMIUM || '/usr/bin/chromium';
 const INSTRUMENTED = process.env.FM_TEST_INSTRUMENTED === '1';
 const COARSE = INSTRUMENTED && process.env.FM_TEST_FULL_SIZE !== '1';
 const VOXEL = Number(process.env.FM_VIEWER_VOXEL || (COARSE ? 0.5 : 0.3));
-const WAIT = INSTRUMENTED ? 2 : 1;
+// (FM_VIEWER_WAIT: another factor, for a finer FM_VIEWER_VOXEL when measuring)
+const WAIT = Number(process.env.FM_VIEWER_WAIT || (INSTRUMENTED ? 2 : 1));
 const daemonBin = process.argv[2];
 const artifactDir = process.argv[3] || os.tmpdir();
 
@@ -167,6 +168,106 @@ function hueCounts(img) {
   return n;
 }
 
+// Faces, bytes and bounding box of a Draco mesh, by Draco's decoder (the
+// Emscripten build three.js ships, run in node).
+async function dracoFacts(buf) {
+  const libs = path.join(VIEWER, 'node_modules/three/examples/jsm/libs/draco');
+  // (a script that defines the global DracoDecoderModule, not a module)
+  const make = new Function('require', '__dirname',
+    `${fs.readFileSync(path.join(libs, 'draco_wasm_wrapper.js'), 'utf8')}\nreturn DracoDecoderModule;`)(require, libs);
+  const M = await make({ wasmBinary: fs.readFileSync(path.join(libs, 'draco_decoder.wasm')) });
+  const dec = new M.Decoder();
+  const db = new M.DecoderBuffer();
+  db.Init(new Int8Array(buf.buffer, buf.byteOffset, buf.length), buf.length);
+  const mesh = new M.Mesh();
+  const st = dec.DecodeBufferToMesh(db, mesh);
+  if (!st.ok()) throw new Error(`draco: ${st.error_msg()}`);
+  const attr = dec.GetAttribute(mesh, dec.GetAttributeId(mesh, M.POSITION));
+  const arr = new M.DracoFloat32Array();
+  dec.GetAttributeFloatForAllPoints(mesh, attr, arr);
+  const box = [Infinity, Infinity, Infinity, -Infinity, -Infinity, -Infinity];
+  for (let i = 0; i < arr.size(); i++) {
+    const v = arr.GetValue(i), k = i % 3;
+    box[k] = Math.min(box[k], v);
+    box[k + 3] = Math.max(box[k + 3], v);
+  }
+  const faces = mesh.num_faces();
+  for (const o of [arr, mesh, db, dec]) M.destroy(o);
+  return { faces, bytes: buf.length, box: box.map((v) => Math.fround(v)) };
+}
+
+// Open a finished job in a fresh page and time it until its whole stock
+// shows and the readout gives it (chunks: the chunk path, by ?chunks).
+async function openFinished(context, jobUrl, chunks, then = null) {
+  const p = await context.newPage();
+  const problems = [];
+  p.on('pageerror', (e) => problems.push(`page error: ${e.message}`));
+  p.on('console', (m) => { if (m.type() === 'error') problems.push(`console: ${m.text()}`); });
+  try {
+    const t = Date.now();
+    await p.goto(chunks ? jobUrl.replace('/#', '/?chunks#') : jobUrl);
+    await p.waitForFunction(() => window.frepmillViewer && window.frepmillViewer.idle()
+      && window.frepmillViewer.triangleCount() > 0
+      && !document.getElementById('mesh').textContent.startsWith('-'), null, { timeout: 120000 * WAIT });
+    const ms = Date.now() - t;
+    const shown = await p.evaluate(() => ({ whole: window.frepmillViewer.wholeShown(),
+      tris: window.frepmillViewer.triangleCount(), box: window.frepmillViewer.stockBox(),
+      readout: document.getElementById('mesh').textContent }));
+    const after = then ? await then(p) : null;
+    ok(problems.length === 0, `no page errors${problems.length ? ': ' + problems.join('; ') : ''}`);
+    return { ms, ...shown, then: after };
+  } finally {
+    await p.close();
+  }
+}
+
+// A finished job opened afresh (issue 37): its whole stock in one request
+// (GET .../stock.drc, meshed once with adaptivity), the time until it is
+// complete printed (never asserted: no timed tests), and what it shows
+// checked against the served file, decoded here by Draco's own decoder
+// (not three.js's loader the page uses), and against the stock's box.
+async function checkFinished(context, url, id, job, daemonTris, daemonChunks) {
+  const tFirst = Date.now();
+  const firstAnswer = await fetch(`${url}/v1/jobs/${id}/stock.drc`);
+  const servedBuf = Buffer.from(await firstAnswer.arrayBuffer());
+  const firstMs = Date.now() - tFirst;
+  ok(firstAnswer.status === 200, `GET stock.drc of the done job answers 200 (the first request meshes it: ${firstMs} ms)`);
+  const served = await dracoFacts(servedBuf);
+  // Then scrubbed to the end: that time's chunks replace the whole mesh.
+  const opened = await openFinished(context, `${url}/#job=${id}`, false, async (p) => {
+    await p.evaluate(() => {
+      const sc = document.getElementById('scrub');
+      sc.value = sc.max;
+      sc.dispatchEvent(new Event('input'));
+    });
+    await p.waitForFunction(() => window.frepmillViewer.stockShownAt() !== null, null, { timeout: 60000 * WAIT });
+    return p.evaluate(() => ({ whole: window.frepmillViewer.wholeShown(), tris: window.frepmillViewer.triangleCount(),
+      chunks: window.frepmillViewer.chunkCount() }));
+  });
+  console.log(`finished job opened: complete stock after ${opened.ms.toFixed(0)} ms ("${opened.readout}"); ` +
+    `served stock.drc: ${served.faces} triangles, ${served.bytes} bytes, box ${served.box.join(' ')}; ` +
+    `its chunks: ${daemonTris} triangles`);
+  ok(opened.whole, 'the finished job shows its whole stock mesh, not its chunks');
+  ok(opened.tris === served.faces, `the page shows every triangle served (${opened.tris})`);
+  ok(opened.readout.startsWith(`${served.faces.toLocaleString('en')} triangles, whole stock, ` +
+    `${(served.bytes / 1e6).toFixed(2)} MB`), `the mesh readout gives them and the bytes ("${opened.readout}")`);
+  ok(opened.box.every((v, k) => v === served.box[k]), `the page's box is the served mesh's (${opened.box.join(' ')})`);
+  // The demo's pocket leaves the block's outer faces: the finished
+  // stock's box is the block's, within Draco's quantization (16 bits over
+  // the largest extent, mesh.h: half a step either way).
+  const block = job.stock.slice(4).split(',').map(Number);
+  const halfStep = Math.max(block[3] - block[0], block[4] - block[1], block[5] - block[2]) / 65535 / 2;
+  ok(served.box.every((v, k) => Math.abs(v - block[k]) <= halfStep * (1 + 1e-6)),
+    `... which is the stock's block ${block.join(' ')} (within ${halfStep.toFixed(6)} mm)`);
+  ok(served.faces < daemonTris, `with fewer triangles than its chunks (${served.faces} < ${daemonTris})`);
+  ok(!opened.then.whole && opened.then.tris === daemonTris && opened.then.chunks === daemonChunks,
+    `scrubbed to the end, the page shows the final chunks instead (${opened.then.tris} triangles in ${opened.then.chunks})`);
+  if (process.env.FM_VIEWER_COMPARE) {
+    const chunked = await openFinished(context, `${url}/#job=${id}`, true);
+    console.log(`the same from its chunks: complete after ${chunked.ms.toFixed(0)} ms ("${chunked.readout}")`);
+  }
+}
+
 async function startDaemon(stateDir, logPath) {
   const log = fs.openSync(logPath, 'a');
   const proc = spawn(daemonBin, ['--listen', '127.0.0.1:0', '--state-dir', stateDir,
@@ -222,6 +323,30 @@ async function main() {
       // The event stream is closed by the page at the job's end.
       if (!r.url().includes('/events')) problems.push(`request failed: ${r.url()} ${r.failure()?.errorText}`);
     });
+
+    if (process.env.FM_VIEWER_OPEN_ONLY) {
+      // Measuring (docs/viewer.md): the demo job run without a page, then
+      // only the finished job opened (a finer voxel than the page can follow).
+      const r0 = await fetch(`${url}/v1/jobs`, {
+        method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(job),
+      });
+      ok(r0.status === 202, `demo job accepted (HTTP ${r0.status})`);
+      const { id } = await r0.json();
+      for (let i = 0; ; i++) {
+        const st0 = await (await fetch(`${url}/v1/jobs/${id}`)).json();
+        if (st0.state === 'done') break;
+        if (st0.state === 'failed' || i > 6000 * WAIT) throw new Error(`the demo job did not finish (${st0.state})`);
+        await sleep(100);
+      }
+      const list = await (await fetch(`${url}/v1/jobs/${id}/chunks?since=0`)).json();
+      const chunkBytes = list.chunks.reduce((n, c) => n + (c.bytes || 0), 0);
+      console.log(`demo job at ${VOXEL} mm: ${list.chunks.filter((c) => c.triangles > 0).length} chunks, ` +
+        `${list.chunks.reduce((n, c) => n + c.triangles, 0)} triangles${chunkBytes ? `, ${chunkBytes} bytes` : ''}`);
+      await checkFinished(context, url, id, job, list.chunks.reduce((n, c) => n + c.triangles, 0),
+        list.chunks.filter((c) => c.triangles > 0).length);
+      passed = true;
+      return;
+    }
 
     // The page first, then the job: the viewer sees it from the start.
     await page.goto(`${url}/`);
@@ -290,6 +415,8 @@ async function main() {
     console.log(`legend: ${keys.join(' ')}`);
     ok(keys.length === 3 && keys.every((k) => plyColors.includes(k.split('=')[1])),
       'the legend has a swatch for each of the 3 tools, in the colours of the mesh');
+
+    await checkFinished(context, url, id, job, daemonTris, daemonChunks);
 
     // Toolpath, program line and position readout.
     const ui = await page.evaluate(() => ({
