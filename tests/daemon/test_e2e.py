@@ -117,6 +117,26 @@ def main():
                 check(abs(fvol - vol) <= tol_mesh,
                       "mesh?format=%s: volume %.2f mm3 = the STL's %.2f (tolerance %.2f)" %
                       (fmt, fvol, vol, tol_mesh))
+            # The viewer's whole stock (issue 37): meshed with adaptivity, so
+            # fewer triangles, but the same block and, its merged polygons
+            # straying both ways, the volume within half a voxel of surface;
+            # made once and kept (the second answer is the job's file).
+            code, whole = curl(d.url + "/v1/jobs/%s/stock.drc" % job_id)
+            verts, faces = decode_draco(whole, tmp)
+            fvol, lo, hi = mesh_measures(verts, faces)
+            check(code == 200 and 0 < len(faces) < stl_triangles,
+                  "stock.drc: %d bytes, %d triangles (the chunks: %d)" % (len(whole), len(faces), stl_triangles))
+            check(all(abs(a - b) <= VOXEL / 2 for a, b in zip(lo + hi, STOCK_BOX)),
+                  "stock.drc: bounding box %s %s is the stock's" % (lo, hi))
+            check(abs(fvol - ref["final_volume_mm3"]) <= tol_grid,
+                  "stock.drc: volume %.2f vs CLI stock volume %.2f mm3 (tolerance %.2f)" %
+                  (fvol, ref["final_volume_mm3"], tol_grid))
+            code2, again = curl(d.url + "/v1/jobs/%s/stock.drc" % job_id)
+            with open(os.path.join(d.state_dir, "jobs", job_id, "stock.drc"), "rb") as f:
+                kept = f.read()
+            check(code2 == 200 and again == whole == kept, "stock.drc again: the same bytes, the job's file")
+            code, err = curl_json(d.url + "/v1/jobs/nosuchjob/stock.drc")
+            check(code == 404 and err["error"]["code"] == "not_found", "stock.drc of no job: 404 not_found")
             code, vdb = curl(d.url + "/v1/jobs/%s/stock.vdb" % job_id)
             check(code == 200 and len(vdb) > 1000, "stock.vdb is %d bytes" % len(vdb))
             code, lst = curl_json(d.url + "/v1/jobs")
