@@ -119,13 +119,16 @@ static int smaller(int a, int b) { return a < b ? a : b; }
 void fm_cycle_times_summarize(const fm_cycle_times *ct, fm_cycle_summary *out)
 {
     memset(out, 0, sizeof *out);
+    /* A program without motions has no lists at all (NULL): memcpy takes
+     * no NULL even for 0 bytes (UBSan, simulate_examples). */
     out->tool_count = smaller(ct->tool_count, FM_CYCLE_SUMMARY_TOOLS);
-    memcpy(out->tools, ct->tools, (size_t)out->tool_count * sizeof *out->tools);
+    if (out->tool_count > 0) memcpy(out->tools, ct->tools, (size_t)out->tool_count * sizeof *out->tools);
     out->operation_count = smaller(ct->operation_count, FM_CYCLE_SUMMARY_OPERATIONS);
-    memcpy(out->operations, ct->operations, (size_t)out->operation_count * sizeof *out->operations);
+    if (out->operation_count > 0)
+        memcpy(out->operations, ct->operations, (size_t)out->operation_count * sizeof *out->operations);
     out->operation_total = ct->operation_total;
     out->block_count = smaller(ct->top_count, FM_CYCLE_SUMMARY_BLOCKS);
-    memcpy(out->blocks, ct->top, (size_t)out->block_count * sizeof *out->blocks);
+    if (out->block_count > 0) memcpy(out->blocks, ct->top, (size_t)out->block_count * sizeof *out->blocks);
 }
 
 void fm_cycle_summary_view(const fm_cycle_summary *s, fm_cycle_times *view)

@@ -4,7 +4,8 @@
  * operations overflow the list (FM_CYCLE_MAX_OPERATIONS) and the tools
  * the job result's summary (64): per tool and per listed operation the
  * sums are the test's own, the operations counted all the same, the
- * slowest blocks the test's sort of them, and the summary a prefix. */
+ * slowest blocks the test's sort of them, and the summary a prefix; and
+ * the summary of no motion at all. */
 #include <stdlib.h>
 
 #include "runner/cycle_times.h"
@@ -105,5 +106,14 @@ int main(void)
           json_array_size(json_object_get(j, "blocks")) == 10);
     json_decref(j);
     fm_cycle_times_free(&ct);
+
+    /* No motion at all (a program that only sets modes): empty lists, no
+     * NULL handed to memcpy (UBSan found it in simulate_examples). */
+    fm_cycle_times none;
+    fm_cycle_times_init(&none, 10);
+    fm_cycle_times_finish(&none);
+    fm_cycle_times_summarize(&none, &s);
+    CHECK(s.tool_count == 0 && s.operation_count == 0 && s.operation_total == 0 && s.block_count == 0);
+    fm_cycle_times_free(&none);
     return test_summary("cycle_times");
 }
