@@ -20,19 +20,34 @@ from test_live import client, need_node_client
 # job's set-up (the stock, its first meshes) comes before its first blocks:
 # a coarser grid and a longer polling window there. The window only bounds
 # the wait; the test reads the same registers.
-VOXEL = 0.4 if COARSE else 0.2
+VOXEL = 0.4 if COARSE else 0.1
 POLL_S = 180 if INSTRUMENTED else 60
 
 
 def numbered_demo():
-    """The demo program with an N word on every line that moves: N10, N20..."""
-    out, n = [], 0
+    """The demo program with an N word on every line that moves: N10, N20...,
+    and before its M5 ten layers of a zigzag over the block: the job must
+    still be cutting when the test pauses it (about 1.5 s in). In the
+    optimized build the demo alone at 0.2 mm took 0.56 s, and the pause
+    came after its last motion once (CI, "a paused job does not advance
+    (motion 284)"); with these layers, one thread and 0.1 mm it takes some
+    6 s on two idle cores."""
     with open(os.path.join(DEMO, "pocket.ngc")) as f:
-        for line in f:
-            if re.match(r"\s*G[0-3]\b", line):
-                n += 10
-                line = "N%d %s" % (n, line)
-            out.append(line)
+        lines = f.read().splitlines()
+    end = max(i for i, line in enumerate(lines) if line.strip() == "M5")
+    extra = ["G0 Z5", "G0 X10 Y10", "G1 Z0 F1000"]
+    for layer in range(1, 11):
+        extra.append("G1 Z-%d" % layer)
+        for p in range(41):
+            extra.append("G1 X%d Y%d" % (90 if p % 2 == 0 else 10, 10 + p))
+            extra.append("G1 Y%.1f" % (10 + p + 0.5))
+        extra += ["G0 Z5", "G0 X10 Y10"]
+    out, n = [], 0
+    for line in lines[:end] + extra + lines[end:]:
+        if re.match(r"\s*G[0-3]\b", line):
+            n += 10
+            line = "N%d %s" % (n, line)
+        out.append(line + "\n")
     return "".join(out), n
 
 
@@ -66,6 +81,7 @@ def main():
     with tempfile.TemporaryDirectory(prefix="fm-modbus-") as tmp:
         t0 = time.time()
         d = Daemon(frepmilld, os.path.join(tmp, "state"), "--workers", "1",
+                   "--threads-per-job", "1",
                    "--modbus-listen", "127.0.0.1:0", "--modbus-commands", "yes",
                    "--publish-interval-s", "0.2")
         try:
