@@ -79,6 +79,10 @@ typedef struct mtc_header {
 } mtc_header;
 
 void mtc_format_time(double t, char *out, size_t size);
+/* A sequence number: decimal digits only, within uint64_t; 0, or -1
+ * (mtc_query.c; the query's from/at and a Streams document's sequence and
+ * nextSequence). */
+int mtc_parse_sequence(const char *text, uint64_t *out);
 
 /* The document writers: a malloc'd document, or NULL when out of memory. */
 char *mtc_write_probe(const mtc_model *model, const mtc_header *h, size_t *size);

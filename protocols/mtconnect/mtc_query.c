@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "mtc_internal.h"
 #include "mtconnect.h"
 
 #define QUERY_MAX 2048
@@ -49,13 +50,25 @@ static fm_status query_error(fm_error *err, const char *code, const char *fmt, c
     return fm_error_set_reason(err, FM_ERR_INPUT, code, fmt, a);
 }
 
+int mtc_parse_sequence(const char *text, uint64_t *out)
+{
+    uint64_t v = 0;
+    if (!*text) return -1;
+    for (const char *c = text; *c; c++) {
+        if (*c < '0' || *c > '9') return -1;
+        unsigned d = (unsigned)(*c - '0');
+        if (v > (UINT64_MAX - d) / 10) return -1;
+        v = v * 10 + d;
+    }
+    *out = v;
+    return 0;
+}
+
+/* from and at: a sequence number the buffer can hold (at most 2^63). */
 static int parse_unsigned(const char *v, uint64_t *out)
 {
-    if (!isdigit((unsigned char)v[0])) return -1;
-    errno = 0;
-    char *end;
-    unsigned long long n = strtoull(v, &end, 10);
-    if (errno || *end || n > (1ULL << 63)) return -1;
+    uint64_t n;
+    if (mtc_parse_sequence(v, &n) != 0 || n > (1ULL << 63)) return -1;
     *out = n;
     return 0;
 }

@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "mtc_internal.h"
 #include "mtconnect.h"
 
 typedef struct streams_obs {
@@ -34,21 +35,6 @@ static int by_sequence(const void *a, const void *b)
     return x->node->line < y->node->line ? -1 : x->node->line > y->node->line;
 }
 
-/* A sequence number: decimal digits only, within uint64_t. */
-static int parse_sequence(const char *text, uint64_t *out)
-{
-    uint64_t v = 0;
-    if (!*text) return -1;
-    for (const char *c = text; *c; c++) {
-        if (*c < '0' || *c > '9') return -1;
-        unsigned d = (unsigned)(*c - '0');
-        if (v > (UINT64_MAX - d) / 10) return -1;
-        v = v * 10 + d;
-    }
-    *out = v;
-    return 0;
-}
-
 /* Iterative over the tree (libxml2 bounds its depth, but a walk of our own
  * need not rely on that). */
 static void collect(xmlNodePtr first, streams_list *list)
@@ -61,7 +47,7 @@ static void collect(xmlNodePtr first, streams_list *list)
             uint64_t v;
             if (!seq) {
                 descend = n->children != NULL;
-            } else if (parse_sequence((const char *)seq, &v) == 0) {
+            } else if (mtc_parse_sequence((const char *)seq, &v) == 0) {
                 if (list->count == list->cap) {
                     size_t c = list->cap ? list->cap * 2 : 256;
                     streams_obs *l = realloc(list->items, c * sizeof *l);
@@ -126,7 +112,7 @@ int fm_mtc_streams_read(const char *xml, size_t size, fm_mtc_observation_fn fn, 
         if (n->type == XML_ELEMENT_NODE && !strcmp((const char *)n->name, "Header")) {
             xmlChar *v = xmlGetProp(n, (const xmlChar *)"nextSequence");
             uint64_t next;
-            if (v && parse_sequence((const char *)v, &next) == 0) *next_sequence = next;
+            if (v && mtc_parse_sequence((const char *)v, &next) == 0) *next_sequence = next;
             xmlFree(v);
         }
     }
