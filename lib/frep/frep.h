@@ -367,6 +367,13 @@ typedef struct fm_field {
      * counts the voxels where that could matter (fm_stock_cut_stats). */
     void (*batch_shortfall)(void *ctx, void *worker, size_t n, const double *x, const double *y,
                             const double *z, double *out, double *shortfall);
+    /* Nonzero: inside [lo, hi] too the value is at most the distance to the
+     * box's nearest face (a 1-Lipschitz field, nonpositive outside, has it
+     * when the box holds its inside). Consumers may then bound a point's
+     * value by its signed distance to the box without evaluating it: where
+     * a previous cut already left the stock at that bound (a pocket's floor
+     * or wall retraced), lib/stock skips the point. */
+    int within_box;
 } fm_field;
 
 /* A field over a compiled tape at fixed time t; the tape must outlive the

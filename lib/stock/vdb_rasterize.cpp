@@ -267,6 +267,26 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
          * the leaf's bound did not settle, settle more. The result is the
          * same as evaluating every voxel. */
         const double cap = std::min<double>(bg, job.field_hi);
+        /* A field within its box (frep.h) is at most the voxel's signed
+         * distance to that box: where the stock already holds that much, a
+         * previous cut took the voxel as far as this one can (the floor or
+         * wall of a pocket retraced by the next pass, which the octant's
+         * interval cannot see). The margin covers the field's own rounding. */
+        const bool boxed = field->within_box != 0;
+        auto box_bound = [&](int i) {
+            const int c[3] = {job.origin.x() + (i >> 6), job.origin.y() + ((i >> 3) & 7), job.origin.z() + (i & 7)};
+            double inside = bg, out2 = 0;
+            for (int k = 0; k < 3; k++) {
+                const double p = v->origin[k] + v->voxel * c[k];
+                if (p < field->lo[k])
+                    out2 += (field->lo[k] - p) * (field->lo[k] - p);
+                else if (p > field->hi[k])
+                    out2 += (p - field->hi[k]) * (p - field->hi[k]);
+                else
+                    inside = std::min(inside, std::min(p - field->lo[k], field->hi[k] - p));
+            }
+            return clamp_to_band((out2 > 0 ? -std::sqrt(out2) : inside) + 1e-11, bg);
+        };
         for (int oct = 0; oct < 8; oct++) {
             const int ox = (oct & 4) ? 4 : 0, oy = (oct & 2) ? 4 : 0, oz = (oct & 1) ? 4 : 0;
             int cand[64];
@@ -292,6 +312,7 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
                 const int i = cand[k];
                 const double a = stock ? stock[i] : -bg;
                 if (a >= octcap) continue;
+                if (boxed && a >= box_bound(i)) continue;
                 if (r.lo >= bg)
                     full[nfull++] = i; /* deep inside the cut: clamped to the band anyway */
                 else

@@ -284,6 +284,10 @@ fm_status fm_sweep_field_many_ex(fm_field *field, const fm_motion *motions, size
             field->lo[a] = fmin(field->lo[a], c->sweeps[i]->lo[a]);
             field->hi[a] = fmax(field->hi[a], c->sweeps[i]->hi[a]);
         }
+    /* Each profile sweep is a max of the part's exact signed distances,
+     * so at most the distance to the union's boundary, which lies inside
+     * the union of the motions' boxes. Custom parts are not distances. */
+    field->within_box = c->sweeps[0]->part.kind == FM_TOOL_PART_PROFILE;
     field->ctx = c;
     field->worker_new = many_worker_new;
     field->worker_free = many_worker_free;

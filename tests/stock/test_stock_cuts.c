@@ -3,7 +3,9 @@
  * full ring, a box pocket) against their formulas at 0.1 mm (0.5%) and
  * 0.05 mm (0.1%); a program of many cuts stays a valid narrow-band level set
  * equal to the rasterized closed form of the result; the work of a cut does
- * not grow with the stock; chunks, versions, per-tool and per-block sums,
+ * not grow with the stock; a field within its box (frep.h) skips the
+ * voxels a retraced pocket floor already holds and leaves every voxel as
+ * evaluating them would; chunks, versions, per-tool and per-block sums,
  * and the memory budget of a cut. */
 #include "fields.h"
 #include "stock/stock_private.h"
@@ -236,6 +238,60 @@ static void test_work_independent_of_stock(void)
     fm_stock_free(big);
 }
 
+/* Twenty flat passes at one floor, each 0.5 mm beside the last, as a
+ * zigzag pocket cuts: the same cuts with and without the field's promise
+ * to stay within its box. With it, the voxels of the floor that the
+ * previous passes already took to this depth are not evaluated again; the
+ * grids must agree voxel for voxel, and the removed volume is the union's
+ * box, 15.5 x 14 x (10 - 6.03) mm. */
+static void test_box_bound_skips_retraced_floor(void)
+{
+    fm_error err;
+    fm_stock_options o = opts(0.2);
+    const double lo[3] = {0, 0, 0}, hi[3] = {20, 20, 10};
+    fm_stock *plain = fm_stock_new_box(lo, hi, &o, &err), *boxed = fm_stock_new_box(lo, hi, &o, &err);
+    CHECK(plain && boxed);
+    if (!plain || !boxed) {
+        fm_stock_free(plain);
+        fm_stock_free(boxed);
+        return;
+    }
+    size_t evaluated[2] = {0, 0};
+    for (int i = 0; i < 20; i++) {
+        shape pass = {.kind = SHAPE_BOX, .a = {2 + 0.5 * i, 3, 6.03}, .b = {8 + 0.5 * i, 17, 12}};
+        for (int j = 0; j < 2; j++) {
+            fm_field f = shape_field(&pass);
+            f.within_box = j;
+            fm_stock_cut c = {1, i, 0, 1};
+            fm_stock_cut_stats st;
+            CHECK(fm_stock_subtract(j ? boxed : plain, &f, &c, &st, &err) == FM_OK);
+            evaluated[j] += st.voxels_evaluated;
+        }
+    }
+    const double expect = 15.5 * 14 * (10 - 6.03);
+    CHECK_NEAR(fm_stock_removed_volume(boxed), expect, 0.005 * expect);
+    CHECK_NEAR(fm_stock_removed_volume(plain), fm_stock_removed_volume(boxed), 0);
+    size_t differ = 0, voxels = 0;
+    for (int i = -4; i <= 104; i++)
+        for (int j = -4; j <= 104; j++)
+            for (int k = -4; k <= 54; k++) {
+                const double ijk[3] = {i, j, k};
+                double p[3];
+                fm_stock_index_to_world(boxed, ijk, p);
+                differ += fm_stock_sample(plain, p) != fm_stock_sample(boxed, p);
+                voxels++;
+            }
+    CHECK(differ == 0);
+    /* the first pass has nothing to skip; each later one retraces 5.5 of
+     * its 6 mm of floor: well over half of what it evaluates */
+    CHECK(evaluated[1] < evaluated[0] / 2);
+    printf("retraced floor: %zu voxels evaluated without the box bound, %zu with it; %zu of %zu voxels "
+           "differ; removed %.3f mm3 (box %.3f)\n",
+           evaluated[0], evaluated[1], differ, voxels, fm_stock_removed_volume(boxed), expect);
+    fm_stock_free(plain);
+    fm_stock_free(boxed);
+}
+
 static void test_chunks_and_tables(void)
 {
     fm_error err;
@@ -325,6 +381,7 @@ int main(int argc, char **argv)
     if (!(argc > 1 && strcmp(argv[1], "--quick") == 0)) test_accuracy(0.05, 0.001);
     test_program();
     test_work_independent_of_stock();
+    test_box_bound_skips_retraced_floor();
     test_chunks_and_tables();
     test_cut_budget();
     return test_summary("stock_cuts");

@@ -391,9 +391,23 @@ static void check_field_many(const fm_tool_part *part)
     for (int i = 0; i < 4; i++) fm_sweep_free(s[i]);
 }
 
+/* Signed distance from p to the box [lo, hi], positive inside. */
+static double box_signed_distance(const double p[3], const double lo[3], const double hi[3])
+{
+    double inside = DBL_MAX, out2 = 0;
+    for (int a = 0; a < 3; a++) {
+        double e = p[a] < lo[a] ? lo[a] - p[a] : p[a] > hi[a] ? p[a] - hi[a] : 0;
+        out2 += e * e;
+        inside = fmin(inside, fmin(p[a] - lo[a], hi[a] - p[a]));
+    }
+    return out2 > 0 ? -sqrt(out2) : inside;
+}
+
 /* Batches as lib/stock sends them (the voxels of a leaf, or scattered
  * points) over a run of short 3D moves: the culled, ordered max equals the
- * plain max over every sweep, bit for bit. */
+ * plain max over every sweep, bit for bit; and a profile part's field keeps
+ * its promise to stay within its box (frep.h, within_box), which lets
+ * lib/stock skip voxels a previous cut took that far. */
 static void check_field_many_batches(const fm_tool_part *part)
 {
     enum { NM = 16, NP = 64 };
@@ -409,6 +423,7 @@ static void check_field_many_batches(const fm_tool_part *part)
     fm_field f;
     fm_error err;
     CHECK(fm_sweep_field_many(&f, ms, NM, part, &err) == FM_OK);
+    CHECK(f.within_box == (part->kind == FM_TOOL_PART_PROFILE));
     fm_sweep *s[NM];
     for (int i = 0; i < NM; i++) CHECK(fm_sweep_new(&ms[i], part, NULL, &s[i], &err) == FM_OK);
     void *fw = f.worker_new(f.ctx);
@@ -426,6 +441,7 @@ static void check_field_many_batches(const fm_tool_part *part)
             double p[3] = {x[k], y[k], z[k]}, ref = -DBL_MAX;
             for (int i = 0; i < NM; i++) ref = fmax(ref, fm_sweep_eval(s[i], NULL, p));
             CHECK(out[k] == ref);
+            if (f.within_box) CHECK(out[k] <= box_signed_distance(p, f.lo, f.hi) + 1e-12);
         }
     }
     f.worker_free(f.ctx, fw);
