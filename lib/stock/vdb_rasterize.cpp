@@ -308,11 +308,17 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
             if (timed) t_field += seconds_now() - t0;
             res.intervals++;
             const double octcap = std::min<double>(cap, r.hi);
+            /* Deeper inside the field's box than the band, the box bound is
+             * the band and skips nothing: only octants near a face or
+             * outside ask it (most of a ball's, none of a floor's). */
+            bool deep = true;
+            for (int k = 0; k < 3; k++) deep = deep && box[k].lo - bg > field->lo[k] && box[k].hi + bg < field->hi[k];
+            const bool near_face = boxed && !deep;
             for (int k = 0; k < nc; k++) {
                 const int i = cand[k];
                 const double a = stock ? stock[i] : -bg;
                 if (a >= octcap) continue;
-                if (boxed && a >= box_bound(i)) continue;
+                if (near_face && a >= box_bound(i)) continue;
                 if (r.lo >= bg)
                     full[nfull++] = i; /* deep inside the cut: clamped to the band anyway */
                 else
