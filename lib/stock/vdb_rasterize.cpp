@@ -20,7 +20,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <vector>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 using namespace fm_vdb_bridge;
 
@@ -273,30 +278,53 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
          * wall of a pocket retraced by the next pass, which the octant's
          * interval cannot see). The margin covers the field's own rounding. */
         const bool boxed = field->within_box != 0;
+        /* The box distance is separable: per axis, the 8 coordinates of
+         * the leaf are inside [lo, hi] (their distance to its nearer face)
+         * or outside (the square of their distance to it). */
+        double face[3][8], out2[3][8];
+        if (boxed)
+            for (int k = 0; k < 3; k++)
+                for (int j = 0; j < 8; j++) {
+                    const double p = v->origin[k] + v->voxel * (job.origin[k] + j);
+                    const double below = field->lo[k] - p, above = p - field->hi[k];
+                    face[k][j] = below > 0 || above > 0 ? bg : std::min(-below, -above);
+                    out2[k][j] = below > 0 ? below * below : above > 0 ? above * above : 0;
+                }
         auto box_bound = [&](int i) {
-            const int c[3] = {job.origin.x() + (i >> 6), job.origin.y() + ((i >> 3) & 7), job.origin.z() + (i & 7)};
-            double inside = bg, out2 = 0;
-            for (int k = 0; k < 3; k++) {
-                const double p = v->origin[k] + v->voxel * c[k];
-                if (p < field->lo[k])
-                    out2 += (field->lo[k] - p) * (field->lo[k] - p);
-                else if (p > field->hi[k])
-                    out2 += (p - field->hi[k]) * (p - field->hi[k]);
-                else
-                    inside = std::min(inside, std::min(p - field->lo[k], field->hi[k] - p));
-            }
-            return clamp_to_band((out2 > 0 ? -std::sqrt(out2) : inside) + 1e-11, bg);
+            const int ix = i >> 6, iy = (i >> 3) & 7, iz = i & 7;
+            const double o2 = out2[0][ix] + out2[1][iy] + out2[2][iz];
+            const double in = std::min<double>(bg, std::min(face[0][ix], std::min(face[1][iy], face[2][iz])));
+            return clamp_to_band((o2 > 0 ? -std::sqrt(o2) : in) + 1e-11, bg);
         };
+        /* Which voxels are below the cap: bit y * 8 + z of word x. An
+         * octant's voxels are four words' bits under one of four masks. */
+        uint64_t below[8];
+        /* a < cap on floats: cap rounded up to a float compares the same */
+        float capf = float(cap);
+        if (double(capf) < cap) capf = std::nextafter(capf, std::numeric_limits<float>::infinity());
+        for (int ix = 0; ix < 8; ix++) {
+            uint64_t w = 0;
+            if (stock) {
+                const float *row = stock + ix * 64;
+#if defined(__SSE2__)
+                const __m128 c4 = _mm_set1_ps(capf);
+                for (int b = 0; b < 64; b += 4)
+                    w |= uint64_t(_mm_movemask_ps(_mm_cmplt_ps(_mm_loadu_ps(row + b), c4))) << b;
+#else
+                for (int b = 0; b < 64; b++) w |= uint64_t(row[b] < capf) << b;
+#endif
+            } else {
+                w = -bg < cap ? ~uint64_t(0) : 0;
+            }
+            below[ix] = w;
+        }
         for (int oct = 0; oct < 8; oct++) {
             const int ox = (oct & 4) ? 4 : 0, oy = (oct & 2) ? 4 : 0, oz = (oct & 1) ? 4 : 0;
-            int cand[64];
-            int nc = 0;
-            for (int k = 0; k < 64; k++) {
-                const int i = ((ox + (k >> 4)) << 6) | ((oy + ((k >> 2) & 3)) << 3) | (oz + (k & 3));
-                const double a = stock ? stock[i] : -bg;
-                if (a < cap) cand[nc++] = i;
-            }
-            if (nc == 0) continue;
+            const uint64_t rows = uint64_t(0xF) << oz; /* z in [oz, oz + 4) of one y */
+            const uint64_t octmask = (rows | rows << 8 | rows << 16 | rows << 24) << (8 * oy);
+            uint64_t any = 0;
+            for (int ix = ox; ix < ox + 4; ix++) any |= below[ix] & octmask;
+            if (!any) continue;
             fm_interval box[3];
             const int o[3] = {job.origin.x() + ox, job.origin.y() + oy, job.origin.z() + oz};
             for (int k = 0; k < 3; k++) {
@@ -314,15 +342,42 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
             bool deep = true;
             for (int k = 0; k < 3; k++) deep = deep && box[k].lo - bg > field->lo[k] && box[k].hi + bg < field->hi[k];
             const bool near_face = boxed && !deep;
-            for (int k = 0; k < nc; k++) {
-                const int i = cand[k];
-                const double a = stock ? stock[i] : -bg;
-                if (a >= octcap) continue;
-                if (near_face && a >= box_bound(i)) continue;
-                if (r.lo >= bg)
-                    full[nfull++] = i; /* deep inside the cut: clamped to the band anyway */
-                else
-                    todo[n++] = i;
+            /* the octant's voxels below its own cap, as a mask like below's */
+            float octcapf = float(octcap);
+            if (double(octcapf) < octcap) octcapf = std::nextafter(octcapf, std::numeric_limits<float>::infinity());
+            for (int ix = ox; ix < ox + 4; ix++) {
+                uint64_t open = 0;
+                if (stock) {
+                    for (int iy = oy; iy < oy + 4; iy++) {
+                        const float *q = stock + (ix << 6) + (iy << 3) + oz;
+#if defined(__SSE2__)
+                        const uint64_t bits = uint64_t(_mm_movemask_ps(_mm_cmplt_ps(_mm_loadu_ps(q), _mm_set1_ps(octcapf))));
+#else
+                        const uint64_t bits = uint64_t(q[0] < octcapf) | uint64_t(q[1] < octcapf) << 1 |
+                                              uint64_t(q[2] < octcapf) << 2 | uint64_t(q[3] < octcapf) << 3;
+#endif
+                        open |= bits << ((iy << 3) + oz);
+                    }
+                } else {
+                    open = -bg < octcap ? octmask : 0;
+                }
+                for (uint64_t m = below[ix] & octmask & open; m; m &= m - 1) {
+                    const int i = (ix << 6) | __builtin_ctzll(m);
+                    const double a = stock ? stock[i] : -bg;
+                    if (near_face) {
+                        /* outside the box, S <= -distance < 0: the stock's
+                         * air side, or a voxel farther than the band, is
+                         * settled without the square root */
+                        const int ix2 = i >> 6, iy = (i >> 3) & 7, iz = i & 7;
+                        const double o2 = out2[0][ix2] + out2[1][iy] + out2[2][iz];
+                        if (o2 > 1e-20 && (a >= 0 || o2 >= double(bg) * bg)) continue;
+                        if (a >= box_bound(i)) continue;
+                    }
+                    if (r.lo >= bg)
+                        full[nfull++] = i; /* deep inside the cut: clamped to the band anyway */
+                    else
+                        todo[n++] = i;
+                }
             }
         }
     }
