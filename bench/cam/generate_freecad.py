@@ -103,6 +103,13 @@ def box(x0, y0, z0, x1, y1, z1):
     return Part.makeBox(x1 - x0, y1 - y0, z1 - z0, Vector(x0, y0, z0))
 
 
+def rounded_box(x0, y0, z0, x1, y1, z1, radius):
+    """A box whose vertical edges are filleted."""
+    solid = box(x0, y0, z0, x1, y1, z1)
+    return solid.makeFillet(radius, [e for e in solid.Edges if abs(e.BoundBox.XLength) < 1e-6
+                                     and abs(e.BoundBox.YLength) < 1e-6])
+
+
 def pocket_raster():
     """A 58x50 mm pocket 3.2 mm deep, cleared by ZigZag passes along X 0.16 mm apart with a 1 mm flat."""
     doc = new_doc("pocket_raster")
@@ -129,9 +136,7 @@ def pocket_raster():
 def adaptive_pocket():
     """A rounded 70x50 mm pocket 6 mm deep around a 20 mm round island, cleared adaptively with a 4 mm flat."""
     doc = new_doc("adaptive_pocket")
-    cavity = box(10, 10, -6, 80, 60, 1)
-    cavity = cavity.makeFillet(8.0, [e for e in cavity.Edges if abs(e.BoundBox.XLength) < 1e-6
-                                     and abs(e.BoundBox.YLength) < 1e-6])
+    cavity = rounded_box(10, 10, -6, 80, 60, 1, 8.0)
     island = Part.makeCylinder(10, 8, Vector(45, 35, -7))
     shape = box(0, 0, -15, 90, 70, 0).cut(cavity.cut(island))
     job, model = make_job(doc, shape, "Plate")
@@ -160,9 +165,7 @@ def adaptive_pocket():
 def plate_outline():
     """A rounded plate cut out of its stock (Profile), a 20 mm bore (Helix) and four 5 mm holes (Drilling, G83)."""
     doc = new_doc("plate_outline")
-    plate = box(5, 5, -10, 95, 55, 0)
-    plate = plate.makeFillet(10.0, [e for e in plate.Edges if abs(e.BoundBox.XLength) < 1e-6
-                                    and abs(e.BoundBox.YLength) < 1e-6])
+    plate = rounded_box(5, 5, -10, 95, 55, 0, 10.0)
     plate = plate.cut(Part.makeCylinder(10, 12, Vector(50, 30, -11)))
     for x, y in ((17, 17), (83, 17), (17, 43), (83, 43)):
         plate = plate.cut(Part.makeCylinder(2.5, 12, Vector(x, y, -11)))
