@@ -4,15 +4,13 @@
 # the stock given to frepmill simulate is the box named in each program's header. The programs are posted with
 # FreeCAD's linuxcnc post-processor; the header names the CAM system, its version, the operation and the stock.
 import os
-import sys
 
 import FreeCAD
 import Part
-import Path
 from FreeCAD import Vector
 
 from PathScripts import PathJob, PathToolBit, PathToolController
-from PathScripts import PathPocketShape, PathAdaptive, PathProfile, PathHelix, PathDrilling, PathEngrave, PathVcarve
+from PathScripts import PathPocketShape, PathAdaptive, PathProfile, PathHelix, PathDrilling, PathVcarve
 from PathScripts.post import linuxcnc_post
 from PathScripts import PathUtils
 
@@ -247,8 +245,9 @@ def engraving():
           "stock: box:0,0,-8,110,36,0"])
 
 
-if __name__ == "__main__" or True:
-    which = os.environ.get("FM_CAM_ONLY", "")
-    for fn in (pocket_raster, adaptive_pocket, plate_outline, engraving):
-        if not which or which == fn.__name__:
-            fn()
+# freecadcmd runs this file as a macro (its __name__ is not "__main__"): everything, or the one program that
+# FM_CAM_ONLY names
+which = os.environ.get("FM_CAM_ONLY", "")
+for fn in (pocket_raster, adaptive_pocket, plate_outline, engraving):
+    if not which or which == fn.__name__:
+        fn()

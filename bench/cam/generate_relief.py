@@ -2,9 +2,9 @@
 # Writes two of bench/cam's programs with LinuxCNC's image-to-gcode (the CAM program that LinuxCNC ships: a
 # depth image in, a raster of the surface the tool can reach out), headless:
 #   /usr/bin/python3 bench/cam/generate_relief.py      (from the repository root; Debian's linuxcnc-uspace)
-# The depth images are computed here (numpy) and written as 8-bit PNGs beside nothing: image-to-gcode reads
-# them from a temporary folder. Its options dialog (Tk) is replaced by the options below, given as the dialog
-# would return them; everything else is image-to-gcode's own code, loaded from /usr/bin/image-to-gcode.
+# The depth images are computed here (numpy) and written as 8-bit PNGs to a temporary folder, where
+# image-to-gcode reads them. Its options dialog (Tk) is replaced by the options below, given as the dialog would
+# return them; everything else is image-to-gcode's own code, loaded from /usr/bin/image-to-gcode.
 import importlib.machinery
 import importlib.util
 import io
