@@ -231,8 +231,12 @@ fm_status fm_sweep_new(const fm_motion *m, const fm_tool_part *part, const fm_sw
         s->aj = arc.aj;
         for (int i = 0; i < 3; i++) s->ctr[i] = arc.center[i] + m->tip_offset[i];
         s->r0 = arc.r0;
-        double r1 = arc.r0 + arc.dr;
         s->drr = arc.dr;
+        if (fast && arc.dr != 0 && fabs(arc.dr) <= FM_SWEEP_NEAR_CIRCLE) {
+            s->r0 = arc.r0 + 0.5 * arc.dr; /* the circle meant (sweep.h) */
+            s->drr = 0;
+        }
+        double r1 = s->r0 + s->drr;
         s->th0 = arc.th0;
         s->dth = arc.dth;
         s->dh = arc.dh;

@@ -30,6 +30,12 @@
 
 #define FM_SWEEP_TOL 1e-7
 #define FM_SWEEP_COARSE_TOL 1e-3
+/* An arc whose radius changes by at most this (mm) is swept as the circle
+ * of its mean radius when fast paths are on: CAM posts round ends and
+ * centres to 3 decimals, which makes the circle they meant a spiral by up
+ * to about a micrometre, and a spiral has no closed form. The path moves by
+ * at most half of it: 1 um, a hundredth of a 0.1 mm voxel. */
+#define FM_SWEEP_NEAR_CIRCLE 2e-3
 
 typedef struct fm_sweep fm_sweep;
 typedef struct fm_sweep_worker fm_sweep_worker;
