@@ -1,7 +1,9 @@
 /* sweep.c: the swept volume S(p) = max over t of the moving tool part:
  * poses of each motion kind, the closed forms (planar line and arc,
- * capsule), the certified search for concave cases, and the
- * branch-and-bound on t for everything else. See docs/sweep.md for the
+ * capsule), the certified search for concave cases (with a flat end
+ * mill's ramp proven at a guessed maximum), the branch-and-bound on t for
+ * everything else, and that branch-and-bound seeded by a helix's
+ * structure for convex parts on helices about their axis. See docs/sweep.md for the
  * proofs behind each bound. */
 #include "sweep/sweep.h"
 #include "sweep/sweep_internal.h"
@@ -783,13 +785,126 @@ static void helix_search(const fm_sweep *s, fm_sweep_worker *worker, const doubl
 
 /* ------------------------------------------------------- evaluation -- */
 
+/* A flat end mill (the plain cylinder: R, z_lo, z_hi) on a line with a
+ * fixed axis (a ramp): where the maximum of F over u is likely. With
+ * zeta(u) = z0 - u dz and the distance to the moving axis d(u) = sqrt(q(u)),
+ * q a convex quadratic, F <= G = min(R - d, zeta - z_lo, z_hi - zeta)
+ * everywhere, with equality unless both the side and the nearer end are
+ * negative (below or above the tool and outside its radius: then F is minus
+ * the distance to the rim). G is concave, the least of a concave and two
+ * linear terms, so its maximum is at an end, at the peak of R - d, or where
+ * two terms cross: a quadratic's roots. When that maximum is negative on
+ * both sides, F = -sqrt((d - R)^2 + l^2) with l the nearer end's term, and
+ * (d - R)^2 + l^2 is convex there (d is convex and above R): a few Newton
+ * steps from it. Only a guess: concave_search proves it or searches. */
+static double ramp_guess(const fm_sweep *s, const double p[3])
+{
+    const double *a = s->a0, *d = s->d;
+    const double R = s->part.cylinder_radius, zlo = s->part.z_lo, zhi = s->part.z_hi;
+    double v0[3] = {p[0] - s->c0[0], p[1] - s->c0[1], p[2] - s->c0[2]};
+    const double z0 = dot3(a, v0), dz = dot3(a, d);
+    double w0[3], dp[3];
+    for (int i = 0; i < 3; i++) {
+        w0[i] = v0[i] - z0 * a[i];
+        dp[i] = d[i] - dz * a[i];
+    }
+    const double al = dot3(dp, dp), be = dot3(w0, dp), ga = dot3(w0, w0);
+    /* the linear terms l0 + l1 u */
+    const double lin0[2] = {z0 - zlo, zhi - z0}, lin1[2] = {-dz, dz};
+    double cand[8];
+    int nc = 0;
+    cand[nc++] = 0;
+    cand[nc++] = 1;
+    if (al > 0) cand[nc++] = be / al;
+    if (dz != 0) cand[nc++] = (z0 - 0.5 * (zlo + zhi)) / dz;
+    for (int k = 0; k < 2; k++) {
+        /* sqrt(q(u)) = c + e u with c + e u >= 0: (al - e^2) u^2 - 2 (be + c e) u + ga - c^2 = 0 */
+        const double c = R - lin0[k], e = -lin1[k];
+        const double A = al - e * e, B = -2 * (be + c * e), C = ga - c * c;
+        if (fabs(A) > 1e-14 * (al + e * e)) {
+            const double disc = B * B - 4 * A * C;
+            if (disc >= 0) {
+                const double sq = sqrt(disc), qq = -0.5 * (B + (B >= 0 ? sq : -sq));
+                if (qq != 0) cand[nc++] = C / qq;
+                cand[nc++] = qq / A;
+            }
+        } else if (B != 0) {
+            cand[nc++] = -C / B;
+        }
+    }
+    double best = -DBL_MAX, ub = 0;
+    for (int i = 0; i < nc; i++) {
+        const double u = cand[i];
+        if (!(u >= 0 && u <= 1)) continue;
+        const double q = ga - 2 * be * u + al * u * u;
+        double g = R - sqrt(q > 0 ? q : 0);
+        for (int k = 0; k < 2; k++) g = fmin(g, lin0[k] + lin1[k] * u);
+        if (g > best) best = g, ub = u;
+    }
+    if (best >= 0) return ub;
+    /* Both terms may be negative there: minimize (d - R)^2 + l^2. */
+    double u = ub;
+    for (int it = 0; it < 6; it++) {
+        const double q = ga - 2 * be * u + al * u * u;
+        const double dd = sqrt(q > 0 ? q : 0);
+        const int k = lin0[0] + lin1[0] * u <= lin0[1] + lin1[1] * u ? 0 : 1;
+        const double l = lin0[k] + lin1[k] * u, l1 = lin1[k];
+        if (!(dd > R) || l >= 0) break;
+        const double d1 = (al * u - be) / dd, d2 = (al - d1 * d1) / dd;
+        const double E1 = (dd - R) * d1 + l * l1, E2 = d1 * d1 + (dd - R) * d2 + l1 * l1;
+        if (!(E2 > 0)) break;
+        double next = u - E1 / E2;
+        next = next < 0 ? 0 : next > 1 ? 1 : next;
+        if (fabs(next - u) <= 1e-15) {
+            u = next;
+            break;
+        }
+        u = next;
+    }
+    return u;
+}
+
 static double concave_search(const fm_sweep *s, void *pw, const double p[3], fm_sweep_value *out)
 {
+    const double along = dot3(s->d, s->a0);
+    size_t used = 0;                 /* evaluations the guess spent, out of the same budget */
+    double guess_best = -DBL_MAX, guess_u = 0; /* and the best value it found */
+    if (s->part.cylinder_radius > 0 && s->kind == SW_LINE && along * along < s->dd * (1 - 1e-12) &&
+        s->max_evals >= 2) {
+        /* A flat end mill's ramp (not a plunge, which the ends settle): where the maximum should be (ramp_guess),
+         * proven with two evaluations next to it: F is concave, so with a
+         * supergradient >= 0 at u1 and <= 0 at u2 nothing before u1 beats
+         * F(u1), nothing after u2 beats F(u2), and the tangents bound
+         * [u1, u2] (local_max). Otherwise the search below. */
+        const double ug = ramp_guess(s, p), h = 1e-9 / fmax(1, sqrt(s->dd)); /* 1e-9 mm of path */
+        const double u1 = ug - h < 0 ? 0 : ug - h, u2 = ug + h > 1 ? 1 : ug + h;
+        double D1, D2;
+        const double F1 = eval_F(s, pw, p, u1, &D1), F2 = eval_F(s, pw, p, u2, &D2);
+        size_t evals = 2;
+        if ((u1 == 0 || D1 >= 0) && (u2 == 1 || D2 <= 0)) {
+            double u, up;
+            double v = local_max(s, pw, p, u1, F1, D1, u2, F2, D2, s->tol, 1, &u, &up, &evals,
+                                 s->max_evals < 8 ? s->max_evals : 8);
+            if (up - v <= s->tol) {
+                out->value = v;
+                out->upper = up + 1e-12 * (1 + fabs(up));
+                out->t = s->t0 + u * (s->t1 - s->t0);
+                out->evaluations = evals;
+                out->exhausted = 0;
+                return v;
+            }
+        }
+        used = evals;
+        guess_best = F1 >= F2 ? F1 : F2;
+        guess_u = F1 >= F2 ? u1 : u2;
+    }
     double Da, Db;
     double Fa = eval_F(s, pw, p, 0, &Da), Fb = eval_F(s, pw, p, 1, &Db);
-    size_t evals = 2;
+    size_t evals = used + 2;
     double u, up;
     double v = local_max(s, pw, p, 0, Fa, Da, 1, Fb, Db, s->tol, 1, &u, &up, &evals, s->max_evals);
+    if (guess_best > v) v = guess_best, u = guess_u;
+    if (up < v) up = v;
     out->value = v;
     out->upper = up + 1e-12 * (1 + fabs(up));
     out->t = s->t0 + u * (s->t1 - s->t0);

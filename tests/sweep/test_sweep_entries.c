@@ -1,13 +1,16 @@
-/* test_sweep_helix.c: FM_SWEEP_HELIX (a convex part on a helix about its
- * own axis, sweep.c) against the general branch-and-bound of the same
- * sweep (no_fast_paths) and the sampled brute force of sweep_cases.h, over
- * flat, bull, ball and drill flutes on ten helices: the demo's entries (one
- * and four turns), a bore narrower than the tool, a helix through the
- * tool's axis, partial arcs, shallow and steep pitches, clockwise and
- * rising, G18 and G19 helices with the tool along their axis, and a tool
- * pointing down its helix's axis. Each value must lie within the other's
- * proof ([value, upper], certified to FM_SWEEP_TOL), be attained at the
- * time reported, and interval enclosures must hold at points of their box. */
+/* test_sweep_entries.c: a tool's ways into the material other than the
+ * plunge. FM_SWEEP_HELIX (a convex part on a helix about its own axis,
+ * sweep.c) against the general branch-and-bound of the same sweep
+ * (no_fast_paths) and the sampled brute force of sweep_cases.h, over flat,
+ * bull, ball and drill flutes on ten helices: the demo's entries (one and
+ * four turns), a bore narrower than the tool, a helix through the tool's
+ * axis, partial arcs, shallow and steep pitches, clockwise and rising, G18
+ * and G19 helices with the tool along their axis, and a tool pointing down
+ * its helix's axis. Then a flat end mill's ramps (CONCAVE with the guess of
+ * ramp_guess proven by two evaluations) the same way. Each value must lie
+ * within the other's proof ([value, upper], certified to FM_SWEEP_TOL), be
+ * attained at the time reported, and interval enclosures must hold at
+ * points of their box. */
 #include "test.h"
 #include "sweep/sweep_cases.h"
 
@@ -63,24 +66,24 @@ static void near_point(const fm_sweep *s, const fm_motion *m, const fm_tool_part
     }
 }
 
-static long points, brute_points;
-static double evals_helix, evals_search;
+static long points, ramp_points, brute_points;
+static double evals_helix, evals_search, evals_ramp, evals_ramp_search;
 static int shown;
 
-static void check_case(const char *cutter, const fm_tool_part *part, const helix_case *hc, int npoints)
+static void check_motion(const char *cutter, const fm_tool_part *part, const char *what, fm_motion m,
+                         fm_sweep_method method, double *evals_fast, double *evals_general, long *count, int npoints)
 {
-    fm_motion m = case_motion(hc);
     fm_sweep *fast, *slow;
     fm_sweep_options general = {0};
     general.no_fast_paths = 1;
     fm_error err;
     if (fm_sweep_new(&m, part, NULL, &fast, &err) != FM_OK) {
-        fprintf(stderr, "%s, %s: %s\n", cutter, hc->name, err.message);
+        fprintf(stderr, "%s, %s: %s\n", cutter, what, err.message);
         CHECK(0);
         return;
     }
     CHECK(fm_sweep_new(&m, part, &general, &slow, NULL) == FM_OK);
-    CHECK(fm_sweep_method_of(fast) == FM_SWEEP_HELIX);
+    CHECK(fm_sweep_method_of(fast) == method);
     CHECK(fm_sweep_method_of(slow) == FM_SWEEP_SEARCH);
     fm_sweep_worker *w = fm_sweep_worker_new(fast);
     sc_speed speed = sc_motion_speed(&m);
@@ -90,17 +93,17 @@ static void check_case(const char *cutter, const fm_tool_part *part, const helix
         fm_sweep_value a, b;
         fm_sweep_eval_ex(fast, w, p, &a);
         fm_sweep_eval_ex(slow, w, p, &b);
-        points++;
-        evals_helix += (double)a.evaluations;
-        evals_search += (double)b.evaluations;
+        (*count)++;
+        *evals_fast += (double)a.evaluations;
+        *evals_general += (double)b.evaluations;
         /* both proofs hold the true maximum: each value lies below the
          * other's upper bound, and the helix's proof is certified */
         int ok = !a.exhausted && a.upper - a.value <= FM_SWEEP_TOL + 1e-12 && a.value <= b.upper + 1e-9 &&
                  b.value <= a.upper + 1e-9;
         if (!ok && shown++ < 10)
-            fprintf(stderr, "%s, %s at (%.9g, %.9g, %.9g): helix %.12g [upper %.12g, %zu evaluations%s], search %.12g "
+            fprintf(stderr, "%s, %s at (%.9g, %.9g, %.9g): fast %.12g [upper %.12g, %zu evaluations%s], search %.12g "
                             "[upper %.12g]\n",
-                    cutter, hc->name, p[0], p[1], p[2], a.value, a.upper, a.evaluations,
+                    cutter, what, p[0], p[1], p[2], a.value, a.upper, a.evaluations,
                     a.exhausted ? ", exhausted" : "", b.value, b.upper);
         CHECK(ok);
         /* attained at the time reported */
@@ -109,8 +112,8 @@ static void check_case(const char *cutter, const fm_tool_part *part, const helix
             double brute = sc_brute_sparse(fast, w, &speed, p);
             brute_points++;
             if (!(a.value <= brute + 1e-9 && brute <= a.upper + 1e-9) && shown++ < 10)
-                fprintf(stderr, "%s, %s at (%.9g, %.9g, %.9g): helix %.12g [upper %.12g], brute force %.12g\n", cutter,
-                        hc->name, p[0], p[1], p[2], a.value, a.upper, brute);
+                fprintf(stderr, "%s, %s at (%.9g, %.9g, %.9g): fast %.12g [upper %.12g], brute force %.12g\n", cutter,
+                        what, p[0], p[1], p[2], a.value, a.upper, brute);
             CHECK(a.value <= brute + 1e-9);
             CHECK(brute <= a.upper + 1e-9);
         }
@@ -140,6 +143,22 @@ static void check_case(const char *cutter, const fm_tool_part *part, const helix
     fm_sweep_free(fast);
     fm_sweep_free(slow);
 }
+
+/* A flat end mill's ramps: 3D lines (CONCAVE, proven at ramp_guess's u). */
+typedef struct ramp_case {
+    const char *name;
+    double from[3], to[3], axis[3];
+} ramp_case;
+
+static const ramp_case ramps[] = {
+    {"ramp 10.8 mm down 3.5", {0, 0, 2}, {10, -4, -1.5}, {0, 0, 1}},
+    {"shallow ramp 20.6 mm down 0.3", {0, 0, 0}, {20, 5, -0.3}, {0, 0, 1}},
+    {"steep ramp down 10", {1, 1, 5}, {1.5, 0.8, -5}, {0, 0, 1}},
+    {"rising ramp", {0, 0, -3}, {8, 3, 1}, {0, 0, 1}},
+    {"short ramp 0.05 mm", {0, 0, 0}, {0.05, 0, -0.01}, {0, 0, 1}},
+    {"ramp with a tilted tool", {0, 0, 0}, {6, 6, -2}, {0.3, -0.2, 1}},
+    {"ramp with the tool pointing down", {2, 1, 0}, {-5, 3, 2.5}, {0, 0, -1}},
+};
 
 /* Which sweeps take the helix: not the V-bit or tapered cutters (no ball of
  * their full radius about their middle), not a tilted tool, not a spiral. */
@@ -197,11 +216,22 @@ int main(int argc, char **argv)
             CHECK(0);
             continue;
         }
-        for (size_t k = 0; k < NCASES; k++) check_case(cutters[c].name, &t.flutes, &cases[k], npoints);
+        for (size_t k = 0; k < NCASES; k++)
+            check_motion(cutters[c].name, &t.flutes, cases[k].name, case_motion(&cases[k]), FM_SWEEP_HELIX,
+                         &evals_helix, &evals_search, &points, npoints);
+        if (cutters[c].spec.shape != FM_TOOL_FLAT) continue;
+        for (size_t k = 0; k < sizeof ramps / sizeof ramps[0]; k++) {
+            const ramp_case *rc = &ramps[k];
+            fm_motion m = sc_line(rc->from[0], rc->from[1], rc->from[2], rc->to[0], rc->to[1], rc->to[2]);
+            for (int i = 0; i < 3; i++) m.axis_start[i] = m.axis_end[i] = rc->axis[i];
+            check_motion(cutters[c].name, &t.flutes, rc->name, m, FM_SWEEP_CONCAVE, &evals_ramp, &evals_ramp_search,
+                         &ramp_points, npoints);
+        }
     }
     check_selection();
-    printf("helix against the search: %ld points (%ld also against the brute force); part evaluations per point: "
-           "helix %.2f, search %.2f\n",
-           points, brute_points, evals_helix / (double)points, evals_search / (double)points);
-    return test_summary("sweep_helix");
+    printf("against the search: helices %ld points, ramps %ld (%ld in all also against the brute force); part "
+           "evaluations per point: helix %.2f (search %.2f), flat ramp %.2f (search %.2f)\n",
+           points, ramp_points, brute_points, evals_helix / (double)points, evals_search / (double)points,
+           evals_ramp / (double)ramp_points, evals_ramp_search / (double)ramp_points);
+    return test_summary("sweep_entries");
 }
