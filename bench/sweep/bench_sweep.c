@@ -89,7 +89,7 @@ static void bench(const char *cutter, const char *kind, const fm_motion *m, cons
         fm_sweep_eval_ex(s, w, p, &v);
         evals += v.evaluations;
     }
-    static const char *methods[] = {"static", "planar-line", "planar-arc", "capsule", "concave", "search"};
+    static const char *methods[] = {"static", "planar-line", "planar-arc", "capsule", "concave", "search", "helix"};
     fflush(stdout);
     printf("%-13s %-11s %-12s %10.0f %10.0f %8.1f %7.1f\n", cutter, kind, methods[fm_sweep_method_of(s)], n / tb,
            n / ti, tb / tf, (double)evals / (n < 2000 ? n : 2000));

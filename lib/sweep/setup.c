@@ -289,6 +289,24 @@ fm_status fm_sweep_new(const fm_motion *m, const fm_tool_part *part, const fm_sw
         s->method = FM_SWEEP_CAPSULE;
     } else if (s->kind == SW_LINE && s->axis_const && profile && fast && part->convex) {
         s->method = FM_SWEEP_CONCAVE;
+    } else if (s->kind == SW_ARC && profile && fast && part->convex && s->a0[s->ai] == 0 && s->a0[s->aj] == 0 &&
+               fabs(s->drr) <= 1e-10 && s->r0 > 0 &&
+               fm_tool_profile_eval(part, NULL, 0, 0.5 * (part->z_lo + part->z_hi), NULL) >=
+                   part->r_max * (1 - 1e-12)) {
+        /* A helix (or an arc with a rise below planar_arc's 1e-10) about
+         * the tool's own axis, with a part that holds the ball of radius
+         * r_max about its middle (flat, bull, ball, drill flutes taller than
+         * their diameter): the distance to the axis is monotone between the
+         * angles nearest and farthest from the point, and the part's
+         * largest value over a box of (r, z) is one evaluation (sweep.c).
+         * V-bits and tapered cutters stay with the search, which that
+         * bound would not speed up. */
+        s->method = FM_SWEEP_HELIX;
+        s->hx_c0 = cos(s->th0);
+        s->hx_s0 = sin(s->th0);
+        s->hx_c1 = cos(s->th0 + s->dth);
+        s->hx_s1 = sin(s->th0 + s->dth);
+        s->hx_zmid = 0.5 * (part->z_lo + part->z_hi);
     }
     /* Second-order bound: a convex part on a fixed axis has F'' <= |tip''|. */
     s->second_order = profile && part->convex && s->axis_const && (s->kind == SW_LINE || s->kind == SW_ARC);

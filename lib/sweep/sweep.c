@@ -1,7 +1,9 @@
 /* sweep.c: the swept volume S(p) = max over t of the moving tool part:
  * poses of each motion kind, the closed forms (planar line and arc,
- * capsule), the certified search for concave cases, and the
- * branch-and-bound on t for everything else. See docs/sweep.md for the
+ * capsule), the certified search for concave cases (with a flat end
+ * mill's ramp proven at a guessed maximum), the branch-and-bound on t for
+ * everything else, and that branch-and-bound seeded by a helix's
+ * structure for convex parts on helices about their axis. See docs/sweep.md for the
  * proofs behind each bound. */
 #include "sweep/sweep.h"
 #include "sweep/sweep_internal.h"
@@ -307,6 +309,10 @@ static double local_max(const fm_sweep *s, void *pw, const double p[3], double u
 
 typedef struct bb_node {
     double ua, ub, Fa, Da, Fb, Db, U;
+    /* helix_search: the distance to the tool axis at both ends, and
+     * whether the ends are evaluated yet (a piece seeded by its bound) */
+    double ra, rb;
+    int ev, piece;
 } bb_node;
 
 #define BB_CAP 1024
@@ -529,7 +535,7 @@ static double bb_search(const fm_sweep *s, fm_sweep_worker *worker, const double
         double F = eval_F(s, pw, p, u, &D);
         evals++;
         if (F > best) best = F, ubest = u;
-        bb_node n = {(double)(i - 1) / pieces, u, Fprev, Dprev, F, D, 0};
+        bb_node n = {(double)(i - 1) / pieces, u, Fprev, Dprev, F, D, 0, 0, 0, 1, 0};
         n.U = node_bound(s, pw, p, &n);
         heap_push(h, &n);
         Fprev = F, Dprev = D;
@@ -552,7 +558,7 @@ static double bb_search(const fm_sweep *s, fm_sweep_worker *worker, const double
         double Dm, Fm = eval_F(s, pw, p, m, &Dm);
         evals++;
         if (Fm > best) best = Fm, ubest = m;
-        bb_node l = {n.ua, m, n.Fa, n.Da, Fm, Dm, 0}, r = {m, n.ub, Fm, Dm, n.Fb, n.Db, 0};
+        bb_node l = {n.ua, m, n.Fa, n.Da, Fm, Dm, 0, 0, 0, 1, 0}, r = {m, n.ub, Fm, Dm, n.Fb, n.Db, 0, 0, 0, 1, 0};
         l.U = node_bound(s, pw, p, &l);
         r.U = node_bound(s, pw, p, &r);
         if (l.U > best + cert_tol) heap_push(h, &l);
@@ -585,15 +591,320 @@ static double bb_search(const fm_sweep *s, fm_sweep_worker *worker, const double
     return best;
 }
 
+/* ------------------------------------------- helix about the tool axis -- */
+
+/* FM_SWEEP_HELIX: a convex part whose axis is the helix's (a G17 helix
+ * with a vertical tool, an arc with a rise). With (x, y) the point's offset
+ * from the centre in the plane and th(u) the tip's angle, the distance to
+ * the tool axis is d(u) = |(x, y) - r (cos th, sin th)| and zeta(u) =
+ * a_k (p_k - ctr_k - u dh) is linear. d is monotone between the times where
+ * th(u) passes the point's angle phi or its opposite (phi - th a multiple
+ * of pi, where d = |rho - r| or rho + r: no trigonometry), so on each such
+ * piece [ua, ub] the part, which never increases with r, is at most its
+ * largest value over d in [min d, max d] and zeta between the ends', one
+ * profile evaluation for the parts setup.c admits (profile_box_max). Those bounds
+ * seed the branch-and-bound before any evaluation, so that of the two
+ * pieces a turn only the one or two where the tool passes the point at the
+ * right height are searched, and they keep bounding every sub-interval:
+ * at a flat end mill's kink (side distance R - d falling while the height
+ * term rises) the bound of the sub-interval on the wrong side of the kink
+ * is the value at its end, so the tangents' meeting point closes the proof
+ * in a few steps. Same tolerance and budget as the search. */
+
+typedef struct hx_point {
+    double x, y, rho, pk;
+} hx_point;
+
+/* The part at u (tip angle with cosine ct and sine st), dF/du, and the
+ * distance to the tool axis. */
+static double helix_F(const fm_sweep *s, void *pw, const hx_point *q, double u, double ct, double st, double *dF,
+                      double *dist)
+{
+    const double r = s->r0, sa = s->a0[s->ak];
+    const double wx = q->x - r * ct, wy = q->y - r * st;
+    const double d = sqrt(wx * wx + wy * wy);
+    const double zeta = sa * (q->pk - u * s->dh);
+    double g[2];
+    const double f = fm_tool_profile_eval(&s->part, pw, d, zeta, g);
+    /* d d' = w . (-c') with c' = r dth (-sin th, cos th); on the axis 0 is
+     * a supergradient (the profile never increases with r). */
+    const double dd = d > 1e-300 ? -r * s->dth * (wy * ct - wx * st) / d : 0;
+    *dF = g[0] * dd - g[1] * sa * s->dh;
+    *dist = d;
+    return f;
+}
+
+/* The largest value of the part over r in [rlo, rhi], z in [zlo, zhi]:
+ * the part holds the ball of radius r_max about (0, zmid) (setup.c), so
+ * every point (r, zmid) is at depth r_max - r, the most any point at
+ * radius r can be, and zmid maximizes z -> f(r, z), which is concave (a
+ * convex part): the maximum over the box is at rlo (f never increases with
+ * r) and the z of [zlo, zhi] nearest zmid, exactly. */
+static double profile_box_max(const fm_sweep *s, void *pw, double rlo, double zlo, double zhi)
+{
+    const double zm = s->hx_zmid;
+    return fm_tool_profile_eval(&s->part, pw, rlo, zm < zlo ? zlo : zm > zhi ? zhi : zm, NULL);
+}
+
+/* Upper bound of F over a node inside one monotone piece (ra, rb: the
+ * distances at its ends). */
+static double helix_box(const fm_sweep *s, void *pw, const hx_point *q, const bb_node *n)
+{
+    const double sa = s->a0[s->ak];
+    const double za = sa * (q->pk - n->ua * s->dh), zb = sa * (q->pk - n->ub * s->dh);
+    const double v = profile_box_max(s, pw, fmin(n->ra, n->rb), fmin(za, zb), fmax(za, zb));
+    /* rounding of the distances, and a radius that changes by |drr| */
+    return v + 1e-12 * (1 + fabs(v) + s->r0 + q->rho + s->part.r_max) + fabs(s->drr);
+}
+
+#define HX_MAX_PIECES 130
+
+static void helix_search(const fm_sweep *s, fm_sweep_worker *worker, const double p[3], fm_sweep_value *out)
+{
+    void *pw = worker ? worker->part_worker : NULL;
+    if (worker && !worker->heap) worker->heap = malloc(sizeof(bb_heap));
+    bb_heap *h = worker ? worker->heap : malloc(sizeof *h);
+    if (!h) {
+        bb_search(s, worker, p, out);
+        return;
+    }
+    hx_point q;
+    q.x = p[s->ai] - s->ctr[s->ai];
+    q.y = p[s->aj] - s->ctr[s->aj];
+    q.rho = sqrt(q.x * q.x + q.y * q.y);
+    q.pk = p[s->ak] - s->ctr[s->ak];
+    /* The pieces' ends: u = 0, the times where phi - th(u) = j pi in
+     * increasing u (th(u) = phi - j pi: cos and sin from the point's own
+     * direction), u = 1. */
+    double bu[HX_MAX_PIECES + 1], bc[HX_MAX_PIECES + 1], bs[HX_MAX_PIECES + 1];
+    int nb = 0;
+    bu[0] = 0, bc[0] = s->hx_c0, bs[0] = s->hx_s0;
+    if (q.rho > 0) {
+        const double phi = atan2(q.y, q.x);
+        const double a = (phi - s->th0) / FM_PI, b = (phi - s->th0 - s->dth) / FM_PI;
+        const double jl = floor(fmin(a, b)) + 1, jh = ceil(fmax(a, b)) - 1;
+        if (jh - jl + 1 > HX_MAX_PIECES - 1) {
+            if (!worker) free(h);
+            bb_search(s, worker, p, out);
+            return;
+        }
+        const int count = jh >= jl ? (int)(jh - jl) + 1 : 0;
+        for (int i = 0; i < count; i++) {
+            const double j = s->dth > 0 ? jh - i : jl + i;
+            const double u = (phi - s->th0 - j * FM_PI) / s->dth;
+            if (!(u > bu[nb]) || !(u < 1)) continue;
+            const double sg = fmod(fabs(j), 2) == 1 ? -1 : 1;
+            nb++;
+            bu[nb] = u, bc[nb] = sg * q.x / q.rho, bs[nb] = sg * q.y / q.rho;
+        }
+    }
+    nb++;
+    bu[nb] = 1, bc[nb] = s->hx_c1, bs[nb] = s->hx_s1;
+    double bd[HX_MAX_PIECES + 1], bF[HX_MAX_PIECES + 1], bD[HX_MAX_PIECES + 1];
+    unsigned char have[HX_MAX_PIECES + 1];
+    for (int k = 0; k <= nb; k++) {
+        const double wx = q.x - s->r0 * bc[k], wy = q.y - s->r0 * bs[k];
+        bd[k] = sqrt(wx * wx + wy * wy);
+        have[k] = 0;
+    }
+    h->count = 0;
+    for (int k = 0; k < nb; k++) {
+        bb_node n = {bu[k], bu[k + 1], 0, 0, 0, 0, 0, bd[k], bd[k + 1], 0, k};
+        n.U = helix_box(s, pw, &q, &n);
+        heap_push(h, &n);
+    }
+    const double tol = s->tol;
+    const size_t budget = s->max_evals;
+    size_t evals = 0;
+    double best = -DBL_MAX, ubest = 0;
+    while (h->count > 0) {
+        if (h->n[0].U <= best + tol) break;
+        if (evals >= budget || h->count >= BB_CAP - 2) break;
+        bb_node n = heap_pop(h);
+        if (!n.ev) {
+            /* a piece seeded by its bound: evaluate its ends */
+            for (int k = n.piece; k <= n.piece + 1; k++) {
+                if (have[k]) continue;
+                double dist;
+                bF[k] = helix_F(s, pw, &q, bu[k], bc[k], bs[k], &bD[k], &dist);
+                have[k] = 1;
+                evals++;
+                if (bF[k] > best) best = bF[k], ubest = bu[k];
+            }
+            n.Fa = bF[n.piece], n.Da = bD[n.piece], n.Fb = bF[n.piece + 1], n.Db = bD[n.piece + 1];
+            n.ev = 1;
+            const double U2 = node_bound(s, pw, p, &n) + fabs(s->drr);
+            if (U2 < n.U) n.U = U2;
+            if (n.U > best + tol) heap_push(h, &n);
+            continue;
+        }
+        const double w = n.ub - n.ua;
+        double m = 0.5 * (n.ua + n.ub);
+        if (n.Da > 0 && n.Db < 0) {
+            if (n.Da - n.Db > 2 * s->accel * w) {
+                /* F' falls by more than the curvature bound allows: a kink
+                 * (side against bottom of a flat end mill); the tangents
+                 * from both ends meet there. */
+                m = (n.Fb - n.Fa + n.Da * n.ua - n.Db * n.ub) / (n.Da - n.Db);
+                if (!(m > n.ua + 0.01 * w)) m = n.ua + 0.01 * w;
+                if (!(m < n.ub - 0.01 * w)) m = n.ub - 0.01 * w;
+            } else {
+                /* a smooth maximum: the secant root of F' */
+                m = n.ua + w * n.Da / (n.Da - n.Db);
+                if (m < n.ua + 0.1 * w) m = n.ua + 0.1 * w;
+                if (m > n.ub - 0.1 * w) m = n.ub - 0.1 * w;
+            }
+        }
+        const double th = s->th0 + m * s->dth;
+        double Dm, dm;
+        const double Fm = helix_F(s, pw, &q, m, cos(th), sin(th), &Dm, &dm);
+        evals++;
+        if (Fm > best) best = Fm, ubest = m;
+        bb_node l = {n.ua, m, n.Fa, n.Da, Fm, Dm, 0, n.ra, dm, 1, n.piece};
+        bb_node r = {m, n.ub, Fm, Dm, n.Fb, n.Db, 0, dm, n.rb, 1, n.piece};
+        l.U = fmin(helix_box(s, pw, &q, &l), node_bound(s, pw, p, &l) + fabs(s->drr));
+        r.U = fmin(helix_box(s, pw, &q, &r), node_bound(s, pw, p, &r) + fabs(s->drr));
+        if (l.U > best + tol) heap_push(h, &l);
+        if (r.U > best + tol) heap_push(h, &r);
+    }
+    double upper_rest = -DBL_MAX;
+    for (int i = 0; i < h->count; i++)
+        if (h->n[i].U > upper_rest) upper_rest = h->n[i].U;
+    if (!worker) free(h);
+    if (best == -DBL_MAX) { /* no evaluation allowed: one, for an attained value */
+        double D, dist;
+        best = helix_F(s, pw, &q, 0, bc[0], bs[0], &D, &dist);
+        evals++;
+    }
+    out->value = best;
+    out->upper = upper_rest > best + tol ? upper_rest : best + tol;
+    out->t = s->t0 + ubest * (s->t1 - s->t0);
+    out->evaluations = evals;
+    out->exhausted = upper_rest > best + tol;
+}
+
 /* ------------------------------------------------------- evaluation -- */
+
+/* A flat end mill (the plain cylinder: R, z_lo, z_hi) on a line with a
+ * fixed axis (a ramp): where the maximum of F over u is likely. With
+ * zeta(u) = z0 - u dz and the distance to the moving axis d(u) = sqrt(q(u)),
+ * q a convex quadratic, F <= G = min(R - d, zeta - z_lo, z_hi - zeta)
+ * everywhere, with equality unless both the side and the nearer end are
+ * negative (below or above the tool and outside its radius: then F is minus
+ * the distance to the rim). G is concave, the least of a concave and two
+ * linear terms, so its maximum is at an end, at the peak of R - d, or where
+ * two terms cross: a quadratic's roots. When that maximum is negative on
+ * both sides, F = -sqrt((d - R)^2 + l^2) with l the nearer end's term, and
+ * (d - R)^2 + l^2 is convex there (d is convex and above R): a few Newton
+ * steps from it. Only a guess: concave_search proves it or searches. */
+static double ramp_guess(const fm_sweep *s, const double p[3])
+{
+    const double *a = s->a0, *d = s->d;
+    const double R = s->part.cylinder_radius, zlo = s->part.z_lo, zhi = s->part.z_hi;
+    double v0[3] = {p[0] - s->c0[0], p[1] - s->c0[1], p[2] - s->c0[2]};
+    const double z0 = dot3(a, v0), dz = dot3(a, d);
+    double w0[3], dp[3];
+    for (int i = 0; i < 3; i++) {
+        w0[i] = v0[i] - z0 * a[i];
+        dp[i] = d[i] - dz * a[i];
+    }
+    const double al = dot3(dp, dp), be = dot3(w0, dp), ga = dot3(w0, w0);
+    /* the linear terms l0 + l1 u */
+    const double lin0[2] = {z0 - zlo, zhi - z0}, lin1[2] = {-dz, dz};
+    double cand[8];
+    int nc = 0;
+    cand[nc++] = 0;
+    cand[nc++] = 1;
+    if (al > 0) cand[nc++] = be / al;
+    if (dz != 0) cand[nc++] = (z0 - 0.5 * (zlo + zhi)) / dz;
+    for (int k = 0; k < 2; k++) {
+        /* sqrt(q(u)) = c + e u with c + e u >= 0: (al - e^2) u^2 - 2 (be + c e) u + ga - c^2 = 0 */
+        const double c = R - lin0[k], e = -lin1[k];
+        const double A = al - e * e, B = -2 * (be + c * e), C = ga - c * c;
+        if (fabs(A) > 1e-14 * (al + e * e)) {
+            const double disc = B * B - 4 * A * C;
+            if (disc >= 0) {
+                const double sq = sqrt(disc), qq = -0.5 * (B + (B >= 0 ? sq : -sq));
+                if (qq != 0) cand[nc++] = C / qq;
+                cand[nc++] = qq / A;
+            }
+        } else if (B != 0) {
+            cand[nc++] = -C / B;
+        }
+    }
+    double best = -DBL_MAX, ub = 0;
+    for (int i = 0; i < nc; i++) {
+        const double u = cand[i];
+        if (!(u >= 0 && u <= 1)) continue;
+        const double q = ga - 2 * be * u + al * u * u;
+        double g = R - sqrt(q > 0 ? q : 0);
+        for (int k = 0; k < 2; k++) g = fmin(g, lin0[k] + lin1[k] * u);
+        if (g > best) best = g, ub = u;
+    }
+    if (best >= 0) return ub;
+    /* Both terms may be negative there: minimize (d - R)^2 + l^2. */
+    double u = ub;
+    for (int it = 0; it < 6; it++) {
+        const double q = ga - 2 * be * u + al * u * u;
+        const double dd = sqrt(q > 0 ? q : 0);
+        const int k = lin0[0] + lin1[0] * u <= lin0[1] + lin1[1] * u ? 0 : 1;
+        const double l = lin0[k] + lin1[k] * u, l1 = lin1[k];
+        if (!(dd > R) || l >= 0) break;
+        const double d1 = (al * u - be) / dd, d2 = (al - d1 * d1) / dd;
+        const double E1 = (dd - R) * d1 + l * l1, E2 = d1 * d1 + (dd - R) * d2 + l1 * l1;
+        if (!(E2 > 0)) break;
+        double next = u - E1 / E2;
+        next = next < 0 ? 0 : next > 1 ? 1 : next;
+        if (fabs(next - u) <= 1e-15) {
+            u = next;
+            break;
+        }
+        u = next;
+    }
+    return u;
+}
 
 static double concave_search(const fm_sweep *s, void *pw, const double p[3], fm_sweep_value *out)
 {
+    const double along = dot3(s->d, s->a0);
+    size_t used = 0;                 /* evaluations the guess spent, out of the same budget */
+    double guess_best = -DBL_MAX, guess_u = 0; /* and the best value it found */
+    if (s->part.cylinder_radius > 0 && s->kind == SW_LINE && along * along < s->dd * (1 - 1e-12) &&
+        s->max_evals >= 2) {
+        /* A flat end mill's ramp (not a plunge, which the ends settle): where the maximum should be (ramp_guess),
+         * proven with two evaluations next to it: F is concave, so with a
+         * supergradient >= 0 at u1 and <= 0 at u2 nothing before u1 beats
+         * F(u1), nothing after u2 beats F(u2), and the tangents bound
+         * [u1, u2] (local_max). Otherwise the search below. */
+        const double ug = ramp_guess(s, p), h = 1e-9 / fmax(1, sqrt(s->dd)); /* 1e-9 mm of path */
+        const double u1 = ug - h < 0 ? 0 : ug - h, u2 = ug + h > 1 ? 1 : ug + h;
+        double D1, D2;
+        const double F1 = eval_F(s, pw, p, u1, &D1), F2 = eval_F(s, pw, p, u2, &D2);
+        size_t evals = 2;
+        if ((u1 == 0 || D1 >= 0) && (u2 == 1 || D2 <= 0)) {
+            double u, up;
+            double v = local_max(s, pw, p, u1, F1, D1, u2, F2, D2, s->tol, 1, &u, &up, &evals,
+                                 s->max_evals < 8 ? s->max_evals : 8);
+            if (up - v <= s->tol) {
+                out->value = v;
+                out->upper = up + 1e-12 * (1 + fabs(up));
+                out->t = s->t0 + u * (s->t1 - s->t0);
+                out->evaluations = evals;
+                out->exhausted = 0;
+                return v;
+            }
+        }
+        used = evals;
+        guess_best = F1 >= F2 ? F1 : F2;
+        guess_u = F1 >= F2 ? u1 : u2;
+    }
     double Da, Db;
     double Fa = eval_F(s, pw, p, 0, &Da), Fb = eval_F(s, pw, p, 1, &Db);
-    size_t evals = 2;
+    size_t evals = used + 2;
     double u, up;
     double v = local_max(s, pw, p, 0, Fa, Da, 1, Fb, Db, s->tol, 1, &u, &up, &evals, s->max_evals);
+    if (guess_best > v) v = guess_best, u = guess_u;
+    if (up < v) up = v;
     out->value = v;
     out->upper = up + 1e-12 * (1 + fabs(up));
     out->t = s->t0 + u * (s->t1 - s->t0);
@@ -655,6 +966,9 @@ void fm_sweep_eval_ex(const fm_sweep *s, fm_sweep_worker *worker, const double p
     }
     case FM_SWEEP_CONCAVE:
         concave_search(s, pw, p, out);
+        return;
+    case FM_SWEEP_HELIX:
+        helix_search(s, worker, p, out);
         return;
     case FM_SWEEP_SEARCH:
     default:

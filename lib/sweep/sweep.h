@@ -48,7 +48,10 @@ typedef enum fm_sweep_method {
     FM_SWEEP_CAPSULE,     /* ball-tipped part on any line: closed form (the ball swept up its axis) wherever
                              the part's top does not decide, else CONCAVE */
     FM_SWEEP_CONCAVE,     /* convex part on a line, fixed axis: t -> T is concave; certified bracketing */
-    FM_SWEEP_SEARCH       /* everything else: branch-and-bound on t, then local search */
+    FM_SWEEP_SEARCH,      /* everything else: branch-and-bound on t, then local search */
+    FM_SWEEP_HELIX        /* convex part on a helix (arc with a rise) about its own axis: the
+                             branch-and-bound seeded with the pieces where the distance to the axis
+                             is monotone, bounded exactly there (docs/sweep.md) */
 } fm_sweep_method;
 
 typedef struct fm_sweep_options {

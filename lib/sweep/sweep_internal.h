@@ -23,6 +23,10 @@ struct fm_sweep {
     /* arc: tip(u) = ctr + r(u) (cos th(u) e_ai + sin th(u) e_aj) + u dh e_ak */
     int ai, aj, ak, full_turn;
     double ctr[3], th0, dth, r0, drr, dh;
+    /* helix (FM_SWEEP_HELIX): cos and sin of the start and end angles */
+    double hx_c0, hx_s0, hx_c1, hx_s1;
+    /* the part holds the ball of radius r_max about (0, hx_zmid) */
+    double hx_zmid;
     /* parametric */
     const fm_path *path;
     /* rotary axes (kinematics.c) */
