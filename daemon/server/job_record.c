@@ -48,6 +48,12 @@ job *fm_job_record_new(const char *id, const char *jobs_dir, fm_job_doc *doc, do
 
 void fm_job_record_free_chunks(job *j)
 {
+    /* the worker settles its encoder when the run ends (queue.c); never
+     * free meshes it may still be reading */
+    if (j->encoder_started) {
+        pthread_join(j->encoder, NULL);
+        j->encoder_started = 0;
+    }
     for (size_t i = 0; i < j->chunk_count; i++) {
         fm_mesh_free(j->chunks[i].mesh);
         fm_mesh_chunk_cache_free(j->chunks[i].cache);

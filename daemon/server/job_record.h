@@ -33,6 +33,8 @@ typedef struct chunk_version {
     size_t triangles;
     uint8_t *drc;      /* Draco encoding; NULL when it has no triangles */
     size_t drc_size;
+    int encoding;      /* announced, its Draco bytes still being made (a live
+                          job's publication encodes after its event, publish.c) */
 } chunk_version;
 
 /* A chunk's published meshes, oldest first; the last is the current one.
@@ -104,6 +106,13 @@ typedef struct job {
     size_t history_bytes;
     double history_from_s;
     int meshes_loaded;     /* chunks reflect the final stock (or a worker publishes) */
+    /* A live job's last publication is announced before its Draco bytes
+     * exist: the encoder thread makes them (publish.c); readers of the bytes
+     * wait on cond while encoding_pending. The encoder is started and
+     * joined by the publishing thread only. */
+    size_t encoding_pending;
+    pthread_t encoder;
+    int encoder_started;
     job_event ring[JOB_EVENT_RING];
     uint64_t next_event;   /* id of the next event; ids start at 1 */
     int ended;             /* the "end" event was emitted */

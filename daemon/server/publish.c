@@ -233,6 +233,7 @@ void fm_publish_progress(job *j, const fm_job_progress *p, publish_pace *pace)
 
 void fm_publish_chunks_drop_caches(job *j)
 {
+    fm_publish_chunks_settle(j);
     pthread_mutex_lock(&j->lock);
     for (size_t i = 0; i < j->chunk_count; i++) {
         fm_mesh_chunk_cache_free(j->chunks[i].cache);
@@ -309,6 +310,7 @@ typedef struct remesh_work {
     size_t n;
     uint64_t version;
     double time_s;
+    int encode; /* 0: the encoder thread encodes after the event */
     atomic_size_t next;
     remesh_share helper;
 } remesh_work;
@@ -331,6 +333,10 @@ static void remesh_chunks(remesh_work *w, remesh_share *share)
         share->mesh_s += fm_clock_monotonic_s() - tm;
         v->triangles = c->mesh ? c->mesh->triangle_count : 0;
         share->triangles += v->triangles;
+        if (!w->encode) {
+            v->encoding = v->triangles > 0;
+            continue;
+        }
         const double te = fm_clock_monotonic_s();
         if (v->triangles > 0 &&
             fm_mesh_encode_draco(c->mesh, w->draco, &v->drc, &v->drc_size, &err) != FM_OK) {
@@ -348,6 +354,191 @@ static void *remesh_helper(void *arg)
     return NULL;
 }
 
+/* ----------------------------------------------- encoding after the event -- */
+
+/* A live job's publication is announced as soon as its chunks are meshed:
+ * Draco (about half of a move's publication) runs after the event, on the
+ * encoder thread and one helper, while the worker takes the next position.
+ * The meshes it encodes are the chunks' current ones, which stay alive
+ * until the next publication swaps in its own, and that first waits for
+ * the encoder (fm_publish_chunks_settle). Readers of the bytes (the chunk
+ * list's sizes, a chunk's .drc) wait until they exist. */
+typedef struct encode_item {
+    int32_t index[3];
+    uint64_t version;
+    const fm_mesh *mesh;
+    uint8_t *drc;
+    size_t drc_size;
+} encode_item;
+
+typedef struct encode_work {
+    job *j;
+    fm_mesh_draco_options draco;
+    encode_item *items;
+    size_t n;
+    atomic_size_t next;
+    double started;
+} encode_work;
+
+static void encode_items(encode_work *w)
+{
+    for (;;) {
+        const size_t i = atomic_fetch_add(&w->next, 1);
+        if (i >= w->n) return;
+        fm_error err;
+        encode_item *it = &w->items[i];
+        if (fm_mesh_encode_draco(it->mesh, &w->draco, &it->drc, &it->drc_size, &err) != FM_OK) {
+            it->drc = NULL;
+            it->drc_size = 0;
+        }
+    }
+}
+
+static void *encode_helper(void *arg)
+{
+    encode_items(arg);
+    return NULL;
+}
+
+/* The encoder: every item encoded (on two threads when there are two),
+ * then the bytes put in their versions under the job's lock and the
+ * waiting readers woken. */
+static void *encoder_main(void *arg)
+{
+    encode_work *w = arg;
+    job *j = w->j;
+    const double cpu0 = fm_clock_cpu_s();
+    pthread_t helper;
+    int helped = w->n >= 2 && pthread_create(&helper, NULL, encode_helper, w) == 0;
+    encode_items(w);
+    if (helped) pthread_join(helper, NULL);
+    size_t bytes = 0;
+    pthread_mutex_lock(&j->lock);
+    for (size_t i = 0; i < w->n; i++) {
+        encode_item *it = &w->items[i];
+        chunk_version *v = NULL;
+        for (size_t k = 0; !v && k < j->chunk_count; k++) {
+            job_chunk *c = &j->chunks[k];
+            if (memcmp(c->index, it->index, sizeof it->index) || !c->version_count) continue;
+            chunk_version *cur = &c->versions[c->version_count - 1];
+            if (cur->version == it->version && cur->encoding) v = cur;
+        }
+        if (!v) { /* cannot happen: the current version stays until the next publication */
+            free(it->drc);
+            continue;
+        }
+        v->drc = it->drc;
+        v->drc_size = it->drc_size;
+        v->encoding = 0;
+        bytes += it->drc_size;
+    }
+    j->encoding_pending = 0;
+    pthread_cond_broadcast(&j->cond);
+    pthread_mutex_unlock(&j->lock);
+    fm_log(FM_LOG_DEBUG,
+           "job %s: encoded %zu chunks (%zu bytes) %.1f ms after their event, %.1f ms daemon CPU "
+           "meanwhile",
+           j->id, w->n, bytes, (fm_clock_monotonic_s() - w->started) * 1e3,
+           (fm_clock_cpu_s() - cpu0) * 1e3);
+    free(w->items);
+    free(w);
+    return NULL;
+}
+
+void fm_publish_chunks_settle(job *j)
+{
+    if (!j->encoder_started) return;
+    pthread_join(j->encoder, NULL);
+    j->encoder_started = 0;
+}
+
+/* The encoder's work for up to count versions (filled as they are swapped
+ * in); NULL without memory. */
+static encode_work *encode_work_new(job *j, const fm_mesh_draco_options *draco, size_t count)
+{
+    encode_work *w = calloc(1, sizeof *w);
+    encode_item *items = calloc(count ? count : 1, sizeof *items);
+    if (!w || !items) {
+        free(w);
+        free(items);
+        return NULL;
+    }
+    *w = (encode_work){.j = j, .draco = *draco, .items = items};
+    return w;
+}
+
+/* Encode now, on this thread, what was to be encoded after the event (no
+ * memory for the encoder's work). */
+static void encode_fresh_now(const fm_mesh_draco_options *draco, const job_chunk *fresh,
+                             chunk_version *fresh_v, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        chunk_version *v = &fresh_v[i];
+        fm_error err;
+        if (v->encoding &&
+            fm_mesh_encode_draco(fresh[i].mesh, draco, &v->drc, &v->drc_size, &err) != FM_OK) {
+            v->drc = NULL;
+            v->drc_size = 0;
+        }
+        v->encoding = 0;
+    }
+}
+
+/* The same vertices (positions, normals, colours) and triangles; a chunk
+ * with no surface has a mesh of no triangles (or none, when its meshing
+ * failed: never equal). */
+static int mesh_equal(const fm_mesh *a, const fm_mesh *b)
+{
+    if (!a || !b || a->vertex_count != b->vertex_count || a->triangle_count != b->triangle_count ||
+        !a->normals != !b->normals || !a->colors != !b->colors)
+        return 0;
+    const size_t nv = a->vertex_count, nt = a->triangle_count;
+    return (!nv || !memcmp(a->positions, b->positions, 3 * nv * sizeof *a->positions)) &&
+           (!nv || !a->normals || !memcmp(a->normals, b->normals, 3 * nv * sizeof *a->normals)) &&
+           (!nv || !a->colors || !memcmp(a->colors, b->colors, 3 * nv * sizeof *a->colors)) &&
+           (!nt || !memcmp(a->triangles, b->triangles, 3 * nt * sizeof *a->triangles));
+}
+
+/* A live move's chunks, the one at the tool first: it remeshes most of its
+ * leaves (150-250 of 512 on bench_live's rows, 6-8 ms under load; the
+ * chunks beside it a few, 1-3 ms), and the two threads take chunks in
+ * order, so taken last it would finish alone after the others. */
+typedef struct chunk_order {
+    double distance;
+    size_t index;
+} chunk_order;
+
+static int cmp_chunk_order(const void *a, const void *b)
+{
+    const chunk_order *x = a, *y = b;
+    return x->distance < y->distance ? -1 : x->distance > y->distance ? 1
+           : x->index < y->index     ? -1
+                                     : x->index > y->index;
+}
+
+static void nearest_first(fm_stock_chunk *chunks, size_t n, const double tool[3])
+{
+    chunk_order *order = n > 1 ? malloc(n * sizeof *order) : NULL;
+    fm_stock_chunk *sorted = order ? malloc(n * sizeof *sorted) : NULL;
+    if (!sorted) { /* one chunk, or no memory: the order is only speed */
+        free(order);
+        return;
+    }
+    for (size_t i = 0; i < n; i++) {
+        double d2 = 0;
+        for (int k = 0; k < 3; k++) {
+            const double out = fmax(chunks[i].lo[k] - tool[k], tool[k] - chunks[i].hi[k]);
+            if (out > 0) d2 += out * out;
+        }
+        order[i] = (chunk_order){d2, i};
+    }
+    qsort(order, n, sizeof *order, cmp_chunk_order);
+    for (size_t i = 0; i < n; i++) sorted[i] = chunks[order[i].index];
+    memcpy(chunks, sorted, n * sizeof *chunks);
+    free(sorted);
+    free(order);
+}
+
 /* Remesh the chunks that changed since the last publication and swap them
  * in. Runs on the worker's thread (or a reader's, for a finished job whose
  * stock was loaded from its snapshot) with exclusive use of stock. With
@@ -356,6 +547,9 @@ static void *remesh_helper(void *arg)
  * neighbours: a live move changes about a fifth of a chunk's leaves. */
 static void publish_chunks(job *j, fm_stock *stock, double program_time_s, int cache)
 {
+    /* The previous publication's encoding is left running while this one
+     * finds and meshes its chunks (new meshes): it ends before they are
+     * swapped in (fm_publish_chunks_settle below). */
     uint64_t version = fm_stock_version(stock);
     pthread_mutex_lock(&j->lock);
     uint64_t since = j->chunk_count ? j->mesh_version : 0;
@@ -374,6 +568,13 @@ static void publish_chunks(job *j, fm_stock *stock, double program_time_s, int c
         changed = bigger;
         cap = n;
         n = fm_stock_changed_chunks(stock, since, changed, cap);
+    }
+    if (cache) {
+        pthread_mutex_lock(&j->lock);
+        double tool[3];
+        memcpy(tool, j->view.position, sizeof tool);
+        pthread_mutex_unlock(&j->lock);
+        nearest_first(changed, n, tool);
     }
     fm_mesh_extract_options opt;
     fm_mesh_extract_default(&opt);
@@ -409,8 +610,9 @@ static void publish_chunks(job *j, fm_stock *stock, double program_time_s, int c
     fm_mesh_draco_options draco;
     fm_mesh_draco_default(&draco);
     draco.speed = 7;
+    /* A live job (cache) announces its meshes before encoding them. */
     remesh_work w = {stock, &opt, &draco, changed, fresh, fresh_v, n, version, program_time_s,
-                     0, {0, 0, 0}};
+                     !cache, 0, {0, 0, 0}};
     /* One helper thread beside this one when there are chunks to share: the
      * chunks are independent (each reads the stock, which nothing changes
      * meanwhile), and a live move's 2-4 chunks then take about half the
@@ -424,13 +626,22 @@ static void publish_chunks(job *j, fm_stock *stock, double program_time_s, int c
     const double t_encode = share.encode_s + w.helper.encode_s;
     const size_t triangles = share.triangles + w.helper.triangles;
     free(changed);
+    size_t to_encode = 0;
+    for (size_t i = 0; i < n; i++) to_encode += fresh_v[i].encoding;
+    encode_work *enc = to_encode ? encode_work_new(j, &draco, to_encode) : NULL;
+    if (to_encode && !enc) encode_fresh_now(&draco, fresh, fresh_v, n);
+    const double t_settle = fm_clock_monotonic_s();
+    fm_publish_chunks_settle(j);
+    const double settle_s = fm_clock_monotonic_s() - t_settle;
     fm_log(FM_LOG_DEBUG,
            "job %s: published %zu chunks (%zu triangles) at version %llu in %.1f ms on %d "
            "threads: mesh %.1f ms, encode %.1f ms wall (summed over the threads), %.1f ms "
-           "daemon CPU",
+           "daemon CPU; %.1f ms waiting for the previous encoding",
            j->id, n, triangles, (unsigned long long)version, (fm_clock_monotonic_s() - t0) * 1e3,
-           helped ? 2 : 1, t_mesh * 1e3, t_encode * 1e3, (fm_clock_cpu_s() - cpu0) * 1e3);
+           helped ? 2 : 1, t_mesh * 1e3, t_encode * 1e3, (fm_clock_cpu_s() - cpu0) * 1e3,
+           settle_s * 1e3);
     json_t *ids = json_array();
+    size_t kept = 0;
     pthread_mutex_lock(&j->lock);
     if (j->history_from_s < 0) j->history_from_s = program_time_s;
     for (size_t i = 0; i < n; i++) {
@@ -439,6 +650,18 @@ static void publish_chunks(job *j, fm_stock *stock, double program_time_s, int c
         snprintf(name, sizeof name, "%d_%d_%d", c->index[0], c->index[1], c->index[2]);
         size_t k = 0;
         while (k < j->chunk_count && memcmp(j->chunks[k].index, c->index, sizeof c->index)) k++;
+        /* A chunk the stock marked (a leaf the cut touched lies within two
+         * voxels of it) whose mesh came out as its current one: the change
+         * reached none of its faces (the chunks along a seam the move runs
+         * beside, a chunk above the stock's top with no faces). It keeps
+         * that version: no encoding, nothing for clients to fetch again. */
+        if (cache && c->mesh && k < j->chunk_count && j->chunks[k].version_count &&
+            !j->chunks[k].cache && mesh_equal(c->mesh, j->chunks[k].mesh)) {
+            fm_mesh_free(c->mesh);
+            j->chunks[k].cache = c->cache;
+            kept++;
+            continue;
+        }
         if (k == j->chunk_count && j->chunk_count == j->chunk_cap) {
             size_t ncap = j->chunk_cap ? j->chunk_cap * 2 : 64;
             job_chunk *t = realloc(j->chunks, ncap * sizeof *t);
@@ -468,13 +691,30 @@ static void publish_chunks(job *j, fm_stock *stock, double program_time_s, int c
         fm_mesh_chunk_cache_free(j->chunks[k].cache); /* none: it was moved out above */
         j->chunks[k].cache = c->cache;
         json_array_append_new(ids, json_string(name));
+        if (enc && fresh_v[i].encoding) {
+            encode_item *it = &enc->items[enc->n++];
+            memcpy(it->index, c->index, sizeof it->index);
+            it->version = version;
+            it->mesh = c->mesh;
+        }
     }
+    if (enc) j->encoding_pending = enc->n;
     history_trim(j, j->history_limit);
     j->mesh_version = version;
     j->mesh_time_s = program_time_s;
     fm_publish_event(j, "chunks", json_pack("{s:I, s:f, s:o}", "version", (json_int_t)version,
                                             "program_time_s", program_time_s, "changed", ids));
     pthread_mutex_unlock(&j->lock);
+    if (kept)
+        fm_log(FM_LOG_DEBUG, "job %s: version %llu kept %zu marked chunks whose meshes did not change",
+               j->id, (unsigned long long)version, kept);
+    if (enc) {
+        enc->started = fm_clock_monotonic_s();
+        if (pthread_create(&j->encoder, NULL, encoder_main, enc) == 0)
+            j->encoder_started = 1;
+        else
+            encoder_main(enc); /* no thread: encoded here, as before */
+    }
     free(fresh);
     free(fresh_v);
 }
@@ -651,6 +891,24 @@ fm_status fm_publish_report_json(job *j, json_t **out, fm_error *err)
     return rc;
 }
 
+/* Readers of Draco bytes (sizes, files) wait for the encoding of a live
+ * job's last publication, announced before it (caller holds j->lock).
+ * Returns how long they waited (s), 0 when the bytes were there. */
+static double wait_encoded(job *j)
+{
+    if (!j->encoding_pending) return 0;
+    const double t0 = fm_clock_monotonic_s();
+    while (j->encoding_pending) pthread_cond_wait(&j->cond, &j->lock);
+    return fm_clock_monotonic_s() - t0;
+}
+
+static void log_wait(const job *j, const char *what, double waited_s)
+{
+    if (waited_s > 0)
+        fm_log(FM_LOG_DEBUG, "job %s: %s waited %.1f ms for its meshes' Draco bytes", j->id, what,
+               waited_s * 1e3);
+}
+
 static void chunk_name(const job_chunk *c, char *out, size_t size)
 {
     snprintf(out, size, "%d_%d_%d", c->index[0], c->index[1], c->index[2]);
@@ -683,6 +941,7 @@ fm_status fm_publish_chunk_list(job *j, uint64_t since, double at_s, json_t **ou
     fm_status rc;
     json_t *list = json_array();
     pthread_mutex_lock(&j->lock);
+    const double waited = wait_encoded(j);
     if (at_s >= 0 && (j->history_from_s < 0 || at_s < j->history_from_s - 1e-9)) {
         rc = j->history_from_s < 0
                  ? fm_error_set_reason(err, FM_ERR_INPUT, "no_mesh",
@@ -711,6 +970,7 @@ fm_status fm_publish_chunk_list(job *j, uint64_t since, double at_s, json_t **ou
                      (json_int_t)j->history_bytes, "since", (json_int_t)since, "chunks", list);
     if (*out && at_s >= 0) json_object_set_new(*out, "at", json_real(at_s));
     pthread_mutex_unlock(&j->lock);
+    log_wait(j, "a chunk list", waited);
     return *out ? FM_OK
                 : fm_error_set_reason(err, FM_ERR_LIMIT, "out_of_memory", "out of memory");
 }
@@ -721,6 +981,7 @@ fm_status fm_publish_chunk_bytes(job *j, const char *name, uint64_t version, uin
     fm_status rc = fm_error_set_reason(err, FM_ERR_INPUT, "not_found", "job %s has no chunk %.64s",
                                        j->id, name);
     pthread_mutex_lock(&j->lock);
+    const double waited = wait_encoded(j);
     for (size_t i = 0; i < j->chunk_count; i++) {
         char n[48];
         chunk_name(&j->chunks[i], n, sizeof n);
@@ -751,6 +1012,7 @@ fm_status fm_publish_chunk_bytes(job *j, const char *name, uint64_t version, uin
         break;
     }
     pthread_mutex_unlock(&j->lock);
+    log_wait(j, "a chunk's mesh", waited);
     return rc;
 }
 

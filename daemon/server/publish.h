@@ -35,6 +35,10 @@ void fm_publish_progress(job *j, const fm_job_progress *p, publish_pace *pace);
  * stock exclusively), as the stock at program time program_time_s; the
  * chunks' earlier meshes stay in the history within its bound. */
 void fm_publish_chunks(job *j, fm_stock *stock, double program_time_s);
+/* Wait for the encoder of the last publication (a live job's chunks are
+ * announced before their Draco bytes exist); by the publishing thread,
+ * before the job's stock goes away. */
+void fm_publish_chunks_settle(job *j);
 /* Make sure the chunks of a finished job are published (loads its stock
  * snapshot once after a restart). */
 fm_status fm_publish_ensure_meshes(job *j, fm_error *err);

@@ -331,6 +331,7 @@ static void run_job(fm_queue *q, job *j)
         fm_queue_finish(q, j, FM_JOB_DONE, what);
     }
 done:
+    fm_publish_chunks_settle(j); /* the encoder of its last publication, if still running */
     fm_job_result_release(&result);
     if (q->hooks.run_over) q->hooks.run_over(q->hooks.user, j, unfinished);
 }
