@@ -246,6 +246,9 @@ static void run_job(fm_queue *q, job *j)
     if (st == FM_OK) {
         st = fm_job_run(&spec, &hooks, &result, &err);
         spec.resume_stock = NULL; /* the runner took it */
+        /* the encoder of a live job's last publication ends here, on the
+         * thread that started it, before any path below can free chunks */
+        fm_publish_chunks_settle(j);
     } else {
         fm_stock_free(spec.resume_stock);
         spec.resume_stock = NULL;
@@ -331,7 +334,6 @@ static void run_job(fm_queue *q, job *j)
         fm_queue_finish(q, j, FM_JOB_DONE, what);
     }
 done:
-    fm_publish_chunks_settle(j); /* the encoder of its last publication, if still running */
     fm_job_result_release(&result);
     if (q->hooks.run_over) q->hooks.run_over(q->hooks.user, j, unfinished);
 }
