@@ -272,9 +272,10 @@ static void test_box_bound_skips_retraced_floor(void)
     CHECK_NEAR(fm_stock_removed_volume(boxed), expect, 0.005 * expect);
     CHECK_NEAR(fm_stock_removed_volume(plain), fm_stock_removed_volume(boxed), 0);
     size_t differ = 0, voxels = 0;
-    for (int i = -4; i <= 104; i++)
-        for (int j = -4; j <= 104; j++)
-            for (int k = -4; k <= 54; k++) {
+    /* every voxel within five of the passes' union (index = mm / 0.2) */
+    for (int i = 5; i <= 93; i++)
+        for (int j = 10; j <= 90; j++)
+            for (int k = 25; k <= 54; k++) {
                 const double ijk[3] = {i, j, k};
                 double p[3];
                 fm_stock_index_to_world(boxed, ijk, p);
