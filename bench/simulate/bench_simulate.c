@@ -170,16 +170,17 @@ static double rss_now(void)
 }
 
 /* The resident set over the job: read after every cut (/proc/self/statm);
- * whenever it passes the largest so far by 1 MB the stock's breakdown is
- * taken again (a walk over the grid's nodes), so that the breakdown shown
- * is the one at the peak. The time the hook takes is left out of the
+ * whenever it passes by 1 MB the largest at which the stock's breakdown
+ * was taken, the breakdown is taken again (a walk over the grid's
+ * nodes), so that the breakdown shown is the one at the peak. The time the hook takes is left out of the
  * job's wall and CPU figures. With trace, the breakdown is printed every
  * trace cuts. */
 typedef struct mem_watch {
     double start_rss, stock_rss; /* before the job; when the stock is made */
     double max_rss;              /* over the cuts */
     long max_cut, cuts;
-    fm_stock_memory at_max;      /* the stock's breakdown at max_rss */
+    fm_stock_memory at_max;      /* the stock's breakdown near max_rss */
+    double at_max_rss;           /* the resident set when it was taken */
     double hook_wall, hook_cpu;  /* seconds spent here */
     long trace;
 } mem_watch;
@@ -200,7 +201,7 @@ static void watch_stock(void *user, fm_stock *stock)
     double w0 = bench_wall_s(), c0 = bench_cpu_s();
     w->stock_rss = rss_now();
     fm_stock_memory_usage(stock, &w->at_max);
-    w->max_rss = w->stock_rss;
+    w->max_rss = w->at_max_rss = w->stock_rss;
     w->hook_wall += bench_wall_s() - w0;
     w->hook_cpu += bench_cpu_s() - c0;
 }
@@ -212,7 +213,10 @@ static int watch_progress(void *user, const fm_job_progress *p)
     w->cuts++;
     double rss = rss_now();
     if (rss > w->max_rss) {
-        if (rss > w->max_rss + 1048576.0 || w->max_cut == 0) fm_stock_memory_usage(p->stock, &w->at_max);
+        if (rss > w->at_max_rss + 1048576.0 || w->max_cut == 0) {
+            fm_stock_memory_usage(p->stock, &w->at_max);
+            w->at_max_rss = rss;
+        }
         w->max_rss = rss;
         w->max_cut = w->cuts;
     }
