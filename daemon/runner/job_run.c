@@ -225,6 +225,7 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
         c->stock = stock;
         c->err = err;
         c->started = fm_clock_monotonic_s();
+        c->trimmed_at = c->started;
         c->progress.motions_total = sv.motions;
         c->progress.time_planned = timeline_planned(spec, &sv);
         c->progress.program_time_total = c->progress.time_planned ? sv.plan_end : sv.time_total;
@@ -237,6 +238,9 @@ fm_status fm_job_run(const fm_job_spec *spec, const fm_job_hooks *hooks, fm_job_
         if (st == FM_OK) st = cut(c, &sv, result, err);
         if (st == FM_OK) st = c->status;
         if (st == FM_OK && !c->stopped && !c->stopped_at_line) st = job_flush_batch(c);
+        /* the cuts' freed pages go back before the design and the final
+         * measures allocate */
+        job_release_free_memory();
         if (st == FM_OK && design && !c->stopped) st = compare(c, design, sv.log, result, err);
     }
     if (st == FM_OK) {

@@ -642,6 +642,25 @@ size_t fm_stock_memory_bytes(const fm_stock *s)
     return fm_vdb_memory(s->vdb) + fm_tool_marks_bytes(&s->marks);
 }
 
+void fm_stock_memory_usage(const fm_stock *s, fm_stock_memory *out)
+{
+    memset(out, 0, sizeof *out);
+    fm_vdb_counts g;
+    fm_vdb_memory_usage(s->vdb, &g);
+    out->leaves = g.leaves;
+    out->active_voxels = g.active_voxels;
+    out->internal_nodes = g.internal_nodes;
+    out->leaf_bytes = fm_vdb_leaf_bytes();
+    out->band_bytes = g.memusage;
+    const size_t leaves_counted = g.leaves * fm_vdb_leaf_memusage();
+    out->internal_bytes = g.memusage > leaves_counted ? g.memusage - leaves_counted : 0;
+    out->marks_bytes = fm_tool_marks_used_bytes(&s->marks);
+    out->marks_leaves = s->marks.nleaves;
+    out->tables_bytes = s->cap_chunks * sizeof *s->chunks + s->cap_tools * sizeof *s->tools +
+                        s->opt.block_table_size * sizeof *s->blocks +
+                        s->block_index_size * sizeof *s->block_index;
+}
+
 void fm_stock_set_memory_budget(fm_stock *s, size_t bytes)
 {
     if (bytes) s->opt.memory_budget = bytes;

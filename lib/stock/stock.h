@@ -164,6 +164,26 @@ void fm_stock_set_memory_budget(fm_stock *stock, size_t bytes);
  * marks). */
 size_t fm_stock_memory_bytes(const fm_stock *stock);
 
+/* Where the stock's memory goes, for reports and benchmarks (bytes unless
+ * named otherwise). band_bytes is OpenVDB's own count (Tree::memUsage:
+ * the leaves' nodes and value buffers, the internal nodes, the root);
+ * leaf_bytes is what one more leaf costs with malloc's headers (the
+ * budget's figure), so leaves x leaf_bytes + internal_bytes is the band as
+ * the allocator sees it. Costs a walk over the grid's nodes. */
+typedef struct fm_stock_memory {
+    size_t leaves;          /* 8^3 leaves */
+    size_t active_voxels;   /* voxels in the narrow band */
+    size_t internal_nodes;  /* 16^3 and 32^3 internal nodes */
+    size_t leaf_bytes;      /* one leaf: node, value buffer, allocator headers */
+    size_t internal_bytes;  /* the internal nodes and the root */
+    size_t band_bytes;      /* OpenVDB's memUsage() of the grid */
+    size_t marks_bytes;     /* the tool marks (fm_stock_voxel_tool) in use; the budget also
+                               counts their spare capacity, which is never written */
+    size_t marks_leaves;    /* leaves the tool marks keep a record for */
+    size_t tables_bytes;    /* dirty chunks, per-tool and per-block tables */
+} fm_stock_memory;
+void fm_stock_memory_usage(const fm_stock *stock, fm_stock_memory *out);
+
 /* For benchmarks (the floor of bench_simulate): the cost of OpenVDB's bare
  * update of the voxels the cuts set - read through a value accessor, max,
  * write back - timed on one thread over the voxels the tool marks record

@@ -46,6 +46,9 @@ void fm_tool_marks_clear(fm_tool_marks *m, const int32_t lo[3], const int32_t hi
 /* 1 and *tool when a cut set voxel ijk, else 0. */
 int fm_tool_marks_get(const fm_tool_marks *m, const int32_t ijk[3], int *tool);
 size_t fm_tool_marks_bytes(const fm_tool_marks *m);
+/* The same without the records' spare capacity (never written, so never
+ * resident). */
+size_t fm_tool_marks_used_bytes(const fm_tool_marks *m);
 /* Snapshot bytes (malloc'd; NULL when out of memory) and back. decode
  * checks every count against the bytes present before allocating and
  * leaves m empty on failure; path names the file in errors. */

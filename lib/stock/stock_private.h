@@ -65,8 +65,18 @@ fm_status fm_vdb_from_mesh(fm_vdb *v, const float *points, size_t npoints, const
 double fm_vdb_volume(const fm_vdb *v);
 fm_status fm_vdb_area(const fm_vdb *v, double *area, fm_error *err);
 size_t fm_vdb_memory(const fm_vdb *v);
+/* The grid's counts behind fm_stock_memory_usage. */
+typedef struct fm_vdb_counts {
+    size_t memusage;       /* OpenVDB's Tree::memUsage() */
+    size_t leaves;
+    size_t internal_nodes; /* 16^3 and 32^3 internal nodes */
+    size_t active_voxels;
+} fm_vdb_counts;
+void fm_vdb_memory_usage(const fm_vdb *v, fm_vdb_counts *out);
 /* Bytes one more leaf costs (for the estimate formula). */
 size_t fm_vdb_leaf_bytes(void);
+/* What OpenVDB's memUsage() counts for one leaf (no allocator headers). */
+size_t fm_vdb_leaf_memusage(void);
 size_t fm_vdb_internal1_bytes(void);
 /* Bytes of one root child (4096^3 voxels). */
 size_t fm_vdb_internal2_bytes(void);

@@ -195,6 +195,12 @@ size_t fm_tool_marks_bytes(const fm_tool_marks *m)
            m->mixed * LEAF_VOXELS * sizeof(uint16_t) + m->nslots * sizeof *m->slot_tool;
 }
 
+size_t fm_tool_marks_used_bytes(const fm_tool_marks *m)
+{
+    return m->nleaves * sizeof *m->leaves + m->index_size * sizeof *m->index +
+           m->mixed * LEAF_VOXELS * sizeof(uint16_t) + m->nslots * sizeof *m->slot_tool;
+}
+
 /* ------------------------------------------------------ serializing -- */
 /* Little-endian: u32 slots, slots x i32 tool; u64 leaves; per leaf i32
  * x, y, z (multiples of 8), u8 kind; kind 0: u16 slot + 1, 8 x u64 set

@@ -54,6 +54,8 @@ size_t fm_vdb_leaf_bytes(void)
     return sizeof(Leaf) + sizeof(float) * LEAF_SIZE + 32;
 }
 
+size_t fm_vdb_leaf_memusage(void) { return sizeof(Leaf) + sizeof(float) * LEAF_SIZE; }
+
 size_t fm_vdb_internal1_bytes(void) { return sizeof(Node1) + 16; }
 
 size_t fm_vdb_internal2_bytes(void) { return sizeof(Tree::RootNodeType::ChildNodeType) + 16; }

@@ -12,6 +12,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
+#include <vector>
 
 using namespace fm_vdb_bridge;
 
@@ -69,6 +71,21 @@ size_t fm_vdb_memory(const fm_vdb *v)
         return FM_OK;
     });
     return m;
+}
+
+void fm_vdb_memory_usage(const fm_vdb *v, fm_vdb_counts *out)
+{
+    std::memset(out, 0, sizeof *out);
+    fm_error err;
+    guarded(&err, "memory", [&]() -> fm_status {
+        const Tree &tree = v->grid->constTree();
+        out->memusage = size_t(tree.memUsage());
+        out->leaves = size_t(tree.leafCount());
+        out->active_voxels = size_t(tree.activeVoxelCount());
+        std::vector<openvdb::Index32> nodes = tree.nodeCount(); /* leaves first, the root last */
+        for (size_t i = 1; i + 1 < nodes.size(); i++) out->internal_nodes += nodes[i];
+        return FM_OK;
+    });
 }
 
 int fm_vdb_active_bounds(const fm_vdb *v, int32_t lo[3], int32_t hi[3])
