@@ -176,8 +176,10 @@ fm_status job_flush_batch(job_cutter *c)
                 c->stats.uncertain_max_mm = cs.uncertain_max_mm;
             c->progress.voxels_uncertain = c->stats.voxels_uncertain;
             c->cuts++;
+            /* not in live mode: a move's latency is the figure there, and
+             * its cuts free little */
             const double now = fm_clock_monotonic_s();
-            if (now - c->trimmed_at >= JOB_TRIM_INTERVAL_S) {
+            if (c->spec->program_kind != FM_PROGRAM_LIVE && now - c->trimmed_at >= JOB_TRIM_INTERVAL_S) {
                 job_release_free_memory();
                 c->trimmed_at = now;
             }
