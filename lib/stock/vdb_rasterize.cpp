@@ -243,6 +243,25 @@ int uniform_sign(const float *vals, const Leaf::NodeMaskType &mask)
     return neg == LEAF_SIZE ? -1 : neg == 0 ? 1 : 0;
 }
 
+/* The least float at or above x: a float a is below x exactly when it is
+ * below this, so the leaf's floats compare in float. */
+inline float float_at_least(double x)
+{
+    float f = float(x);
+    if (double(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+    return f;
+}
+
+/* Bits 0-3: which of q[0..4) are below cap. */
+inline uint64_t below4(const float *q, float cap)
+{
+#if defined(__SSE2__)
+    return uint64_t(_mm_movemask_ps(_mm_cmplt_ps(_mm_loadu_ps(q), _mm_set1_ps(cap))));
+#else
+    return uint64_t(q[0] < cap) | uint64_t(q[1] < cap) << 1 | uint64_t(q[2] < cap) << 2 | uint64_t(q[3] < cap) << 3;
+#endif
+}
+
 /* Evaluate one leaf: build: phi = clamp(-f); subtract: phi = max(phi_stock,
  * clamp(f)) = stock \ field. Existing leaves are updated in place (each job
  * owns its leaf, so jobs run in parallel); new leaves are returned. When
@@ -290,32 +309,26 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
                     face[k][j] = below > 0 || above > 0 ? bg : std::min(-below, -above);
                     out2[k][j] = below > 0 ? below * below : above > 0 ? above * above : 0;
                 }
-        auto box_bound = [&](int i) {
+        /* Does the box bound settle voxel i, whose stock value is a? Outside
+         * the box S <= -distance < 0, so the stock's air side, or a voxel
+         * farther out than the band, is settled without the square root. */
+        auto box_settles = [&](int i, double a) {
             const int ix = i >> 6, iy = (i >> 3) & 7, iz = i & 7;
             const double o2 = out2[0][ix] + out2[1][iy] + out2[2][iz];
+            if (o2 > 1e-20 && (a >= 0 || o2 >= double(bg) * bg)) return true;
             const double in = std::min<double>(bg, std::min(face[0][ix], std::min(face[1][iy], face[2][iz])));
-            return clamp_to_band((o2 > 0 ? -std::sqrt(o2) : in) + 1e-11, bg);
+            return a >= clamp_to_band((o2 > 0 ? -std::sqrt(o2) : in) + 1e-11, bg);
         };
         /* Which voxels are below the cap: bit y * 8 + z of word x. An
          * octant's voxels are four words' bits under one of four masks. */
         uint64_t below[8];
-        /* a < cap on floats: cap rounded up to a float compares the same */
-        float capf = float(cap);
-        if (double(capf) < cap) capf = std::nextafter(capf, std::numeric_limits<float>::infinity());
+        const float capf = float_at_least(cap);
         for (int ix = 0; ix < 8; ix++) {
             uint64_t w = 0;
-            if (stock) {
-                const float *row = stock + ix * 64;
-#if defined(__SSE2__)
-                const __m128 c4 = _mm_set1_ps(capf);
-                for (int b = 0; b < 64; b += 4)
-                    w |= uint64_t(_mm_movemask_ps(_mm_cmplt_ps(_mm_loadu_ps(row + b), c4))) << b;
-#else
-                for (int b = 0; b < 64; b++) w |= uint64_t(row[b] < capf) << b;
-#endif
-            } else {
+            if (stock)
+                for (int b = 0; b < 64; b += 4) w |= below4(stock + ix * 64 + b, capf) << b;
+            else
                 w = -bg < cap ? ~uint64_t(0) : 0;
-            }
             below[ix] = w;
         }
         for (int oct = 0; oct < 8; oct++) {
@@ -343,36 +356,18 @@ void run_job(const fm_vdb *v, const fm_field *field, void *worker, Mode mode, co
             for (int k = 0; k < 3; k++) deep = deep && box[k].lo - bg > field->lo[k] && box[k].hi + bg < field->hi[k];
             const bool near_face = boxed && !deep;
             /* the octant's voxels below its own cap, as a mask like below's */
-            float octcapf = float(octcap);
-            if (double(octcapf) < octcap) octcapf = std::nextafter(octcapf, std::numeric_limits<float>::infinity());
+            const float octcapf = float_at_least(octcap);
             for (int ix = ox; ix < ox + 4; ix++) {
                 uint64_t open = 0;
-                if (stock) {
-                    for (int iy = oy; iy < oy + 4; iy++) {
-                        const float *q = stock + (ix << 6) + (iy << 3) + oz;
-#if defined(__SSE2__)
-                        const uint64_t bits = uint64_t(_mm_movemask_ps(_mm_cmplt_ps(_mm_loadu_ps(q), _mm_set1_ps(octcapf))));
-#else
-                        const uint64_t bits = uint64_t(q[0] < octcapf) | uint64_t(q[1] < octcapf) << 1 |
-                                              uint64_t(q[2] < octcapf) << 2 | uint64_t(q[3] < octcapf) << 3;
-#endif
-                        open |= bits << ((iy << 3) + oz);
-                    }
-                } else {
+                if (stock)
+                    for (int iy = oy; iy < oy + 4; iy++)
+                        open |= below4(stock + (ix << 6) + (iy << 3) + oz, octcapf) << ((iy << 3) + oz);
+                else
                     open = -bg < octcap ? octmask : 0;
-                }
                 for (uint64_t m = below[ix] & octmask & open; m; m &= m - 1) {
                     const int i = (ix << 6) | __builtin_ctzll(m);
                     const double a = stock ? stock[i] : -bg;
-                    if (near_face) {
-                        /* outside the box, S <= -distance < 0: the stock's
-                         * air side, or a voxel farther than the band, is
-                         * settled without the square root */
-                        const int ix2 = i >> 6, iy = (i >> 3) & 7, iz = i & 7;
-                        const double o2 = out2[0][ix2] + out2[1][iy] + out2[2][iz];
-                        if (o2 > 1e-20 && (a >= 0 || o2 >= double(bg) * bg)) continue;
-                        if (a >= box_bound(i)) continue;
-                    }
+                    if (near_face && box_settles(i, a)) continue;
                     if (r.lo >= bg)
                         full[nfull++] = i; /* deep inside the cut: clamped to the band anyway */
                     else

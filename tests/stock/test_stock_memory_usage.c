@@ -17,16 +17,11 @@
 
 static const double box_lo[3] = {0, 0, 0}, box_hi[3] = {12, 7, 5};
 
+/* the box's exact signed distance (fields.h), positive inside */
 static double box_distance(const double p[3])
 {
-    double out2 = 0, in = -INFINITY;
-    for (int k = 0; k < 3; k++) {
-        double c = 0.5 * (box_lo[k] + box_hi[k]), h = 0.5 * (box_hi[k] - box_lo[k]);
-        double d = fabs(p[k] - c) - h;
-        if (d > 0) out2 += d * d;
-        if (d > in) in = d;
-    }
-    return -(sqrt(out2) + fmin(in, 0));
+    const shape b = {.kind = SHAPE_BOX, .a = {box_lo[0], box_lo[1], box_lo[2]}, .b = {box_hi[0], box_hi[1], box_hi[2]}};
+    return shape_eval(&b, p[0], p[1], p[2]);
 }
 
 static int32_t floor_div8(int32_t i) { return i >= 0 ? i / 8 : -((-i + 7) / 8); }
